@@ -1,0 +1,235 @@
+use crate::Real;
+use nalgebra::{SMatrix, SVector};
+
+/// A discrete linear time-invariant model `x' = A x + w`, `y = C x + v` with
+/// `w ~ N(0, Q)`, `v ~ N(0, R)`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LinearModel<T: Real, const N: usize, const M: usize> {
+    /// State transition `A` (N × N).
+    pub a: SMatrix<T, N, N>,
+    /// Measurement matrix `C` (M × N).
+    pub c: SMatrix<T, M, N>,
+    /// Process-noise covariance `Q` (N × N).
+    pub q: SMatrix<T, N, N>,
+    /// Measurement-noise covariance `R` (M × M).
+    pub r: SMatrix<T, M, M>,
+}
+
+impl<T: Real, const N: usize, const M: usize> LinearModel<T, N, M> {
+    /// Converts an `f64` model (as built on the host or at start-up) to another precision.
+    pub fn cast<U: Real>(&self) -> LinearModel<U, N, M> {
+        let f = |v: T| U::of_f64(v.as_f64());
+        LinearModel { a: self.a.map(f), c: self.c.map(f), q: self.q.map(f), r: self.r.map(f) }
+    }
+}
+
+/// The innovation of one measurement update: what the model could not predict.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Innovation<T: Real, const M: usize> {
+    /// `y − C x⁻`.
+    pub residual: SVector<T, M>,
+    /// Its predicted covariance `S = C P⁻ Cᵀ + R`.
+    pub s: SMatrix<T, M, M>,
+    /// Normalised innovation squared `rᵀ S⁻¹ r`; χ²(M) distributed when the filter is consistent.
+    pub nis: T,
+}
+
+/// Counters of everything the filter had to repair or refuse. All zero in a healthy run.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct FilterHealth {
+    /// Times the covariance (or state) became non-finite or lost its positive diagonal and was
+    /// reset to the stated initial covariance.
+    pub covariance_resets: u32,
+    /// Updates refused because the innovation covariance was not positive definite or the
+    /// measurement was not finite.
+    pub refused_updates: u32,
+}
+
+/// Why a measurement update was not applied. The filter state is unchanged in every case.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum FilterError {
+    /// The measurement held NaN or infinity.
+    NonFiniteMeasurement,
+    /// `S = C P Cᵀ + R` could not be factorised (not positive definite).
+    InnovationCovariance,
+}
+
+/// Linear Kalman filter with `N` states and `M` measurements.
+///
+/// Covariance update in Joseph form `P = (I − K C) P (I − K C)ᵀ + K R Kᵀ`, which stays symmetric
+/// positive semi-definite under round-off far better than `(I − K C) P`, followed by explicit
+/// symmetrisation; the gain comes from a Cholesky solve, never an explicit inverse.
+///
+/// ```
+/// use edgekf::filter::{KalmanFilter, LinearModel};
+/// use nalgebra::{Matrix1, Vector1};
+/// // A constant observed in noise: the estimate converges to the mean of the data.
+/// let model = LinearModel { a: Matrix1::new(1.0f64), c: Matrix1::new(1.0), q: Matrix1::new(0.0), r: Matrix1::new(1.0) };
+/// let mut kf = KalmanFilter::new(model, Vector1::new(0.0), Matrix1::new(1e6));
+/// for y in [1.0, 3.0, 2.0] {
+///     kf.predict();
+///     kf.update(&Vector1::new(y)).unwrap();
+/// }
+/// assert!((kf.state()[0] - 2.0).abs() < 1e-5);
+/// ```
+#[derive(Debug, Clone)]
+pub struct KalmanFilter<T: Real, const N: usize, const M: usize> {
+    model: LinearModel<T, N, M>,
+    x: SVector<T, N>,
+    p: SMatrix<T, N, N>,
+    x_reset: SVector<T, N>,
+    p_reset: SMatrix<T, N, N>,
+    health: FilterHealth,
+}
+
+impl<T: Real, const N: usize, const M: usize> KalmanFilter<T, N, M> {
+    /// A filter starting at `x0` with covariance `p0`; `x0, p0` are also the reset values the
+    /// covariance guard falls back to.
+    pub fn new(model: LinearModel<T, N, M>, x0: SVector<T, N>, p0: SMatrix<T, N, N>) -> Self {
+        Self { model, x: x0, p: p0, x_reset: x0, p_reset: p0, health: FilterHealth::default() }
+    }
+
+    /// The model in use.
+    pub fn model(&self) -> &LinearModel<T, N, M> {
+        &self.model
+    }
+
+    /// Current state estimate.
+    pub fn state(&self) -> &SVector<T, N> {
+        &self.x
+    }
+
+    /// Current state covariance.
+    pub fn covariance(&self) -> &SMatrix<T, N, N> {
+        &self.p
+    }
+
+    /// Repair counters since construction.
+    pub fn health(&self) -> FilterHealth {
+        self.health
+    }
+
+    /// Time update `x = A x`, `P = A P Aᵀ + Q`.
+    pub fn predict(&mut self) {
+        self.x = self.model.a * self.x;
+        self.p = self.model.a * self.p * self.model.a.transpose() + self.model.q;
+        self.symmetrise_and_guard();
+    }
+
+    /// Innovation of `y` against the current prediction, without changing the filter.
+    ///
+    /// Returns `None` if `S` is not positive definite.
+    pub fn innovation(&self, y: &SVector<T, M>) -> Option<Innovation<T, M>> {
+        let residual = y - self.model.c * self.x;
+        let s = self.model.c * self.p * self.model.c.transpose() + self.model.r;
+        let chol = s.cholesky()?;
+        let white = chol.l().solve_lower_triangular(&residual)?;
+        Some(Innovation { residual, s, nis: white.norm_squared() })
+    }
+
+    /// Measurement update with `y`. Returns the innovation it used.
+    ///
+    /// A non-finite `y` or a non-positive-definite `S` leaves the filter unchanged, is counted
+    /// in [`FilterHealth::refused_updates`] and is returned as an error.
+    pub fn update(&mut self, y: &SVector<T, M>) -> Result<Innovation<T, M>, FilterError> {
+        if y.iter().any(|v| !v.is_finite()) {
+            self.health.refused_updates += 1;
+            return Err(FilterError::NonFiniteMeasurement);
+        }
+        let c = &self.model.c;
+        let residual = y - c * self.x;
+        let pct = self.p * c.transpose();
+        let s = c * pct + self.model.r;
+        let Some(chol) = s.cholesky() else {
+            self.health.refused_updates += 1;
+            return Err(FilterError::InnovationCovariance);
+        };
+        // K = P Cᵀ S⁻¹, computed as (S⁻¹ C P)ᵀ since S and P are symmetric.
+        let gain = chol.solve(&pct.transpose()).transpose();
+        let nis = chol.l().solve_lower_triangular(&residual).map(|w| w.norm_squared()).unwrap_or_else(T::zero);
+        self.x += gain * residual;
+        let i_kc = SMatrix::<T, N, N>::identity() - gain * c;
+        self.p = i_kc * self.p * i_kc.transpose() + gain * self.model.r * gain.transpose();
+        self.symmetrise_and_guard();
+        Ok(Innovation { residual, s, nis })
+    }
+
+    fn symmetrise_and_guard(&mut self) {
+        let half = T::of_f64(0.5);
+        self.p = (self.p + self.p.transpose()) * half;
+        let broken = self.p.iter().any(|v| !v.is_finite())
+            || (0..N).any(|i| self.p[(i, i)] <= T::zero())
+            || self.x.iter().any(|v| !v.is_finite());
+        if broken {
+            self.health.covariance_resets += 1;
+            self.p = self.p_reset;
+            if self.x.iter().any(|v| !v.is_finite()) {
+                self.x = self.x_reset;
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::{Matrix1, Matrix2, RowVector2, Vector1, Vector2};
+
+    fn cv_model() -> LinearModel<f64, 2, 1> {
+        let dt = 0.1;
+        LinearModel {
+            a: Matrix2::new(1.0, dt, 0.0, 1.0),
+            c: RowVector2::new(1.0, 0.0),
+            q: Matrix2::new(dt.powi(3) / 3.0, dt * dt / 2.0, dt * dt / 2.0, dt) * 0.01,
+            r: Matrix1::new(0.25),
+        }
+    }
+
+    #[test]
+    fn tracks_a_ramp() {
+        let mut kf = KalmanFilter::new(cv_model(), Vector2::zeros(), Matrix2::identity() * 100.0);
+        for k in 0..200 {
+            kf.predict();
+            kf.update(&Vector1::new(0.1 * k as f64 * 2.0)).unwrap();
+        }
+        // slope 2 per second
+        assert!((kf.state()[1] - 2.0).abs() < 1e-3, "{}", kf.state());
+        assert_eq!(kf.health(), FilterHealth::default());
+    }
+
+    #[test]
+    fn joseph_update_matches_information_form() {
+        // One update from a known prior: P⁺⁻¹ = P⁻⁻¹ + Cᵀ R⁻¹ C.
+        let model = cv_model();
+        let p0 = Matrix2::new(2.0, 0.3, 0.3, 1.0);
+        let mut kf = KalmanFilter::new(model.clone(), Vector2::new(1.0, -1.0), p0);
+        let inn = kf.update(&Vector1::new(2.0)).unwrap();
+        let info = p0.try_inverse().unwrap() + model.c.transpose() * model.r.try_inverse().unwrap() * model.c;
+        let p_expected = info.try_inverse().unwrap();
+        assert!((kf.covariance() - p_expected).abs().max() < 1e-12);
+        assert!((inn.residual[0] - 1.0).abs() < 1e-15);
+        assert!((inn.nis - 1.0 / 2.25).abs() < 1e-12);
+    }
+
+    #[test]
+    fn nan_measurement_is_refused_and_counted() {
+        let mut kf = KalmanFilter::new(cv_model(), Vector2::zeros(), Matrix2::identity());
+        let before = *kf.state();
+        assert_eq!(kf.update(&Vector1::new(f64::NAN)), Err(FilterError::NonFiniteMeasurement));
+        assert_eq!(*kf.state(), before);
+        assert_eq!(kf.health().refused_updates, 1);
+    }
+
+    #[test]
+    fn broken_covariance_is_reset_and_counted() {
+        let mut model = cv_model();
+        model.q[(0, 0)] = f64::NAN;
+        let p0 = Matrix2::identity() * 3.0;
+        let mut kf = KalmanFilter::new(model, Vector2::zeros(), p0);
+        kf.predict();
+        assert_eq!(kf.health().covariance_resets, 1);
+        assert_eq!(*kf.covariance(), p0);
+    }
+}

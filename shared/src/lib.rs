@@ -1,0 +1,35 @@
+//! # edgekf — model-based estimation for edge vibration sensors
+//!
+//! `no_std`, allocation-free building blocks that run unchanged on a Cortex-M4F sensor node and
+//! on the host:
+//!
+//! * [`linalg`]: matrix exponential, zero-order-hold and Van Loan discretisation (deterministic:
+//!   only `+ − × ÷`, so the chip and the host compute the same bits);
+//! * [`filter`]: a fixed-size linear Kalman filter with Joseph-form updates, symmetry enforcement
+//!   and a covariance guard that counts and recovers instead of panicking;
+//! * [`models`]: reduced physical models, starting with a single-mode oscillator driven by an
+//!   unknown harmonic force at a known frequency (the "unbalance" pattern of rotating machines);
+//! * [`residual`]: innovation statistics cheap enough for the chip (running mean and variance,
+//!   normalised innovation squared with chi-square bounds).
+//!
+//! Every filter is generic over [`Real`] (`f32` on the chip, `f64` on the host) and over its sizes
+//! through const generics, so one implementation serves both.
+//!
+//! ```
+//! use edgekf::models::harmonic::{HarmonicForceEstimator, HarmonicForceParams};
+//! let params = HarmonicForceParams::default();
+//! let mut est = HarmonicForceEstimator::<f32>::new(&params).unwrap();
+//! let report = est.step(Some(0.0));
+//! assert!(report.force_amplitude.is_finite());
+//! ```
+#![no_std]
+#![deny(missing_docs)]
+#![forbid(unsafe_code)]
+
+pub mod filter;
+pub mod linalg;
+pub mod models;
+mod real;
+pub mod residual;
+
+pub use real::Real;

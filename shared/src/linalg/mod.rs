@@ -1,0 +1,38 @@
+//! Dense linear algebra that the filters need beyond nalgebra: the matrix exponential and
+//! exact discretisation of continuous-time models.
+//!
+//! These routines use only `+ − × ÷` and comparisons (no `exp`, `log` or `pow` from a maths
+//! library), so they produce identical bits on the Cortex-M4F and on x86-64. That is what lets a
+//! firmware run under QEMU be compared with a host run bit for bit.
+
+mod discretize;
+mod expm;
+
+pub use discretize::{van_loan, zoh};
+pub use expm::expm;
+
+/// Why a linear-algebra routine could not produce a result.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum LinalgError {
+    /// A matrix that had to be inverted was singular to working precision.
+    Singular,
+    /// An input held a NaN or an infinity.
+    NonFinite,
+    /// The block size passed as a const generic does not match the blocks
+    /// (for example `NM != N + M` in [`zoh`]).
+    SizeMismatch,
+}
+
+impl core::fmt::Display for LinalgError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            LinalgError::Singular => f.write_str("matrix is singular to working precision"),
+            LinalgError::NonFinite => f.write_str("matrix holds NaN or infinity"),
+            LinalgError::SizeMismatch => f.write_str("block sizes do not add up"),
+        }
+    }
+}
+
+mod solve;
+pub use solve::solve;
