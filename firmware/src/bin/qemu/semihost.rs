@@ -1,0 +1,50 @@
+//! Host file access and exit codes through ARM semihosting (handled by QEMU). Test equipment
+//! only: semihosting calls stop the core while the host serves them.
+
+use cortex_m_semihosting::{nr, syscall, syscall1};
+use edgekf_firmware::line_feed::ByteSource;
+
+/// An open host file.
+pub struct HostFile(usize);
+
+impl HostFile {
+    /// Opens `path` (NUL-terminated, relative to QEMU's working directory) for binary reading.
+    pub fn open(path: &str) -> Option<Self> {
+        if !path.ends_with('\0') {
+            return None;
+        }
+        // SAFETY: SYS_OPEN reads `path.len() - 1` bytes from a valid, NUL-terminated string.
+        let fd = unsafe { syscall!(OPEN, path.as_ptr(), nr::open::R_BINARY, path.len() - 1) } as isize;
+        (fd >= 0).then_some(HostFile(fd as usize))
+    }
+}
+
+impl ByteSource for HostFile {
+    fn read_bytes(&mut self, buf: &mut [u8]) -> usize {
+        // SAFETY: SYS_READ writes at most `buf.len()` bytes into `buf`; it returns the number of
+        // bytes NOT read.
+        let not_read = unsafe { syscall!(READ, self.0, buf.as_mut_ptr(), buf.len()) };
+        buf.len().saturating_sub(not_read)
+    }
+}
+
+impl Drop for HostFile {
+    fn drop(&mut self) {
+        // SAFETY: closes a handle this value owns.
+        unsafe {
+            syscall!(CLOSE, self.0);
+        }
+    }
+}
+
+/// Ends the QEMU process with `code` (SYS_EXIT_EXTENDED, so any code, not just 0/1).
+pub fn exit(code: u32) -> ! {
+    let block = [0x20026u32, code]; // ADP_Stopped_ApplicationExit
+                                    // SAFETY: SYS_EXIT_EXTENDED reads the two-word parameter block.
+    unsafe {
+        syscall1(0x20, block.as_ptr() as usize);
+    }
+    loop {
+        cortex_m::asm::wfi();
+    }
+}
