@@ -6,5 +6,7 @@
 //! recovering.
 
 mod kalman;
+mod steady;
 
 pub use kalman::{FilterError, FilterHealth, Innovation, KalmanFilter, LinearModel};
+pub use steady::{solve_riccati, RiccatiError, SteadyState, SteadyStateFilter};

@@ -46,8 +46,8 @@ fn main() -> ! {
         }
     };
     defmt::info!("start odr={=f32} watermark={=u8}", config.sensor.odr.hz(), config.sensor.fifo_watermark);
-    while !node.bus().is_exhausted() {
-        node.bus_mut().advance_period();
+    // One watermark period per poll, until the data has run out and the FIFO is drained.
+    while node.bus_mut().advance_period() > 0 || !node.bus().is_exhausted() {
         let r = node.poll();
         defmt::info!(
             "blk {=u32} {=u16} {=u16} {=f32} {=f32} {=f32} {=f32} {=f32} {=f32} {=f32}",
