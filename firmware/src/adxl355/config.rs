@@ -8,6 +8,9 @@ pub const STANDARD_GRAVITY: f32 = 9.806_65;
 
 /// Largest 20-bit output code: a reading at or above full scale on the positive side.
 pub const RAW_MAX: i32 = 524_287;
+/// Code of the rated full scale (2 g at ±2 g, 4 g at ±4 g, 8 g at ±8 g: the same count in every
+/// range). Codes at or beyond it are treated as saturated.
+pub const RATED_FULL_SCALE_CODE: i32 = 512_000;
 /// Smallest 20-bit output code: a reading at or below full scale on the negative side.
 pub const RAW_MIN: i32 = -524_288;
 

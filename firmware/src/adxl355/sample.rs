@@ -1,6 +1,6 @@
 //! Decoded data: raw samples, status flags and the FIFO burst decoder.
 
-use super::config::{RAW_MAX, RAW_MIN};
+use super::config::{RATED_FULL_SCALE_CODE, RAW_MAX, RAW_MIN};
 use super::registers;
 
 /// One X/Y/Z sample as sign-extended 20-bit codes (`RAW_MIN..=RAW_MAX`).
@@ -19,16 +19,18 @@ pub struct RawSample {
 }
 
 impl RawSample {
-    /// Whether any axis sits at a rail ([`RAW_MAX`] or [`RAW_MIN`]): the input was at or beyond
-    /// full scale and the value is clipped.
+    /// Whether any axis is at or beyond the rated range (±2/4/8 g, which is ±512 000 codes in
+    /// every range): the part is specified only up to there and the ADC clips shortly after
+    /// (at the 20-bit rails), so such a value means "at least this much", not "this much".
     ///
     /// ```
     /// use edgekf_firmware::adxl355::{RawSample, RAW_MAX};
     /// assert!(RawSample { x: 0, y: RAW_MAX, z: 0 }.is_saturated());
-    /// assert!(!RawSample { x: 1, y: -1, z: 0 }.is_saturated());
+    /// assert!(RawSample { x: -512_000, y: 0, z: 0 }.is_saturated());
+    /// assert!(!RawSample { x: 511_999, y: -1, z: 0 }.is_saturated());
     /// ```
     pub fn is_saturated(&self) -> bool {
-        [self.x, self.y, self.z].iter().any(|&c| c == RAW_MAX || c == RAW_MIN)
+        [self.x, self.y, self.z].iter().any(|&c| c.unsigned_abs() >= RATED_FULL_SCALE_CODE as u32)
     }
 }
 

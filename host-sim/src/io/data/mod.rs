@@ -1,0 +1,370 @@
+//! The data contract: how every CSV that a user gives to, or gets from, `edgekf` looks.
+//!
+//! * a header row, fields separated by commas (surrounding spaces are trimmed; blank lines and
+//!   lines starting with `#` are skipped);
+//! * first column `t`, the time in seconds. Uniform sampling is expected, but gaps and jitter
+//!   are measured and reported ([`TimingReport`]), not hidden;
+//! * then named channels in SI units (`ax` in m/s², …);
+//! * ground truth, when a simulator knows it, in columns prefixed `truth_` (`truth_x`, …);
+//! * columns the reader does not know are dropped and listed in [`DataReport::ignored_columns`];
+//! * an empty or `NaN` cell in a channel is kept as NaN (a missing sample) and counted in
+//!   [`DataReport::nan_cells`]; it is never dropped silently.
+//!
+//! A file that breaks the contract is refused with a [`DataError`] naming the file and the line.
+//! Numbers are written in the shortest form that reads back to the same `f64`, so a file written
+//! by [`write()`] and read by [`read()`] gives back identical bits.
+//!
+//! ```
+//! use edgekf_sim::io::data::read_from;
+//! use std::path::Path;
+//! let csv = "t,ax,truth_x,comment\n0.000,0.5,1e-3,a\n0.001,,2e-3,b\n0.002,0.7,3e-3,c\n";
+//! let (data, report) = read_from(csv.as_bytes(), Path::new("example.csv"), &["ax"]).unwrap();
+//! assert_eq!(data.names, ["ax", "truth_x"]);
+//! assert!(data.column("ax").unwrap()[1].is_nan());
+//! assert_eq!(report.ignored_columns, ["comment"]);
+//! assert_eq!(report.nan_cells, [("ax".to_string(), 1)]);
+//! assert!((report.timing.sample_rate - 1000.0).abs() < 1e-6);
+//! ```
+
+mod error;
+mod timing;
+
+pub use error::DataError;
+pub use timing::{Gap, TimingReport, GAP_FACTOR, UNIFORM_JITTER};
+
+use std::fmt::{self, Write as _};
+use std::io::Read;
+use std::path::Path;
+
+/// Prefix of the ground-truth columns written by simulators.
+pub const TRUTH_PREFIX: &str = "truth_";
+
+/// A data file in memory: the time column and the kept channels, column by column.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct DataFile {
+    /// Channel names, in file order, without `t`.
+    pub names: Vec<String>,
+    /// Time of each row, s (strictly increasing).
+    pub t: Vec<f64>,
+    /// One vector per name, each as long as `t`; NaN marks a missing value.
+    pub columns: Vec<Vec<f64>>,
+}
+
+impl DataFile {
+    /// Reads a data file; the same as [`read()`].
+    pub fn read(path: &Path, known: &[&str]) -> Result<(DataFile, DataReport), DataError> {
+        read(path, known)
+    }
+
+    /// The channel called `name`, if the file has it.
+    pub fn column(&self, name: &str) -> Option<&[f64]> {
+        self.names.iter().position(|n| n == name).map(|i| self.columns[i].as_slice())
+    }
+
+    /// Number of rows.
+    pub fn len(&self) -> usize {
+        self.t.len()
+    }
+
+    /// Whether there are no rows.
+    pub fn is_empty(&self) -> bool {
+        self.t.is_empty()
+    }
+
+    /// Regularity of the time column.
+    pub fn timing(&self) -> TimingReport {
+        TimingReport::of(&self.t)
+    }
+
+    /// The file as CSV text, in the contract's format.
+    pub fn to_csv_string(&self) -> Result<String, DataError> {
+        let names: Vec<&str> = self.names.iter().map(String::as_str).collect();
+        let cols: Vec<&[f64]> = self.columns.iter().map(Vec::as_slice).collect();
+        to_csv_string(Path::new("<memory>"), &names, &self.t, &cols)
+    }
+}
+
+/// What the reader noticed about a file that it accepted.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DataReport {
+    /// Data rows read.
+    pub rows: usize,
+    /// Columns dropped because the caller does not know them (and they are not `truth_`).
+    pub ignored_columns: Vec<String>,
+    /// Kept columns with empty or NaN cells, and how many (only columns with at least one).
+    pub nan_cells: Vec<(String, usize)>,
+    /// Regularity of the time column.
+    pub timing: TimingReport,
+}
+
+impl DataReport {
+    /// One human-readable line per thing a user should know: ignored columns, missing values,
+    /// gaps and jitter. Empty for a clean, uniformly sampled file.
+    pub fn notices(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        for name in &self.ignored_columns {
+            out.push(format!("ignored column `{name}`: not a channel this command uses"));
+        }
+        for (name, n) in &self.nan_cells {
+            out.push(format!(
+                "column `{name}`: {n} empty/NaN cell(s) of {} ({:.2} %), treated as missing samples",
+                self.rows,
+                100.0 * *n as f64 / self.rows as f64
+            ));
+        }
+        out.extend(self.timing.notices());
+        out
+    }
+}
+
+impl fmt::Display for DataReport {
+    /// A summary line followed by the notices, one per line.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{} rows, {}", self.rows, self.timing)?;
+        for n in self.notices() {
+            write!(f, "\nnotice: {n}")?;
+        }
+        Ok(())
+    }
+}
+
+/// Reads a data file. `known` lists the channels the caller understands; `truth_` columns are
+/// always kept, anything else is dropped and reported.
+pub fn read(path: &Path, known: &[&str]) -> Result<(DataFile, DataReport), DataError> {
+    let file = std::fs::File::open(path).map_err(|source| DataError::Io { path: path.to_owned(), source })?;
+    read_from(std::io::BufReader::new(file), path, known)
+}
+
+/// Like [`read`], from any reader; `path` is only used in messages.
+pub fn read_from<R: Read>(mut reader: R, path: &Path, known: &[&str]) -> Result<(DataFile, DataReport), DataError> {
+    // Read whole, so that line numbers can be counted from the bytes (see `LineIndex`).
+    let mut bytes = Vec::new();
+    reader.read_to_end(&mut bytes).map_err(|source| DataError::Io { path: path.to_owned(), source })?;
+    let lines = LineIndex::new(&bytes);
+    let mut rdr = csv::ReaderBuilder::new()
+        .has_headers(false)
+        .flexible(true)
+        .trim(csv::Trim::All)
+        .comment(Some(b'#'))
+        .from_reader(bytes.as_slice());
+    let csv_err = |e: csv::Error| {
+        let line = e.position().map_or(0, |p| lines.line_of(p.byte()));
+        let message = e.to_string();
+        match e.into_kind() {
+            csv::ErrorKind::Io(source) => DataError::Io { path: path.to_owned(), source },
+            _ => DataError::Csv { path: path.to_owned(), line, message },
+        }
+    };
+
+    let mut records = rdr.records();
+    let header = match records.next() {
+        None => return Err(DataError::Empty { path: path.to_owned() }),
+        Some(r) => r.map_err(csv_err)?,
+    };
+    let header_line = header.position().map_or(1, |p| lines.line_of(p.byte()));
+    let layout = Layout::from_header(&header, header_line, path, known)?;
+
+    let mut data = DataFile {
+        names: layout.kept.iter().map(|(_, n)| n.clone()).collect(),
+        t: Vec::new(),
+        columns: vec![Vec::new(); layout.kept.len()],
+    };
+    let mut nan_counts = vec![0usize; layout.kept.len()];
+    for record in records {
+        let record = record.map_err(csv_err)?;
+        let line = record.position().map_or(0, |p| lines.line_of(p.byte()));
+        if record.len() != layout.width {
+            return Err(DataError::Ragged { path: path.to_owned(), line, expected: layout.width, found: record.len() });
+        }
+        let bad = |column: &str, text: &str| DataError::BadNumber {
+            path: path.to_owned(),
+            line,
+            column: column.to_owned(),
+            text: text.to_owned(),
+        };
+        let t_text = &record[0];
+        let t = t_text.parse::<f64>().ok().filter(|v| v.is_finite()).ok_or_else(|| bad("t", t_text))?;
+        if let Some(&previous) = data.t.last() {
+            if t <= previous {
+                return Err(DataError::NonIncreasingTime { path: path.to_owned(), line, t, previous });
+            }
+        }
+        data.t.push(t);
+        for (k, (col, name)) in layout.kept.iter().enumerate() {
+            let text = &record[*col];
+            let v = parse_cell(text).ok_or_else(|| bad(name, text))?;
+            if v.is_nan() {
+                nan_counts[k] += 1;
+            }
+            data.columns[k].push(v);
+        }
+    }
+    if data.t.len() < 2 {
+        return Err(DataError::TooFewRows { path: path.to_owned(), rows: data.t.len() });
+    }
+    let report = DataReport {
+        rows: data.t.len(),
+        ignored_columns: layout.ignored,
+        nan_cells: data.names.iter().cloned().zip(nan_counts).filter(|(_, n)| *n > 0).collect(),
+        timing: data.timing(),
+    };
+    Ok((data, report))
+}
+
+/// Line numbers of records, from the csv reader's byte positions.
+///
+/// The csv crate positions a record where the previous one ended (before the line terminator's
+/// `\n` with CRLF, and before the blank and comment lines it skips), and its own line count leaves
+/// those lines out. This index skips them the same way and counts every line, so messages point
+/// at the line an editor shows.
+struct LineIndex<'a> {
+    bytes: &'a [u8],
+    /// Byte offset of every `\n`.
+    newlines: Vec<usize>,
+}
+
+impl<'a> LineIndex<'a> {
+    fn new(bytes: &'a [u8]) -> Self {
+        Self { bytes, newlines: bytes.iter().enumerate().filter(|(_, &b)| b == b'\n').map(|(i, _)| i).collect() }
+    }
+
+    /// 1-based line of the record positioned at `byte`.
+    fn line_of(&self, byte: u64) -> u64 {
+        let bytes = self.bytes;
+        let mut b = usize::try_from(byte).unwrap_or(usize::MAX).min(bytes.len());
+        loop {
+            while b < bytes.len() && matches!(bytes[b], b'\n' | b'\r') {
+                b += 1;
+            }
+            let line_start = b == 0 || matches!(bytes[b - 1], b'\n' | b'\r');
+            if b < bytes.len() && bytes[b] == b'#' && line_start {
+                while b < bytes.len() && bytes[b] != b'\n' {
+                    b += 1;
+                }
+                continue;
+            }
+            break;
+        }
+        self.newlines.partition_point(|&nl| nl < b) as u64 + 1
+    }
+}
+
+/// Which columns of a file are kept, from its header.
+struct Layout {
+    width: usize,
+    /// (column index, name) of each kept channel.
+    kept: Vec<(usize, String)>,
+    ignored: Vec<String>,
+}
+
+impl Layout {
+    fn from_header(header: &csv::StringRecord, line: u64, path: &Path, known: &[&str]) -> Result<Self, DataError> {
+        let first = header.get(0).unwrap_or_default();
+        if first != "t" {
+            return Err(DataError::FirstColumnNotTime { path: path.to_owned(), line, found: first.to_owned() });
+        }
+        let mut seen = std::collections::HashSet::new();
+        let (mut kept, mut ignored) = (Vec::new(), Vec::new());
+        for (i, name) in header.iter().enumerate() {
+            if name.is_empty() {
+                return Err(DataError::EmptyColumnName { path: path.to_owned(), line, column: i + 1 });
+            }
+            if !seen.insert(name) {
+                return Err(DataError::DuplicateColumn { path: path.to_owned(), line, name: name.to_owned() });
+            }
+            if i == 0 {
+                continue;
+            }
+            if known.contains(&name) || name.starts_with(TRUTH_PREFIX) {
+                kept.push((i, name.to_owned()));
+            } else {
+                ignored.push(name.to_owned());
+            }
+        }
+        Ok(Self { width: header.len(), kept, ignored })
+    }
+}
+
+/// A channel cell: a finite number, or NaN for an empty / `NaN` cell. Infinity is refused: no
+/// sensor reads it, so it is a corrupted file rather than a missing sample.
+fn parse_cell(text: &str) -> Option<f64> {
+    if text.is_empty() || text.eq_ignore_ascii_case("nan") {
+        return Some(f64::NAN);
+    }
+    text.parse::<f64>().ok().filter(|v| v.is_finite())
+}
+
+/// Formats a value so that it reads back to the same bits: integers without a decimal point
+/// (`0`, `3`: counters and flags stay integers), everything else in Rust's shortest round-trip
+/// form (`0.001`, `4.2e-7`), NaN as `NaN`.
+pub fn format_value(v: f64) -> String {
+    let mut s = String::new();
+    push_value(&mut s, v);
+    s
+}
+
+fn push_value(out: &mut String, v: f64) {
+    // Writing to a String cannot fail.
+    let _ = if v.fract() == 0.0 && v.abs() < 1e15 { write!(out, "{v}") } else { write!(out, "{v:?}") };
+}
+
+/// The CSV text of a data file: header `t,names…`, then one row per time. `path` is only used
+/// in the error when a column's length differs from `t`'s.
+pub fn to_csv_string(path: &Path, names: &[&str], t: &[f64], columns: &[&[f64]]) -> Result<String, DataError> {
+    if names.len() != columns.len() {
+        return Err(DataError::LengthMismatch {
+            path: path.to_owned(),
+            name: format!("<{} names for {} columns>", names.len(), columns.len()),
+            len: columns.len(),
+            expected: names.len(),
+        });
+    }
+    for (name, col) in names.iter().zip(columns) {
+        if col.len() != t.len() {
+            return Err(DataError::LengthMismatch {
+                path: path.to_owned(),
+                name: (*name).to_owned(),
+                len: col.len(),
+                expected: t.len(),
+            });
+        }
+    }
+    let mut out = String::with_capacity(t.len() * 12 * (names.len() + 1));
+    out.push('t');
+    for n in names {
+        out.push(',');
+        out.push_str(n);
+    }
+    out.push('\n');
+    for (k, &tk) in t.iter().enumerate() {
+        push_value(&mut out, tk);
+        for col in columns {
+            out.push(',');
+            push_value(&mut out, col[k]);
+        }
+        out.push('\n');
+    }
+    Ok(out)
+}
+
+/// Writes a data file (see [`to_csv_string`]).
+///
+/// ```
+/// use edgekf_sim::io::data::{read, write};
+/// let dir = std::env::temp_dir().join(format!("edgekf-doc-{}", std::process::id()));
+/// std::fs::create_dir_all(&dir).unwrap();
+/// let path = dir.join("w.csv");
+/// let t = [0.0, 0.001, 0.002];
+/// let ax = [0.1, f64::NAN, 1.0 / 3.0];
+/// write(&path, &["ax"], &t, &[&ax]).unwrap();
+/// let (back, _) = read(&path, &["ax"]).unwrap();
+/// assert_eq!(back.column("ax").unwrap()[2], 1.0 / 3.0); // bit-exact
+/// # std::fs::remove_dir_all(&dir).ok();
+/// ```
+pub fn write(path: &Path, names: &[&str], t: &[f64], columns: &[&[f64]]) -> Result<(), DataError> {
+    let text = to_csv_string(path, names, t, columns)?;
+    std::fs::write(path, text).map_err(|source| DataError::Write { path: path.to_owned(), source })
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,3 @@
+//! Files that `edgekf` reads and writes.
+
+pub mod data;

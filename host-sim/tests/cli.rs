@@ -1,0 +1,175 @@
+//! The `edgekf` binary as a user runs it.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+const DEMO_CONFIG: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/configs/oscillator_demo.toml");
+
+fn edgekf(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_edgekf")).args(args).env_remove("RUST_BACKTRACE").output().expect("run edgekf")
+}
+
+fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+/// A fresh directory for one test.
+fn scratch(name: &str) -> PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("cli-{name}"));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn path(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// The table row starting with `label`, split into cells.
+fn row(stdout: &str, label: &str) -> Vec<String> {
+    let line = stdout.lines().find(|l| l.starts_with(label)).unwrap_or_else(|| panic!("no `{label}` in\n{stdout}"));
+    line[label.len()..].split_whitespace().map(str::to_owned).collect()
+}
+
+#[test]
+fn demo_prints_the_summary_and_writes_files() {
+    let dir = scratch("demo");
+    let out = edgekf(&["demo", "--out", path(&dir)]);
+    let stdout = text(&out.stdout);
+    assert!(out.status.success(), "{stdout}\n{}", text(&out.stderr));
+    // Truth, f64 and f32 columns; the f64 estimate before the step is within 1 mN of 5 N.
+    let before = row(&stdout, "force amplitude, mean 3–6 s [N]");
+    assert_eq!(before[0], "5.0000");
+    let f64_before: f64 = before[1].parse().unwrap();
+    assert!((f64_before - 5.0).abs() < 1e-3, "{stdout}");
+    assert_eq!(row(&stdout, "force amplitude, mean 9–12 s [N]")[0], "3.0000");
+    assert_eq!(row(&stdout, "steps"), ["—", "12000", "12000"]);
+    assert!(stdout.contains("noise σ = 4.857 mm/s²"));
+
+    let data = std::fs::read_to_string(dir.join("data.csv")).unwrap();
+    assert!(data.starts_with(
+        "t,ax,ay,az,fault_nack,fault_stuck,truth_x,truth_v,truth_force,truth_force_amplitude,truth_accel\n0,"
+    ));
+    assert_eq!(data.lines().count(), 12_001);
+    let est = std::fs::read_to_string(dir.join("est.csv")).unwrap();
+    assert!(est.starts_with("t,force_amplitude,force_cos,force_sin,displacement,velocity,innovation,nis\n"));
+    assert_eq!(est.lines().count(), 12_001);
+    assert!(dir.join("est_f32.csv").exists());
+}
+
+#[test]
+fn simulate_then_estimate_round_trip_with_faults() {
+    let dir = scratch("roundtrip");
+    let data = dir.join("data.csv");
+    let est = dir.join("est.csv");
+    let out = edgekf(&["oscillator", "simulate", "--config", DEMO_CONFIG, "--out", path(&data), "--faults"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(text(&out.stdout).contains("12000 samples, seed 1, 3 fault(s)"), "{}", text(&out.stdout));
+
+    let out = edgekf(&["oscillator", "estimate", "--config", DEMO_CONFIG, "--data", path(&data), "--out", path(&est)]);
+    let (stdout, stderr) = (text(&out.stdout), text(&out.stderr));
+    assert!(out.status.success(), "{stderr}");
+    assert!(stderr.contains("12000 rows, sample rate 1000.000000 Hz"), "{stderr}");
+    assert!(!stderr.contains("notice"), "a simulator file is clean: {stderr}");
+    // The 20 ms of 3 g saturation read as full scale and are bridged as missing samples.
+    assert_eq!(row(&stdout, "missing samples (NaN + clipped + gap)"), ["—", "0+20+0"]);
+    let before: f64 = row(&stdout, "force amplitude, mean 3–6 s [N]")[1].parse().unwrap();
+    assert!((before - 5.0).abs() < 1e-3, "{stdout}");
+
+    let est_text = std::fs::read_to_string(&est).unwrap();
+    let mut lines = est_text.lines();
+    assert_eq!(lines.next().unwrap(), "t,force_amplitude,force_cos,force_sin,displacement,velocity,innovation,nis");
+    // Row for t = 9.005 s: the innovation and NIS of a clipped sample are empty (NaN).
+    let clipped: Vec<&str> = lines.nth(9_005).unwrap().split(',').collect();
+    assert_eq!((clipped[0], clipped[6], clipped[7]), ("9.005", "NaN", "NaN"));
+
+    // The same data in f32.
+    let out = edgekf(&["oscillator", "estimate", "--data", path(&data), "--precision", "f32"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(text(&out.stdout).contains("harmonic-force estimate (f32) with the model of the demo scenario"));
+}
+
+#[test]
+fn data_notices_go_to_stderr() {
+    let dir = scratch("notices");
+    let data = dir.join("data.csv");
+    // 1.5 s at 1 kHz of a 14 Hz vibration, with a temperature column, two empty cells and 10 ms lost.
+    let mut csv = String::from("t,ax,temperature\n");
+    for k in (0..1500).filter(|k| !(700..710).contains(k)) {
+        let t = k as f64 / 1000.0;
+        let ax = if k == 100 || k == 900 { String::new() } else { format!("{}", 4.8 * (87.96 * t).cos()) };
+        csv.push_str(&format!("{t},{ax},21.5\n"));
+    }
+    std::fs::write(&data, csv).unwrap();
+    let out = edgekf(&["oscillator", "estimate", "--data", path(&data), "--settle", "0.5"]);
+    let stderr = text(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(stderr.contains("notice: ignored column `temperature`"), "{stderr}");
+    assert!(stderr.contains("notice: column `ax`: 2 empty/NaN cell(s) of 1490"), "{stderr}");
+    assert!(stderr.contains("1 gap(s)") && stderr.contains("10 sample(s) missing"), "{stderr}");
+    assert_eq!(row(&text(&out.stdout), "missing samples (NaN + clipped + gap)"), ["—", "2+0+10"]);
+}
+
+#[test]
+fn malformed_files_fail_with_one_clear_line() {
+    let dir = scratch("malformed");
+    let bad = dir.join("bad.csv");
+    std::fs::write(&bad, "t,ax\n0,0.1\n0.001,0.2,0.3\n0.002,0.1\n").unwrap();
+    let out = edgekf(&["oscillator", "estimate", "--data", path(&bad)]);
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = text(&out.stderr);
+    assert_eq!(stderr, format!("error: {}:3: 3 field(s), but the header has 2\n", bad.display()));
+    assert!(out.stdout.is_empty());
+
+    std::fs::write(&bad, "time,ax\n0,1\n").unwrap();
+    let stderr = text(&edgekf(&["oscillator", "estimate", "--data", path(&bad)]).stderr);
+    assert!(stderr.contains("the first column must be `t`"), "{stderr}");
+
+    // Data at 500 Hz against a 1 kHz sensor.
+    std::fs::write(&bad, "t,ax\n0,1\n0.002,1\n0.004,1\n").unwrap();
+    let stderr = text(&edgekf(&["oscillator", "estimate", "--data", path(&bad)]).stderr);
+    // The data report comes first, then the error.
+    let last = stderr.lines().last().unwrap();
+    assert!(
+        last.starts_with("error: ") && last.contains("sampled at 500.000000 Hz but the filter is built for 1000 Hz")
+    );
+
+    let missing = dir.join("nope.csv");
+    let out = edgekf(&["oscillator", "estimate", "--data", path(&missing)]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(text(&out.stderr).contains("nope.csv: cannot read"));
+}
+
+#[test]
+fn bad_scenarios_name_the_file_and_field() {
+    let dir = scratch("badconfig");
+    let cfg = dir.join("c.toml");
+    std::fs::write(&cfg, "[sensor]\nodr_hz = 1200.0\n").unwrap();
+    let out = edgekf(&["oscillator", "simulate", "--config", path(&cfg), "--out", path(&dir.join("d.csv"))]);
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = text(&out.stderr);
+    assert!(
+        stderr.starts_with(&format!("error: {}: invalid scenario: sensor.odr_hz = 1200", cfg.display())),
+        "{stderr}"
+    );
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(!stderr.contains("panicked"));
+
+    std::fs::write(&cfg, "[mode]\nnatural_freq = 20.0\n").unwrap();
+    let stderr = text(&edgekf(&["demo", "--config", path(&cfg)]).stderr);
+    assert!(stderr.contains("unknown field `natural_freq`"), "{stderr}");
+}
+
+#[test]
+fn help_explains_the_commands() {
+    let out = edgekf(&["--help"]);
+    let stdout = text(&out.stdout);
+    assert!(out.status.success());
+    for word in ["demo", "oscillator", "first column `t` in seconds", "edgekf oscillator estimate --config"] {
+        assert!(stdout.contains(word), "{word}: {stdout}");
+    }
+    let out = edgekf(&["oscillator", "simulate", "--help"]);
+    assert!(text(&out.stdout).contains("--faults"));
+    // A usage error is clap's: exit 2.
+    assert_eq!(edgekf(&["oscillator", "estimate"]).status.code(), Some(2));
+}

@@ -1,0 +1,41 @@
+//! Support for edgekf's cross-crate and hardware-in-the-loop tests.
+//!
+//! * [`qemu`] runs the firmware image under `qemu-system-arm` on a data file and decodes its
+//!   defmt stream;
+//! * [`report`] turns the decoded lines into numbers (block estimates, health counters, stack);
+//! * [`host`] runs the very same driver + main loop on the host over the same data, which is what
+//!   a firmware run is compared with.
+#![deny(missing_docs)]
+
+pub mod checks;
+pub mod host;
+pub mod qemu;
+pub mod report;
+
+/// Compares two runs block by block and returns a readable description of the first
+/// difference, or `None` if every reported number is bit-identical.
+pub fn first_difference(firmware: &report::RunReport, host: &report::RunReport) -> Option<String> {
+    if firmware.blocks.len() != host.blocks.len() {
+        return Some(format!("firmware reported {} blocks, host {}", firmware.blocks.len(), host.blocks.len()));
+    }
+    for (f, h) in firmware.blocks.iter().zip(&host.blocks) {
+        let fv = report::block_values(f);
+        let hv = report::block_values(h);
+        for ((name, a), (_, b)) in fv.iter().zip(hv.iter()) {
+            if a.to_bits() != b.to_bits() {
+                return Some(format!(
+                    "block {}: {name} firmware {a:e} host {b:e} ({} ulp apart)",
+                    f.block,
+                    (a.to_bits() as i64 - b.to_bits() as i64).abs()
+                ));
+            }
+        }
+        if (f.read, f.missing) != (h.read, h.missing) {
+            return Some(format!("block {}: read/missing firmware {:?} host {:?}", f.block, (f.read, f.missing), (h.read, h.missing)));
+        }
+    }
+    if firmware.health != host.health {
+        return Some(format!("health differs: firmware {:?} host {:?}", firmware.health, host.health));
+    }
+    None
+}

@@ -1,0 +1,74 @@
+//! Hardware-in-the-loop tests: the firmware image runs under QEMU (`-M netduinoplus2`, a
+//! Cortex-M4F) with the real ADXL355 driver and main loop talking I²C to a virtual ADXL355 fed
+//! from a host CSV file; its defmt output is decoded and compared with the host run of the same
+//! code on the same data. Run through `cargo xtask test`, which builds the image and sets
+//! `EDGEKF_FW_ELF`.
+#![cfg(feature = "hil")]
+
+use edgekf_sim::scenario::Scenario;
+use edgekf_tests::checks::{fault_scenario, recovery_mismatch, worst_amplitude_error, FAULTS_CLEAR_AT};
+use edgekf_tests::report::RunReport;
+use edgekf_tests::{first_difference, host, qemu};
+use std::time::Duration;
+
+fn firmware(csv: &[u8]) -> RunReport {
+    let elf = qemu::firmware_elf().unwrap_or_else(|e| panic!("{e:#}"));
+    let run = qemu::run(&elf, csv, Duration::from_secs(300)).unwrap_or_else(|e| panic!("{e:#}"));
+    if let Some(msg) = run.failure() {
+        panic!("{msg}");
+    }
+    let report = RunReport::parse(run.lines.iter().map(String::as_str)).unwrap_or_else(|e| panic!("{e:#}"));
+    assert!(report.done, "firmware stopped before its end; last lines: {:?}", run.lines.iter().rev().take(3).collect::<Vec<_>>());
+    report
+}
+
+#[test]
+fn clean_run_matches_the_host_bit_for_bit() {
+    let rec = Scenario::default().simulate();
+    let csv = rec.to_csv_string();
+    let fw = firmware(csv.as_bytes());
+    let host = host::run(csv.as_bytes()).unwrap();
+    assert!(fw.health.samples >= 10_000, "only {} samples streamed", fw.health.samples);
+    if let Some(diff) = first_difference(&fw, &host) {
+        panic!("firmware and host disagree: {diff}");
+    }
+    let err = worst_amplitude_error(&fw, &rec, 1.0, 6.0).max(worst_amplitude_error(&fw, &rec, 7.0, 12.0));
+    let (used, total) = fw.stack.expect("stack line");
+    eprintln!(
+        "HIL clean: {} samples in {} blocks, bit-identical to the host (0 ulp); worst force error {:.3} %; \
+         stack high-water {used} B of {total} B; input columns ignored by the device: {}",
+        fw.health.samples,
+        fw.blocks.len(),
+        err * 100.0,
+        fw.feed[2]
+    );
+    assert!(err < 0.01);
+    assert!(used < 16 * 1024, "stack use {used} B");
+}
+
+#[test]
+fn injected_i2c_faults_are_survived_counted_and_recovered_from() {
+    let clean = firmware(Scenario::default().simulate().to_csv_string().as_bytes());
+    let csv = fault_scenario().simulate().to_csv_string();
+    let fw = firmware(csv.as_bytes());
+    let host = host::run(csv.as_bytes()).unwrap();
+    if let Some(diff) = first_difference(&fw, &host) {
+        panic!("firmware and host disagree on the fault run: {diff}");
+    }
+    let h = fw.health;
+    eprintln!("HIL faults: {h:?}; virtual device: loaded {}, NACKs {}, overwritten entries {}", fw.virtual_device[0], fw.virtual_device[1], fw.virtual_device[2]);
+    assert!(h.nacks >= 17 && h.recovered >= 1 && h.failed_polls >= 2, "{h:?}");
+    assert!(h.stuck >= 195 && h.saturated == 50 && h.bridged > 0, "{h:?}");
+    let (what, rel) = recovery_mismatch(&clean, &fw, FAULTS_CLEAR_AT + 0.5, 1e-3);
+    eprintln!("HIL faults: from 0.5 s after the faults clear, worst mismatch {what} = {:.4} % of the clean RMS", rel * 100.0);
+    assert!(rel < 0.01, "{what}: {rel}");
+}
+
+#[test]
+fn a_failing_firmware_run_fails_with_a_readable_message() {
+    let elf = qemu::firmware_elf().unwrap();
+    let run = qemu::run(&elf, b"time,accel\n0,1\n", Duration::from_secs(60)).unwrap();
+    assert_eq!(run.exit_code, Some(3));
+    let msg = run.failure().expect("a failure");
+    assert!(msg.contains("exit code Some(3)") && msg.contains("no usable header"), "{msg}");
+}

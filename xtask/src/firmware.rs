@@ -1,0 +1,124 @@
+//! Cross-building the firmware images and reporting their footprint.
+
+use crate::provision::DEBIAN_CARGO;
+use anyhow::{bail, Context, Result};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::Duration;
+
+/// Which image.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Image {
+    /// `edgekf-qemu`: virtual ADXL355 over semihosting, for `qemu-system-arm -M netduinoplus2`.
+    Qemu,
+    /// `edgekf-board`: STM32F411 with an ADXL355 on I2C1, defmt over RTT.
+    Board,
+}
+
+impl Image {
+    fn bin(self) -> &'static str {
+        match self {
+            Image::Qemu => "edgekf-qemu",
+            Image::Board => "edgekf-board",
+        }
+    }
+    fn feature(self) -> &'static str {
+        match self {
+            Image::Qemu => "qemu",
+            Image::Board => "board",
+        }
+    }
+}
+
+const TARGET: &str = "thumbv7em-none-eabihf";
+const PROFILE: &str = "firmware";
+
+fn workspace_root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).parent().map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from("."))
+}
+
+/// Builds `image` with Debian's cargo (`-Zbuild-std=core`) and returns the ELF path.
+pub fn build(image: Image) -> Result<PathBuf> {
+    let root = workspace_root();
+    let path = std::env::var("PATH").unwrap_or_default();
+    let mut cmd = Command::new(DEBIAN_CARGO);
+    cmd.current_dir(&root)
+        .args(["build", "-p", "edgekf-firmware", "--bin", image.bin(), "--features", image.feature()])
+        .args(["--target", TARGET, "--profile", PROFILE, "-Zbuild-std=core"])
+        .env("PATH", format!("/usr/bin:{path}"))
+        .env("RUSTC_BOOTSTRAP", "1");
+    for var in ["RUSTC", "RUSTDOC", "RUSTC_WRAPPER", "RUSTUP_TOOLCHAIN", "CARGO", "RUSTFLAGS", "CARGO_ENCODED_RUSTFLAGS"] {
+        cmd.env_remove(var);
+    }
+    let st = cmd.status().context("running Debian's cargo for the cross build")?;
+    if !st.success() {
+        bail!("firmware build of {} failed ({st})", image.bin());
+    }
+    let target_dir = std::env::var_os("CARGO_TARGET_DIR").map(PathBuf::from).unwrap_or_else(|| root.join("target"));
+    let elf = target_dir.join(TARGET).join(PROFILE).join(image.bin());
+    if !elf.is_file() {
+        bail!("build succeeded but {} is missing", elf.display());
+    }
+    Ok(elf)
+}
+
+/// Flash and static RAM of an ELF, from its allocated sections.
+pub fn footprint(elf: &Path) -> Result<(u64, u64)> {
+    let out = Command::new("arm-none-eabi-size").arg("-A").arg(elf).output().context("arm-none-eabi-size")?;
+    if !out.status.success() {
+        bail!("arm-none-eabi-size failed on {}", elf.display());
+    }
+    let (mut flash, mut ram) = (0u64, 0u64);
+    for line in String::from_utf8_lossy(&out.stdout).lines() {
+        let f: Vec<&str> = line.split_whitespace().collect();
+        let [name, size, addr] = f[..] else { continue };
+        let (Ok(size), Ok(addr)) = (size.parse::<u64>(), addr.parse::<u64>()) else { continue };
+        if (0x0800_0000..0x0810_0000).contains(&addr) {
+            flash += size;
+        } else if (0x2000_0000..0x2002_0000).contains(&addr) {
+            ram += size;
+            if name == ".data" {
+                flash += size; // initial values live in flash
+            }
+        }
+    }
+    Ok((flash, ram))
+}
+
+/// Prints the footprint line the README quotes.
+pub fn print_footprint(image: Image, elf: &Path) -> Result<()> {
+    let (flash, ram) = footprint(elf)?;
+    println!(
+        "footprint {}: flash {} B ({:.1} KiB of 512 KiB), static RAM {} B ({:.1} KiB of 128 KiB) — {}",
+        image.bin(),
+        flash,
+        flash as f64 / 1024.0,
+        ram,
+        ram as f64 / 1024.0,
+        elf.display()
+    );
+    Ok(())
+}
+
+/// Runs the QEMU image on `data` (default: the demo scenario) and prints the decoded log.
+pub fn run_and_print(elf: &Path, data: Option<&Path>) -> Result<()> {
+    let input = match data {
+        Some(p) => std::fs::read(p).with_context(|| format!("reading {}", p.display()))?,
+        None => edgekf_sim::scenario::Scenario::default().simulate().to_csv_string().into_bytes(),
+    };
+    let run = edgekf_tests::qemu::run(elf, &input, Duration::from_secs(120))?;
+    for line in &run.lines {
+        println!("{line}");
+    }
+    if !run.stderr.trim().is_empty() {
+        eprintln!("{}", run.stderr.trim());
+    }
+    if let Some(msg) = run.failure() {
+        bail!(msg);
+    }
+    let report = edgekf_tests::report::RunReport::parse(run.lines.iter().map(String::as_str))?;
+    if let Some((used, total)) = report.stack {
+        println!("stack high-water: {used} B of {total} B available");
+    }
+    Ok(())
+}
