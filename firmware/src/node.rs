@@ -153,6 +153,7 @@ impl<I2C: I2c> Node<I2C> {
     /// Initialises the accelerometer (with retries) and builds the estimator. On failure the
     /// bus is handed back with the reason, so the caller can retry later.
     #[allow(clippy::type_complexity)]
+    #[inline(never)] // start-up temporaries stay out of the caller's (main's) frame
     pub fn start(i2c: I2C, config: NodeConfig) -> Result<Self, (StartError<I2C::Error>, I2C)> {
         let estimator = match HarmonicForceEstimator::new(&config.estimator) {
             Ok(e) => e,
@@ -236,7 +237,8 @@ impl<I2C: I2c> Node<I2C> {
             }
         }
         self.health.samples += used;
-        let (irms, nis) = if used > 0 { (libm::sqrtf(sum_sq / used as f32), sum_nis / used as f32) } else { (0.0, 0.0) };
+        let (irms, nis) =
+            if used > 0 { (libm::sqrtf(sum_sq / used as f32), sum_nis / used as f32) } else { (0.0, 0.0) };
         self.finish(report, irms, nis)
     }
 

@@ -43,7 +43,8 @@ pub fn worst_amplitude_error(run: &RunReport, rec: &Recording, t0: f64, t1: f64)
 /// After `from` seconds: the RMS difference between two runs' estimates of each quantity, as a
 /// fraction of the RMS of that quantity in `reference`; returns the worst quantity and value.
 pub fn recovery_mismatch(reference: &RunReport, other: &RunReport, from: f64, dt: f64) -> (&'static str, f64) {
-    let pick: [(&'static str, fn(&edgekf_firmware::node::BlockReport) -> f32); 4] = [
+    type Pick = fn(&edgekf_firmware::node::BlockReport) -> f32;
+    let pick: [(&'static str, Pick); 4] = [
         ("displacement", |b| b.displacement),
         ("velocity", |b| b.velocity),
         ("force_cos", |b| b.force_cos),

@@ -31,7 +31,12 @@ pub fn first_difference(firmware: &report::RunReport, host: &report::RunReport) 
             }
         }
         if (f.read, f.missing) != (h.read, h.missing) {
-            return Some(format!("block {}: read/missing firmware {:?} host {:?}", f.block, (f.read, f.missing), (h.read, h.missing)));
+            return Some(format!(
+                "block {}: read/missing firmware {:?} host {:?}",
+                f.block,
+                (f.read, f.missing),
+                (h.read, h.missing)
+            ));
         }
     }
     if firmware.health != host.health {

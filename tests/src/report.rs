@@ -19,8 +19,8 @@ pub struct RunReport {
     pub feed: [u32; 3],
     /// Virtual device: samples loaded, NACKs sent, FIFO entries overwritten.
     pub virtual_device: [u32; 3],
-    /// Stack bytes used and available (firmware runs only).
-    pub stack: Option<(u32, u32)>,
+    /// Stack bytes used by start-up, by the main loop, and available (firmware runs only).
+    pub stack: Option<[u32; 3]>,
     /// Whether the run reached its end.
     pub done: bool,
 }
@@ -91,8 +91,8 @@ impl RunReport {
                 "feed" => r.feed = numbers::<u32>(&rest, 3, line)?.try_into().expect("3 values"),
                 "virtual" => r.virtual_device = numbers::<u32>(&rest, 3, line)?.try_into().expect("3 values"),
                 "stack" => {
-                    let v = numbers::<u32>(&rest, 2, line).context("stack line")?;
-                    r.stack = Some((v[0], v[1]));
+                    let v = numbers::<u32>(&rest, 3, line).context("stack line")?;
+                    r.stack = Some([v[0], v[1], v[2]]);
                 }
                 "done" => r.done = true,
                 _ => {}
@@ -120,7 +120,7 @@ mod tests {
             "estimator 160 1 0 0 0",
             "feed 160 0 5",
             "virtual 160 2 0",
-            "stack 1200 131000",
+            "stack 9000 1200 131000",
             "done",
         ];
         let r = RunReport::parse(lines).unwrap();
@@ -128,7 +128,7 @@ mod tests {
         assert_eq!(r.blocks[0].missing, 1);
         assert_eq!(r.blocks[0].force_amplitude, 5.0311);
         assert_eq!(r.health.stuck, 1);
-        assert_eq!(r.stack, Some((1200, 131000)));
+        assert_eq!(r.stack, Some([9000, 1200, 131000]));
         assert!(r.done);
         assert!(RunReport::parse(["blk 1 2 3 0.5"]).is_err());
     }

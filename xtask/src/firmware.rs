@@ -47,7 +47,9 @@ pub fn build(image: Image) -> Result<PathBuf> {
         .args(["--target", TARGET, "--profile", PROFILE, "-Zbuild-std=core"])
         .env("PATH", format!("/usr/bin:{path}"))
         .env("RUSTC_BOOTSTRAP", "1");
-    for var in ["RUSTC", "RUSTDOC", "RUSTC_WRAPPER", "RUSTUP_TOOLCHAIN", "CARGO", "RUSTFLAGS", "CARGO_ENCODED_RUSTFLAGS"] {
+    for var in
+        ["RUSTC", "RUSTDOC", "RUSTC_WRAPPER", "RUSTUP_TOOLCHAIN", "CARGO", "RUSTFLAGS", "CARGO_ENCODED_RUSTFLAGS"]
+    {
         cmd.env_remove(var);
     }
     let st = cmd.status().context("running Debian's cargo for the cross build")?;
@@ -117,8 +119,8 @@ pub fn run_and_print(elf: &Path, data: Option<&Path>) -> Result<()> {
         bail!(msg);
     }
     let report = edgekf_tests::report::RunReport::parse(run.lines.iter().map(String::as_str))?;
-    if let Some((used, total)) = report.stack {
-        println!("stack high-water: {used} B of {total} B available");
+    if let Some([boot, used, total]) = report.stack {
+        println!("stack high-water: {boot} B during start-up, {used} B in the main loop, {total} B available");
     }
     Ok(())
 }

@@ -65,8 +65,20 @@ fn test(long: bool) -> Result<()> {
 
     step("hardware-in-the-loop tests in QEMU");
     let mut hil = cargo_here();
-    hil.args(["test", "-p", "edgekf-tests", "--features", "hil", "--test", "hil", "--", "--nocapture", "--test-threads", "1"])
-        .env("EDGEKF_FW_ELF", &qemu);
+    hil.args([
+        "test",
+        "-p",
+        "edgekf-tests",
+        "--features",
+        "hil",
+        "--test",
+        "hil",
+        "--",
+        "--nocapture",
+        "--test-threads",
+        "1",
+    ])
+    .env("EDGEKF_FW_ELF", &qemu);
     status(hil, "HIL tests")?;
     step("all tests passed");
     Ok(())

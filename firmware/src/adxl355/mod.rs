@@ -34,7 +34,10 @@ mod sample;
 #[cfg(test)]
 mod tests;
 
-pub use config::{Config, OutputDataRate, Range, DEFAULT_FILTER_DELAY_SAMPLES, RATED_FULL_SCALE_CODE, RAW_MAX, RAW_MIN, STANDARD_GRAVITY};
+pub use config::{
+    Config, OutputDataRate, Range, DEFAULT_FILTER_DELAY_SAMPLES, RATED_FULL_SCALE_CODE, RAW_MAX, RAW_MIN,
+    STANDARD_GRAVITY,
+};
 pub use error::{is_nack, Error};
 pub use interface::{I2cInterface, Interface, SpiInterface};
 pub use sample::{decode_axis, decode_fifo, decode_xyz, encode_axis, FifoRead, RawSample, Status};

@@ -109,5 +109,6 @@ fn bad_scenarios_are_refused_with_the_field_named() {
     assert!(e("[[faults]]\nkind = \"stuck\"\nt_start = 2.0\nt_end = 1.0\n").contains("faults[0]"));
     assert!(e("[[faults]]\nkind = \"melt\"\n").contains("melt"));
     assert!(e("[filter]\nforce_psd = -1.0\n").contains("force_psd"));
+    assert!(e("[filter]\ngain = \"fast\"\n").contains("unknown variant `fast`"));
     assert!(e("duration_s = \"long\"\n").contains("duration_s"));
 }

@@ -45,6 +45,8 @@ pub struct SteadyState<const N: usize, const M: usize> {
 /// let ss = solve_riccati(&m, 1e-14, 10_000).unwrap();
 /// assert!((ss.predicted[(0, 0)] - 1.618033988749895).abs() < 1e-12);
 /// ```
+// Out of line for the same reason as `expm`: start-up temporaries must not stay in `main`'s frame.
+#[inline(never)]
 pub fn solve_riccati<const N: usize, const M: usize>(
     model: &LinearModel<f64, N, M>,
     tol: f64,

@@ -25,6 +25,9 @@ const NORM_TARGET: f64 = 0.5;
 /// assert!((e[(0, 0)] - w.cos()).abs() < 1e-15);
 /// assert!((e[(0, 1)] - w.sin()).abs() < 1e-15);
 /// ```
+// Kept out of line: its f64 temporaries would otherwise be inlined into (and stay reserved in)
+// the caller's stack frame on the chip, which for the firmware's `main` is the whole run.
+#[inline(never)]
 pub fn expm<T: Real, const N: usize>(a: &SMatrix<T, N, N>) -> Result<SMatrix<T, N, N>, LinalgError> {
     if a.iter().any(|v| !v.is_finite()) {
         return Err(LinalgError::NonFinite);
@@ -56,7 +59,7 @@ pub fn expm<T: Real, const N: usize>(a: &SMatrix<T, N, N>) -> Result<SMatrix<T, 
     let mut den = SMatrix::<T, N, N>::identity();
     for k in 1..=q {
         c = c * T::of_f64((q - k + 1) as f64) / T::of_f64((k * (2 * q - k + 1)) as f64);
-        x_pow = x_pow * x;
+        x_pow *= x;
         let term = x_pow * c;
         num += term;
         if k % 2 == 0 {

@@ -107,10 +107,22 @@ impl HarmonicForceParams {
         let wn = self.omega_n();
         let w = self.drive_rad_s;
         Matrix4::new(
-            0.0, wn, 0.0, 0.0, //
-            -wn, -2.0 * self.damping_ratio * wn, wn, 0.0, //
-            0.0, 0.0, 0.0, -w, //
-            0.0, 0.0, w, 0.0,
+            0.0,
+            wn,
+            0.0,
+            0.0, //
+            -wn,
+            -2.0 * self.damping_ratio * wn,
+            wn,
+            0.0, //
+            0.0,
+            0.0,
+            0.0,
+            -w, //
+            0.0,
+            0.0,
+            w,
+            0.0,
         )
     }
 
@@ -121,13 +133,11 @@ impl HarmonicForceParams {
 
     /// The exactly discretised model (Van Loan), in `f64`.
     pub fn discrete_model(&self) -> Result<LinearModel<f64, STATES, 1>, LinalgError> {
-        let bad = [self.natural_freq_hz, self.sample_rate_hz, self.accel_noise_std]
-            .iter()
-            .any(|v| !v.is_finite() || *v <= 0.0)
-            || !self.drive_rad_s.is_finite()
-            || !self.damping_ratio.is_finite()
-            || !(self.force_psd >= 0.0 && self.motion_psd >= 0.0);
-        if bad {
+        let positive =
+            [self.natural_freq_hz, self.sample_rate_hz, self.accel_noise_std].iter().all(|v| v.is_finite() && *v > 0.0);
+        // NaN fails every comparison, so `>= 0.0` also rejects NaN.
+        let densities_ok = self.force_psd >= 0.0 && self.motion_psd >= 0.0;
+        if !positive || !self.drive_rad_s.is_finite() || !self.damping_ratio.is_finite() || !densities_ok {
             return Err(LinalgError::NonFinite);
         }
         let dt = 1.0 / self.sample_rate_hz;

@@ -14,11 +14,12 @@ pub fn normal_quantile(p: f64) -> f64 {
         -3.969683028665376e1,
         2.209460984245205e2,
         -2.759285104469687e2,
-        1.383577518672690e2,
+        1.38357751867269e2,
         -3.066479806614716e1,
         2.506628277459239,
     ];
-    const B: [f64; 5] = [-5.447609879822406e1, 1.615858368580409e2, -1.556989798598866e2, 6.680131188771972e1, -1.328068155288572e1];
+    const B: [f64; 5] =
+        [-5.447609879822406e1, 1.615858368580409e2, -1.556989798598866e2, 6.680131188771972e1, -1.328068155288572e1];
     const C: [f64; 6] = [
         -7.784894002430293e-3,
         -3.223964580411365e-1,
@@ -31,7 +32,8 @@ pub fn normal_quantile(p: f64) -> f64 {
     let p_low = 0.02425;
     let x = if p < p_low {
         let q = libm::sqrt(-2.0 * libm::log(p));
-        (((((C[0] * q + C[1]) * q + C[2]) * q + C[3]) * q + C[4]) * q + C[5]) / ((((D[0] * q + D[1]) * q + D[2]) * q + D[3]) * q + 1.0)
+        (((((C[0] * q + C[1]) * q + C[2]) * q + C[3]) * q + C[4]) * q + C[5])
+            / ((((D[0] * q + D[1]) * q + D[2]) * q + D[3]) * q + 1.0)
     } else if p <= 1.0 - p_low {
         let q = p - 0.5;
         let r = q * q;
@@ -39,7 +41,8 @@ pub fn normal_quantile(p: f64) -> f64 {
             / (((((B[0] * r + B[1]) * r + B[2]) * r + B[3]) * r + B[4]) * r + 1.0)
     } else {
         let q = libm::sqrt(-2.0 * libm::log(1.0 - p));
-        -(((((C[0] * q + C[1]) * q + C[2]) * q + C[3]) * q + C[4]) * q + C[5]) / ((((D[0] * q + D[1]) * q + D[2]) * q + D[3]) * q + 1.0)
+        -(((((C[0] * q + C[1]) * q + C[2]) * q + C[3]) * q + C[4]) * q + C[5])
+            / ((((D[0] * q + D[1]) * q + D[2]) * q + D[3]) * q + 1.0)
     };
     // One Halley step on Φ(x) − p.
     let e = 0.5 * libm::erfc(-x / core::f64::consts::SQRT_2) - p;
@@ -84,7 +87,10 @@ impl NisBounds {
     /// Bounds at false-alarm probability `alpha` (split equally between the two tails).
     pub fn new(m: usize, n: usize, alpha: f64) -> Self {
         let dof = (m * n) as f64;
-        Self { lower: chi2_quantile(alpha / 2.0, dof) / n as f64, upper: chi2_quantile(1.0 - alpha / 2.0, dof) / n as f64 }
+        Self {
+            lower: chi2_quantile(alpha / 2.0, dof) / n as f64,
+            upper: chi2_quantile(1.0 - alpha / 2.0, dof) / n as f64,
+        }
     }
 
     /// Whether `mean_nis` lies inside the interval.
@@ -100,7 +106,8 @@ mod tests {
     #[test]
     fn normal_quantile_reference_values() {
         // scipy.stats.norm.ppf
-        for (p, z) in [(0.5, 0.0), (0.995, 2.5758293035489004), (1e-6, -4.753424308822899), (0.01, -2.3263478740408408)] {
+        for (p, z) in [(0.5, 0.0), (0.995, 2.5758293035489004), (1e-6, -4.753424308822899), (0.01, -2.3263478740408408)]
+        {
             assert!((normal_quantile(p) - z).abs() < 1e-9, "{p}");
         }
         assert!(normal_quantile(0.0).is_nan() && normal_quantile(1.5).is_nan());

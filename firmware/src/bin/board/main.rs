@@ -33,7 +33,7 @@ fn main() -> ! {
         match Node::start(i2c, config) {
             Ok(node) => break node,
             Err((e, bus)) => {
-                defmt::error!("start failed: {}; retrying in 1 s", e);
+                defmt::error!("start failed: {}; retrying in 1 s", defmt::Debug2Format(&e));
                 delay.delay_ms(1000);
                 i2c = bus;
             }

@@ -97,15 +97,15 @@ impl TimingReport {
         if !self.gaps.is_empty() {
             let largest = self.gaps.iter().map(|g| g.dt).fold(0.0, f64::max);
             let mut msg = format!(
-                "timing: {} gap(s) in the time column (interval > {GAP_FACTOR} × the median {} s), about {} sample(s) \
-                 missing, largest {} s",
+                "timing: {} gap(s) in the time column (interval > {GAP_FACTOR} × the median {}), about {} \
+                 sample(s) missing, largest {}",
                 self.gaps.len(),
-                self.dt_median,
+                ms(self.dt_median),
                 self.missing_samples(),
-                largest
+                ms(largest)
             );
             for g in self.gaps.iter().take(5) {
-                msg.push_str(&format!("; row {} at t = {} s after {} s", g.index, g.t, g.dt));
+                msg.push_str(&format!("; row {} at t = {:.6} s after {}", g.index, g.t, ms(g.dt)));
             }
             if self.gaps.len() > 5 {
                 msg.push_str(&format!("; … {} more", self.gaps.len() - 5));
@@ -114,24 +114,29 @@ impl TimingReport {
         }
         if self.max_jitter >= UNIFORM_JITTER * self.dt_median {
             out.push(format!(
-                "timing: sample intervals jitter by up to {:.3e} s ({:.2} % of the {} s period); \
-                 the data are processed as if uniformly sampled",
-                self.max_jitter,
+                "timing: sample intervals jitter by up to {} ({:.2} % of the {} period); the data are \
+                 processed as if uniformly sampled",
+                ms(self.max_jitter),
                 100.0 * self.max_jitter / self.dt_median,
-                self.dt_median
+                ms(self.dt_median)
             ));
         }
         out
     }
 }
 
+/// A duration in milliseconds with six significant-enough decimals (`1.000000 ms`).
+fn ms(seconds: f64) -> String {
+    format!("{:.6} ms", seconds * 1e3)
+}
+
 impl fmt::Display for TimingReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "sample rate {:.6} Hz (median interval {} s)", self.sample_rate, self.dt_median)?;
+        write!(f, "sample rate {:.6} Hz (median interval {})", self.sample_rate, ms(self.dt_median))?;
         if self.uniform {
             write!(f, ", uniform")
         } else {
-            write!(f, ", {} gap(s), max jitter {:.3e} s", self.gaps.len(), self.max_jitter)
+            write!(f, ", {} gap(s), max jitter {}", self.gaps.len(), ms(self.max_jitter))
         }
     }
 }
