@@ -29,6 +29,6 @@ fn faults_are_counted_and_the_estimate_recovers() {
     assert!((195..=200).contains(&h.stuck), "{h:?}");
     assert_eq!(h.saturated, 50, "{h:?}");
     let (what, rel) = recovery_mismatch(&clean, &faulty, FAULTS_CLEAR_AT + 0.5, 1e-3);
-    eprintln!("after recovery: worst RMS mismatch {what} {:.4} % of the clean run's RMS", rel * 100.0);
+    eprintln!("after recovery: worst RMS mismatch {what} {:.2e} % of the clean run's RMS", rel * 100.0);
     assert!(rel < 0.01, "{what}: {rel}");
 }
