@@ -8,5 +8,5 @@
 mod kalman;
 mod steady;
 
-pub use kalman::{FilterError, FilterHealth, Innovation, KalmanFilter, LinearModel};
+pub use kalman::{FilterError, FilterHealth, Innovation, KalmanFilter, LinearModel, SequentialInnovation};
 pub use steady::{solve_riccati, RiccatiError, SteadyState, SteadyStateFilter};
