@@ -5,4 +5,5 @@
 //! estimator that wraps a filter from [`crate::filter`] with what the model needs around it
 //! (missing samples, gating, counters).
 
+pub mod augmented;
 pub mod harmonic;
