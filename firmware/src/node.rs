@@ -332,7 +332,7 @@ mod tests {
     use crate::virtual_adxl355::{FeedSample, SliceFeed, VirtualAdxl355};
     use std::vec::Vec;
 
-    /// Gaussian noise of the ADXL355's size (4 mm/s²) from a fixed-seed xorshift generator.
+    /// Gaussian noise of the ADXL355's size (the model's σ) from a fixed-seed xorshift generator.
     fn noise(state: &mut u64) -> f64 {
         let mut uniform = || {
             *state ^= *state << 13;
@@ -341,7 +341,9 @@ mod tests {
             (*state >> 11) as f64 / (1u64 << 53) as f64
         };
         let (u1, u2) = (uniform().max(1e-300), uniform());
-        4e-3 * libm::sqrt(-2.0 * libm::log(u1)) * libm::cos(2.0 * core::f64::consts::PI * u2)
+        HarmonicForceParams::default().accel_noise_std
+            * libm::sqrt(-2.0 * libm::log(u1))
+            * libm::cos(2.0 * core::f64::consts::PI * u2)
     }
 
     /// Steady forced response of the default mode to a 4 N force at the running speed, with

@@ -27,6 +27,7 @@
 
 pub mod demo;
 pub mod estimate;
+pub mod export;
 pub mod io;
 pub mod reference;
 pub mod report;

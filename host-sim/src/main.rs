@@ -90,6 +90,18 @@ enum Oscillator {
         #[arg(long, value_name = "S", default_value_t = 2.0)]
         settle: f64,
     },
+    /// Write the scenario's discrete model and steady-state gain as Rust constants.
+    ///
+    /// The firmware compiles such a file in with `include!` instead of discretising and solving
+    /// the Riccati equation at start-up. Constants: HARMONIC_A, _C, _Q, _R, _GAIN, _S.
+    Export {
+        /// Scenario file (default: the built-in demo scenario).
+        #[arg(long, value_name = "TOML")]
+        config: Option<PathBuf>,
+        /// Rust file to write.
+        #[arg(long, value_name = "RS")]
+        out: PathBuf,
+    },
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -132,6 +144,13 @@ fn run(command: Command) -> anyhow::Result<()> {
             let rec = s.simulate();
             rec.write_csv(&out)?;
             println!("wrote {}: {}\n{}", out.display(), describe_run(&s), describe(&s));
+            Ok(())
+        }
+        Command::Oscillator(Oscillator::Export { config, out }) => {
+            let s = scenario(config.as_deref())?;
+            let text = edgekf_sim::export::harmonic_constants(&s.estimator_params())?;
+            std::fs::write(&out, text).with_context(|| format!("writing {}", out.display()))?;
+            println!("wrote {}: discrete model and steady-state gain of {}", out.display(), describe(&s));
             Ok(())
         }
         Command::Oscillator(Oscillator::Estimate { config, data: path, out, precision, settle }) => {

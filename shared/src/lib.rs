@@ -9,6 +9,7 @@
 //!   and a covariance guard that counts and recovers instead of panicking;
 //! * [`models`]: reduced physical models, starting with a single-mode oscillator driven by an
 //!   unknown harmonic force at a known frequency (the "unbalance" pattern of rotating machines);
+//! * [`export`]: models and steady-state gains written as Rust constants for the firmware;
 //! * [`residual`]: innovation statistics cheap enough for the chip (running mean and variance,
 //!   normalised innovation squared with chi-square bounds).
 //!
@@ -26,6 +27,7 @@
 #![deny(missing_docs)]
 #![forbid(unsafe_code)]
 
+pub mod export;
 pub mod filter;
 pub mod linalg;
 pub mod models;

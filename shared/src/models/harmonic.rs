@@ -75,7 +75,7 @@ pub enum GainMode {
 
 impl Default for HarmonicForceParams {
     /// A 20 Hz mode (ζ = 2 %, 1 kg) driven at the rotor paper's running speed 87.96 rad/s, read
-    /// by an ADXL355 at 1 kHz: 25 µg/√Hz over its 250 Hz low-pass, about 4 mm/s² per sample.
+    /// by an ADXL355 at 1 kHz: 25 µg/√Hz over its 250 Hz low-pass, 4.86 mm/s² per sample.
     /// The force random walk (1e-3 (m/s²)²/s) gives a steady-state filter whose slowest error
     /// mode decays with τ ≈ 0.1 s and a force standard deviation of about 0.01 m/s² per kg.
     fn default() -> Self {
@@ -85,7 +85,9 @@ impl Default for HarmonicForceParams {
             modal_mass_kg: 1.0,
             drive_rad_s: 87.96,
             sample_rate_hz: 1000.0,
-            accel_noise_std: 4.0e-3,
+            // 25 µg/√Hz × g × √(π/2 × 250 Hz): the ADXL355's density over its low-pass at ODR/4
+            // (the same expression as host-sim's sensor model, so both give the same bits).
+            accel_noise_std: 25e-6 * 9.80665 * libm::sqrt(1.57 * (1000.0 / 4.0)),
             force_psd: 1.0e-3,
             motion_psd: 1.0e-6,
             initial_force_std: 10.0,
