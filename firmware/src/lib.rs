@@ -10,6 +10,8 @@
 pub mod adxl355;
 pub mod line_feed;
 pub mod node;
+#[cfg(all(target_os = "none", feature = "qemu"))]
+pub mod semihost;
 #[cfg(target_os = "none")]
 pub mod stack;
 pub mod virtual_adxl355;

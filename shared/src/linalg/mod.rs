@@ -36,3 +36,6 @@ impl core::fmt::Display for LinalgError {
 
 mod solve;
 pub use solve::solve;
+
+mod dot;
+pub use dot::{column, dot, mul_tr, mul_tr_add};

@@ -7,16 +7,14 @@
 #![no_std]
 #![no_main]
 
-mod semihost;
-
 use cortex_m_rt::{entry, exception, ExceptionFrame};
 use cortex_m_semihosting::heprintln;
 use defmt_semihosting as _;
 use edgekf_firmware::line_feed::LineFeed;
 use edgekf_firmware::node::{Node, NodeConfig};
+use edgekf_firmware::semihost::{exit, HostFile};
 use edgekf_firmware::stack;
 use edgekf_firmware::virtual_adxl355::VirtualAdxl355;
-use semihost::{exit, HostFile};
 
 const INPUT: &str = "hil_input.csv\0";
 

@@ -1,8 +1,8 @@
 //! Host file access and exit codes through ARM semihosting (handled by QEMU). Test equipment
 //! only: semihosting calls stop the core while the host serves them.
 
+use crate::line_feed::ByteSource;
 use cortex_m_semihosting::{nr, syscall, syscall1};
-use edgekf_firmware::line_feed::ByteSource;
 
 /// An open host file.
 pub struct HostFile(usize);

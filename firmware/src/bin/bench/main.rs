@@ -1,0 +1,167 @@
+//! Per-step instruction counts of the filters on the Cortex-M4F, under QEMU.
+//!
+//! Each kernel runs a few warm-up steps, then exactly one step between the markers
+//! `bench_start` and `bench_end`; a QEMU TCG plugin (`xtask/qemu-plugin/insn_section.c`) counts
+//! the instructions executed between them, and `cargo xtask bench` pairs the counts with the
+//! `bench <label>` lines this image prints. Instruction counts are not cycles (flash wait
+//! states and multi-cycle FPU operations come on top) but they are exact and repeatable, so
+//! they serve as the regression metric.
+//!
+//! Models are dense and pseudo-random (fixed seed): the cost of these filters does not depend
+//! on the values, only on the sizes.
+
+#![no_std]
+#![no_main]
+
+use cortex_m_rt::{entry, exception, ExceptionFrame};
+use cortex_m_semihosting::heprintln;
+use defmt_semihosting as _;
+use edgekf::filter::{KalmanFilter, LinearModel, SteadyState, SteadyStateFilter};
+use edgekf::models::harmonic::{HarmonicForceEstimator, HarmonicForceParams};
+use edgekf_firmware::semihost::exit;
+use nalgebra::{SMatrix, SVector};
+
+/// Marks the start of the measured section.
+#[no_mangle]
+#[inline(never)]
+pub extern "C" fn bench_start() {
+    // SAFETY: an empty asm block; it only keeps the function from being merged or removed.
+    unsafe { core::arch::asm!("") }
+}
+
+/// Marks the end of the measured section (a different body, so it gets its own address).
+#[no_mangle]
+#[inline(never)]
+pub extern "C" fn bench_end() {
+    // SAFETY: a single `nop`.
+    unsafe { core::arch::asm!("nop") }
+}
+
+/// Deterministic pseudo-random numbers in [−1, 1).
+struct Lcg(u32);
+
+impl Lcg {
+    fn next(&mut self) -> f64 {
+        self.0 = self.0.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+        (self.0 >> 8) as f64 / (1u32 << 23) as f64 - 1.0
+    }
+}
+
+/// A dense stable model: `A` scaled to Frobenius norm 0.9, dense `C`, diagonally dominant `Q`,
+/// diagonal `R`.
+fn dense_model<const N: usize, const M: usize>(rng: &mut Lcg) -> LinearModel<f64, N, M> {
+    let a = SMatrix::<f64, N, N>::from_fn(|_, _| rng.next());
+    let b = SMatrix::<f64, N, N>::from_fn(|_, _| 0.3 * rng.next());
+    LinearModel {
+        a: a * (0.9 / a.norm()),
+        c: SMatrix::from_fn(|_, _| rng.next()),
+        q: b * b.transpose() + SMatrix::identity() * 0.01,
+        r: SMatrix::identity() * 0.5,
+    }
+}
+
+fn measurement<const M: usize>(rng: &mut Lcg) -> SVector<f32, M> {
+    SVector::from_fn(|_, _| rng.next() as f32)
+}
+
+fn kalman<const N: usize, const M: usize>(label: &str, sequential: bool, rng: &mut Lcg) {
+    let mut kf = KalmanFilter::<f32, N, M>::new(dense_model::<N, M>(rng).cast(), SVector::zeros(), SMatrix::identity());
+    let step = |kf: &mut KalmanFilter<f32, N, M>, y: &SVector<f32, M>| {
+        kf.predict();
+        if sequential {
+            core::hint::black_box(kf.update_sequential(core::hint::black_box(y)).is_ok());
+        } else {
+            core::hint::black_box(kf.update(core::hint::black_box(y)).is_ok());
+        }
+    };
+    for _ in 0..3 {
+        step(&mut kf, &measurement(rng));
+    }
+    let y = measurement(rng);
+    bench_start();
+    step(&mut kf, &y);
+    bench_end();
+    defmt::info!("bench {=str} n={=usize} m={=usize} resets={=u32}", label, N, M, kf.health().covariance_resets);
+}
+
+fn predict_only<const N: usize, const M: usize>(rng: &mut Lcg) {
+    let mut kf = KalmanFilter::<f32, N, M>::new(dense_model::<N, M>(rng).cast(), SVector::zeros(), SMatrix::identity());
+    kf.predict();
+    bench_start();
+    kf.predict();
+    bench_end();
+    defmt::info!("bench kalman_predict n={=usize} m={=usize} resets={=u32}", N, M, kf.health().covariance_resets);
+}
+
+fn steady<const N: usize, const M: usize>(label: &str, rng: &mut Lcg) {
+    let model = dense_model::<N, M>(rng);
+    // Any gain costs the same; solving a 24-state Riccati equation in software f64 would only
+    // slow the benchmark down.
+    let ss = SteadyState {
+        predicted: SMatrix::identity(),
+        filtered: SMatrix::identity(),
+        gain: SMatrix::from_fn(|_, _| 0.01 * rng.next()),
+        innovation: SMatrix::identity(),
+        iterations: 0,
+    };
+    let Ok(mut f) = SteadyStateFilter::<f32, N, M>::from_steady_state(&model, &ss, SVector::zeros()) else {
+        defmt::error!("bench {=str}: no filter", label);
+        exit(1)
+    };
+    let y = measurement::<M>(rng);
+    f.predict();
+    f.update(&y);
+    bench_start();
+    f.predict();
+    core::hint::black_box(f.update(core::hint::black_box(&y)));
+    bench_end();
+    defmt::info!("bench {=str} n={=usize} m={=usize} resets={=u32}", label, N, M, f.resets());
+}
+
+fn harmonic() {
+    let Ok(mut est) = HarmonicForceEstimator::<f32>::new(&HarmonicForceParams::default()) else {
+        defmt::error!("bench harmonic: no estimator");
+        exit(1)
+    };
+    for k in 0..3 {
+        est.step(Some(k as f32 * 0.1));
+    }
+    bench_start();
+    core::hint::black_box(est.step(core::hint::black_box(Some(0.25))));
+    bench_end();
+    defmt::info!(
+        "bench harmonic_step n={=usize} m={=usize} resets={=u32}",
+        4usize,
+        1usize,
+        est.counters().filter.covariance_resets
+    );
+}
+
+#[entry]
+fn main() -> ! {
+    let mut rng = Lcg(0xEDC0_FFEE);
+    harmonic();
+    steady::<4, 1>("steady_state", &mut rng);
+    steady::<24, 4>("steady_state", &mut rng);
+    kalman::<4, 4>("kalman_joseph", false, &mut rng);
+    kalman::<12, 4>("kalman_joseph", false, &mut rng);
+    kalman::<24, 4>("kalman_joseph", false, &mut rng);
+    predict_only::<24, 4>(&mut rng);
+    kalman::<4, 4>("kalman_sequential", true, &mut rng);
+    kalman::<12, 4>("kalman_sequential", true, &mut rng);
+    kalman::<24, 4>("kalman_sequential", true, &mut rng);
+    defmt::info!("done");
+    exit(0)
+}
+
+#[panic_handler]
+fn panic(info: &core::panic::PanicInfo) -> ! {
+    heprintln!("edgekf-bench panicked: {}", info);
+    exit(101)
+}
+
+#[exception]
+unsafe fn HardFault(frame: &ExceptionFrame) -> ! {
+    heprintln!("edgekf-bench HardFault: {:?}", frame);
+    exit(102)
+}
