@@ -138,7 +138,12 @@ const ALPHA: f64 = 1e-3;
 fn nis_of_a_correct_filter_is_chi_square_consistent() {
     let (mean, n) = mean_nis(20, 1_050, 0.0);
     let bounds = NisBounds::new(M, n, ALPHA);
-    eprintln!("mean NIS {mean:.4} over {n} updates; {:.1} % bounds [{:.4}, {:.4}]", 100.0 * (1.0 - ALPHA), bounds.lower, bounds.upper);
+    eprintln!(
+        "mean NIS {mean:.4} over {n} updates; {:.1} % bounds [{:.4}, {:.4}]",
+        100.0 * (1.0 - ALPHA),
+        bounds.lower,
+        bounds.upper
+    );
     // Each update's NIS is χ²(M): the mean is M when consistent.
     assert!(bounds.contains(mean), "mean NIS {mean} outside {bounds:?}");
 }

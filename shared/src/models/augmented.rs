@@ -161,8 +161,8 @@ mod tests {
     extern crate std;
     use super::*;
     use crate::filter::KalmanFilter;
-    use std::{eprintln, vec, vec::Vec};
     use nalgebra::{Matrix2, Matrix3, SVector, Vector2, Vector3};
+    use std::{eprintln, vec, vec::Vec};
 
     /// Two masses (1 kg each) in a chain of springs (400 N/m each) to ground, 1 % damping-ish;
     /// the unknown force acts on mass 2.
@@ -175,8 +175,14 @@ mod tests {
 
     /// Force with dynamic content only (2.2 Hz and 4.1 Hz, near the modes at 1.97 and 5.15 Hz),
     /// simulated with RK4 at 20 sub-steps.
-    fn simulate(s: &StructuralModel<2, 4, 1>, dt: f64, n: usize) -> (Vec<SVector<f64, 4>>, Vec<f64>, Vec<Vector2<f64>>) {
-        let force = |t: f64| (2.0 * core::f64::consts::PI * 2.2 * t).cos() + 0.5 * (2.0 * core::f64::consts::PI * 4.1 * t).sin();
+    fn simulate(
+        s: &StructuralModel<2, 4, 1>,
+        dt: f64,
+        n: usize,
+    ) -> (Vec<SVector<f64, 4>>, Vec<f64>, Vec<Vector2<f64>>) {
+        let force = |t: f64| {
+            (2.0 * core::f64::consts::PI * 2.2 * t).cos() + 0.5 * (2.0 * core::f64::consts::PI * 4.1 * t).sin()
+        };
         let f = |x: &SVector<f64, 4>, t: f64| s.a * x + s.b * force(t);
         let (mut x, mut xs, mut us, mut acc) = (SVector::<f64, 4>::zeros(), vec![], vec![], vec![]);
         let h = dt / 20.0;

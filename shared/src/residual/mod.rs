@@ -4,7 +4,17 @@
 //! predicts (NIS χ²-distributed). These monitors measure how far a run is from that.
 
 mod chi2;
+mod gamma;
+mod locate;
 mod running;
+mod spectrum;
+#[cfg(test)]
+mod testutil;
+mod whiteness;
 
-pub use chi2::{chi2_quantile, normal_quantile, NisBounds};
+pub use chi2::{chi2_cdf, chi2_quantile, chi2_sf, normal_quantile, NisBounds};
+pub use gamma::{gamma_p, gamma_q};
+pub use locate::{locate_peak, NaturalMatch, Order, OrderMatch, PeakClass, PeakLocation, PeakTolerance};
 pub use running::RunningStats;
+pub use spectrum::{find_peaks, median_level, FftLen, FftSize, SpectralPeak, Welch};
+pub use whiteness::{LjungBox, WhitenessWindow};
