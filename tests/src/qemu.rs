@@ -50,10 +50,16 @@ pub fn firmware_elf() -> Result<PathBuf> {
 
 /// Runs `elf` under QEMU with `input` served as `hil_input.csv`; kills it after `timeout`.
 pub fn run(elf: &Path, input: &[u8], timeout: Duration) -> Result<FirmwareRun> {
+    run_with(elf, input, timeout, &[])
+}
+
+/// [`run`] with extra QEMU arguments (e.g. a TCG plugin).
+pub fn run_with(elf: &Path, input: &[u8], timeout: Duration, extra: &[&str]) -> Result<FirmwareRun> {
     let dir = tempfile::tempdir().context("temporary directory for the QEMU run")?;
     std::fs::write(dir.path().join("hil_input.csv"), input).context("writing hil_input.csv")?;
     let mut child = Command::new("qemu-system-arm")
         .args(QEMU_ARGS)
+        .args(extra)
         .arg("-kernel")
         .arg(elf)
         .current_dir(dir.path())

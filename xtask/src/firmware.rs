@@ -13,6 +13,8 @@ pub enum Image {
     Qemu,
     /// `edgekf-board`: STM32F411 with an ADXL355 on I2C1, defmt over RTT.
     Board,
+    /// `edgekf-bench`: per-step instruction counts under QEMU.
+    Bench,
 }
 
 impl Image {
@@ -20,11 +22,12 @@ impl Image {
         match self {
             Image::Qemu => "edgekf-qemu",
             Image::Board => "edgekf-board",
+            Image::Bench => "edgekf-bench",
         }
     }
     fn feature(self) -> &'static str {
         match self {
-            Image::Qemu => "qemu",
+            Image::Qemu | Image::Bench => "qemu",
             Image::Board => "board",
         }
     }
@@ -33,7 +36,7 @@ impl Image {
 const TARGET: &str = "thumbv7em-none-eabihf";
 const PROFILE: &str = "firmware";
 
-fn workspace_root() -> PathBuf {
+pub fn workspace_root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).parent().map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from("."))
 }
 

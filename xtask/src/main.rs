@@ -5,8 +5,11 @@
 //! * `cargo xtask fw [--board]` — cross-build an image and print its flash/RAM use.
 //! * `cargo xtask run [--data FILE.csv]` — run the QEMU image on a data file (default: the demo
 //!   scenario) and print the decoded defmt log, the stack high-water mark included.
+//! * `cargo xtask bench` — per-step instruction counts of the filters on the Cortex-M4F under
+//!   QEMU (an instruction-counting TCG plugin), checked against the budgets.
 //! * `cargo xtask provision` — install what a fresh Debian machine lacks (as root), or say what.
 
+mod bench;
 mod firmware;
 mod provision;
 
@@ -38,8 +41,12 @@ fn run() -> Result<()> {
             firmware::run_and_print(&elf, data.map(std::path::Path::new))
         }
         Some("provision") => provision::ensure(),
+        Some("bench") => {
+            provision::ensure()?;
+            bench::run(&firmware::workspace_root()).map(|_| ())
+        }
         _ => {
-            eprintln!("usage: cargo xtask <test [--long] | fw [--board] | run [--data FILE.csv] | provision>");
+            eprintln!("usage: cargo xtask <test [--long] | fw [--board] | run [--data FILE.csv] | bench | provision>");
             std::process::exit(2);
         }
     }

@@ -1,0 +1,582 @@
+//! Unscented Kalman filter with Van der Merwe's scaled sigma points.
+//!
+//! The arithmetic follows filterpy's `UnscentedKalmanFilter` with `MerweScaledSigmaPoints` step
+//! for step (same weights, same sigma-point order, sigma points of the update redrawn from the
+//! predicted mean and covariance), so a host run in `f64` can be checked against it element by
+//! element; `shared/tests/filterpy.rs` does that.
+
+use super::kalman::{FilterError, FilterHealth, Innovation};
+use crate::Real;
+use nalgebra::{SMatrix, SVector};
+
+/// A nonlinear discrete model `x' = f(x) + w`, `y = h(x) + v` with `w ~ N(0, Q)`,
+/// `v ~ N(0, R)`; the noise covariances live in the filter.
+///
+/// `f` and `h` are called `2N + 1` times per predict and per update, at sigma points that may lie
+/// outside the physical domain (a negative clearance, a health factor above one): clamp inside
+/// the model where that matters. They must not panic; a non-finite result is caught by the filter
+/// (see [`UnscentedKalmanFilter`]). For the chip and the
+/// host to compute the same bits, write them with `+ − × ÷`, `sqrt` and comparisons only (or
+/// call `libm` explicitly, accepting that its results may differ in the last bit between
+/// platforms).
+///
+/// ```
+/// use edgekf::filter::UkfModel;
+/// use nalgebra::{Vector1, Vector2};
+/// /// A falling body with drag, position measured.
+/// struct Fall { dt: f64 }
+/// impl UkfModel<f64, 2, 1> for Fall {
+///     fn f(&self, x: &Vector2<f64>) -> Vector2<f64> {
+///         let v = x[1] + self.dt * (-9.81 + 0.1 * x[1] * x[1]);
+///         Vector2::new(x[0] + self.dt * v, v)
+///     }
+///     fn h(&self, x: &Vector2<f64>) -> Vector1<f64> {
+///         Vector1::new(x[0])
+///     }
+/// }
+/// let m = Fall { dt: 0.01 };
+/// assert!(m.f(&Vector2::new(10.0, 0.0))[1] < 0.0);
+/// ```
+pub trait UkfModel<T: Real, const N: usize, const M: usize> {
+    /// Process model: the state one step later, without noise.
+    fn f(&self, x: &SVector<T, N>) -> SVector<T, N>;
+    /// Measurement model: the noise-free measurement of state `x`.
+    fn h(&self, x: &SVector<T, N>) -> SVector<T, M>;
+}
+
+/// Van der Merwe's scaled sigma points (filterpy's `MerweScaledSigmaPoints`).
+///
+/// With `λ = α² (n + κ) − n` the `2n + 1` points are `x`, `x + √((n+λ)P)` column `i` and
+/// `x − √((n+λ)P)` column `i` (`i = 1…n`, lower Cholesky factor), weighted by
+/// `Wm₀ = λ/(n+λ)`, `Wc₀ = Wm₀ + 1 − α² + β` and `Wmᵢ = Wcᵢ = 1/(2(n+λ))`.
+///
+/// `α` sets the spread (small, e.g. 1e-3 … 1, keeps the points local), `β = 2` is optimal for a
+/// Gaussian prior, `κ` is usually `0` or `3 − n`.
+///
+/// Precision: the unscented mean is in effect a second difference of `f` over a step of
+/// `α √(n+κ) σ`, so the rounding of `f`'s outputs (`ε |f|`) reaches the mean amplified by about
+/// `|Wm₀| ≈ 1/α²`. At α = 1e-3 that costs 6 of `f64`'s 16 digits (filterpy loses the same) and
+/// more than all of `f32`'s 7. [`MerweSigmaPoints::weights`] therefore refuses parameters with
+/// `|Wm₀| · ε > 1e-4` for the precision in use (fewer than four significant digits left): in
+/// `f32` that means `|Wm₀| ≤ 838`, e.g. `α ≳ 0.035` for `κ = 0`; `α ≈ 0.1 … 0.5` is a good
+/// choice there.
+///
+/// ```
+/// use edgekf::filter::MerweSigmaPoints;
+/// let w = MerweSigmaPoints { alpha: 0.5f64, beta: 2.0, kappa: 1.0 }.weights::<2>().unwrap();
+/// // λ = 0.25·3 − 2 = −1.25, n + λ = 0.75
+/// assert!((w.mean_center - (-1.25 / 0.75)).abs() < 1e-15);
+/// assert!((w.mean_center + 4.0 * w.side - 1.0).abs() < 1e-15); // the mean weights sum to one
+/// // α = 1e-3 is fine in f64 but would leave no significant digit in f32.
+/// assert!(MerweSigmaPoints { alpha: 1e-3f64, beta: 2.0, kappa: 0.0 }.weights::<4>().is_ok());
+/// assert!(MerweSigmaPoints { alpha: 1e-3f32, beta: 2.0, kappa: 0.0 }.weights::<4>().is_err());
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MerweSigmaPoints<T: Real> {
+    /// Spread `α > 0`.
+    pub alpha: T,
+    /// Prior-knowledge term `β` (2 for Gaussian).
+    pub beta: T,
+    /// Secondary scaling `κ`; `n + κ` must be positive.
+    pub kappa: T,
+}
+
+/// The weights and scale of a set of sigma points for `n` states.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SigmaWeights<T: Real> {
+    /// `Wm₀`: mean weight of the centre point.
+    pub mean_center: T,
+    /// `Wc₀`: covariance weight of the centre point.
+    pub cov_center: T,
+    /// `Wmᵢ = Wcᵢ = 1/(2(n+λ))` of each of the other `2n` points.
+    pub side: T,
+    /// `n + λ`: the sigma points use the Cholesky factor of `(n + λ) P`.
+    pub spread: T,
+    /// `β − α² = Wc₀ + 2n·Wᵢ − 2`: the weight of `m mᵀ` when the covariance is summed about the
+    /// centre image (`m` = mean minus centre image), as this filter does.
+    pub cov_shift: T,
+}
+
+/// Why an unscented filter could not be built.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum UkfError {
+    /// `α`, `β` or `κ` not finite, `α ≤ 0`, `n + κ ≤ 0` (no real spread), or a centre weight
+    /// `|Wm₀|` so large that the means would keep fewer than four significant digits in the
+    /// precision in use (see [`MerweSigmaPoints`]).
+    SigmaPoints,
+    /// The initial state or covariance is not finite, or `(n + λ) P₀` has no Cholesky factor:
+    /// `P₀` is also the value the covariance guard resets to, so it must be positive definite.
+    InitialCovariance,
+}
+
+impl<T: Real> MerweSigmaPoints<T> {
+    /// The weights for `N` states, computed in `f64` with filterpy's expressions and converted to
+    /// `T` once, so an `f32` filter on the chip and on the host start from the same bits.
+    ///
+    /// Fails with [`UkfError::SigmaPoints`] for parameters without a real spread or too fine for
+    /// the precision `T` (see the type's documentation).
+    pub fn weights<const N: usize>(&self) -> Result<SigmaWeights<T>, UkfError> {
+        let (alpha, beta, kappa) = (self.alpha.as_f64(), self.beta.as_f64(), self.kappa.as_f64());
+        let n = N as f64;
+        let finite = alpha.is_finite() && beta.is_finite() && kappa.is_finite();
+        // `n + λ = α² (n + κ)`; the comparisons are false for NaN.
+        let positive = alpha > 0.0 && n + kappa > 0.0;
+        if !(finite && positive) {
+            return Err(UkfError::SigmaPoints);
+        }
+        let a2 = alpha * alpha;
+        let lambda = a2 * (n + kappa) - n;
+        let spread = n + lambda;
+        let spread_ok = spread > 0.0 && spread.is_finite();
+        if !spread_ok {
+            return Err(UkfError::SigmaPoints);
+        }
+        let side = 0.5 / spread;
+        let mean_center = lambda / spread;
+        let cov_center = mean_center + (1.0 - a2 + beta);
+        // Digits lost to the spread: the means carry about |Wm₀|·ε of relative rounding error.
+        let too_fine = mean_center.abs() * T::default_epsilon().as_f64() > 1e-4;
+        if !(side.is_finite() && mean_center.is_finite() && cov_center.is_finite()) || too_fine {
+            return Err(UkfError::SigmaPoints);
+        }
+        Ok(SigmaWeights {
+            mean_center: T::of_f64(mean_center),
+            cov_center: T::of_f64(cov_center),
+            side: T::of_f64(side),
+            spread: T::of_f64(spread),
+            cov_shift: T::of_f64(beta - a2),
+        })
+    }
+}
+
+/// Lower Cholesky factor of `spread · P`, or `None` unless every input and output value is finite
+/// and the factor's diagonal is positive (nalgebra would divide by an infinite pivot silently).
+fn sigma_factor<T: Real, const N: usize>(p: &SMatrix<T, N, N>, spread: T) -> Option<SMatrix<T, N, N>> {
+    let scaled = p * spread;
+    if scaled.iter().any(|v| !v.is_finite()) {
+        return None;
+    }
+    let l = scaled.cholesky()?.unpack();
+    let ok = l.iter().all(|v| v.is_finite()) && l.diagonal().iter().all(|d| *d > T::zero());
+    ok.then_some(l)
+}
+
+/// Weighted mean and covariance of the `2N + 1` images of the sigma points, given as the centre
+/// image `ψ₀` and the images of the `+` and `−` points (columns of `plus`, `minus`).
+///
+/// Summed about the centre image instead of as `Σ Wmᵢ ψᵢ`: with `eᵢ = ψᵢ − ψ₀`,
+///
+/// ```text
+/// m = Σᵢ₌₁ W eᵢ,   mean = ψ₀ + m,   cov = Σᵢ₌₁ W eᵢ eᵢᵀ + (β − α²) m mᵀ
+/// ```
+///
+/// which equals filterpy's `Σ Wmᵢ ψᵢ`, `Σ Wcᵢ (ψᵢ − mean)(…)ᵀ` exactly for the Merwe weights
+/// (`Wm₀ + 2n W = 1`, `Wc₀ + 2n W − 2 = β − α²`). Unlike the direct sums it has no terms of size
+/// `|Wm₀| |ψ|` to cancel (the deviations `eᵢ` of nearby points are formed exactly, and the weight
+/// sum is one by construction, not by rounding), and for `β ≥ α²` every term is positive
+/// semi-definite. What remains is the rounding of the images `ψᵢ` themselves, amplified by about
+/// `|Wm₀|` (see [`MerweSigmaPoints`]). Rank-one terms are formed as `(e eᵀ) · w`, which is exactly
+/// symmetric. Also returns the deviations from the mean `eᵢ − m` of the `+` and `−` images, for
+/// the cross-covariance.
+#[allow(clippy::type_complexity)]
+fn moments<T: Real, const K: usize, const N: usize>(
+    w: &SigmaWeights<T>,
+    center: &SVector<T, K>,
+    plus: &SMatrix<T, K, N>,
+    minus: &SMatrix<T, K, N>,
+) -> (SVector<T, K>, SMatrix<T, K, K>, SMatrix<T, K, N>, SMatrix<T, K, N>) {
+    let mut e_plus = *plus;
+    let mut e_minus = *minus;
+    for mut col in e_plus.column_iter_mut().chain(e_minus.column_iter_mut()) {
+        col -= center;
+    }
+    let mut m = SVector::<T, K>::zeros();
+    for e in e_plus.column_iter().chain(e_minus.column_iter()) {
+        m += e * w.side;
+    }
+    let mut cov = (m * m.transpose()) * w.cov_shift;
+    for e in e_plus.column_iter().chain(e_minus.column_iter()) {
+        cov += (e * e.transpose()) * w.side;
+    }
+    for mut col in e_plus.column_iter_mut().chain(e_minus.column_iter_mut()) {
+        col -= m;
+    }
+    (center + m, cov, e_plus, e_minus)
+}
+
+/// Unscented Kalman filter with `N` states and `M` measurements.
+///
+/// The plain (covariance, not square-root) form, step for step as filterpy computes it:
+///
+/// * predict: sigma points of `(x, P)`, through `f`, weighted mean and covariance, `+ Q`;
+/// * update: sigma points redrawn from the predicted `(x⁻, P⁻)`, through `h`, predicted
+///   measurement `ẑ`, `S = Pzz + R`, cross-covariance `Pxz`, `K = Pxz S⁻¹`, `x = x⁻ + K (y − ẑ)`,
+///   `P = P⁻ − K S Kᵀ`.
+///
+/// The weighted sums are evaluated about the centre image (`mean = ψ₀ + Σ W (ψᵢ − ψ₀)`,
+/// `cov = Σ W eᵢ eᵢᵀ + (β − α²) m mᵀ` with `eᵢ = ψᵢ − ψ₀`, `m = Σ W eᵢ`), which is algebraically
+/// the same as filterpy's `Σ Wcᵢ (ψᵢ − mean)(…)ᵀ` but has no `±1/α²`-weighted terms to cancel.
+/// In `f64` the two agree to about 1e-12 for a moderate α; at α = 1e-3 both sit at the rounding
+/// floor `|Wm₀|·ε ≈ 2e-10` from the exact result (`shared/tests/filterpy.rs` checks edgekf
+/// against filterpy and against a 60-digit reference).
+///
+/// Robustness, and why not a square-root filter:
+///
+/// * the centred sums are positive semi-definite by construction whenever `β ≥ α²` (every
+///   standard choice): only positive weights `W` and `β − α²` appear, so the predicted `P⁻` and
+///   `S` cannot lose definiteness however negative `Wc₀` is; only the update subtraction can;
+/// * `K S Kᵀ` is formed as `W Wᵀ` with `W = Pxz L⁻ᵀ` (`S = L Lᵀ`): exactly symmetric, no inverse;
+/// * the covariance guard runs after every predict and update. It symmetrises `P` and computes
+///   the Cholesky factor of `(n + λ) P`, which is exactly the factor the next step needs for its
+///   sigma points, so the check costs nothing extra. If `x` or `P` is not finite or the factor
+///   does not exist, the filter counts a [`FilterHealth::covariance_resets`] and restarts its
+///   covariance from the stated `P₀` (and its state from `x₀` if the state is not finite); every
+///   step therefore starts from a positive definite `P`.
+///
+/// A square-root UKF (QR plus Cholesky up/downdates) was not chosen: with the Merwe weights
+/// `Wc₀ < 0` for `α < 1`, so its square-root form needs a Cholesky *downdate*, which fails where
+/// the direct sums lose definiteness; the centred sums remove that failure mode instead, at the
+/// plain filter's cost (one `N × N` Cholesky per step) and with filterpy's arithmetic still
+/// available for verification.
+///
+/// A measurement update that cannot be applied (non-finite measurement, `S` not positive
+/// definite) leaves the filter unchanged, is counted in [`FilterHealth::refused_updates`] and
+/// returns an error; `f` or `h` returning NaN is caught by the guard (predict) or by `S`
+/// (update).
+///
+/// ```
+/// use edgekf::filter::{MerweSigmaPoints, UkfModel, UnscentedKalmanFilter};
+/// use nalgebra::{Matrix1, Matrix2, Vector1, Vector2};
+/// /// A constant seen through a cubic sensor.
+/// struct Model;
+/// impl UkfModel<f32, 2, 1> for Model {
+///     fn f(&self, x: &Vector2<f32>) -> Vector2<f32> { *x }
+///     fn h(&self, x: &Vector2<f32>) -> Vector1<f32> { Vector1::new(x[0] + 0.1 * x[0] * x[0] * x[0]) }
+/// }
+/// let points = MerweSigmaPoints { alpha: 0.5, beta: 2.0, kappa: 1.0 };
+/// let q = Matrix2::identity() * 1e-6;
+/// let r = Matrix1::new(0.01);
+/// let mut ukf = UnscentedKalmanFilter::new(points, q, r, Vector2::zeros(), Matrix2::identity()).unwrap();
+/// for _ in 0..50 {
+///     ukf.predict(&Model);
+///     ukf.update(&Model, &Vector1::new(1.1)).unwrap(); // h(1, ·) = 1.1
+/// }
+/// assert!((ukf.state()[0] - 1.0).abs() < 0.01);
+/// assert_eq!(ukf.health().covariance_resets, 0);
+/// ```
+#[derive(Debug, Clone)]
+pub struct UnscentedKalmanFilter<T: Real, const N: usize, const M: usize> {
+    /// Process-noise covariance `Q`, added after every predict. May be changed between steps
+    /// (for example to retune a parameter random walk); a non-finite value is caught by the
+    /// covariance guard.
+    pub q: SMatrix<T, N, N>,
+    /// Measurement-noise covariance `R`. May be changed between steps; one that makes `S`
+    /// indefinite makes updates refused, not wrong.
+    pub r: SMatrix<T, M, M>,
+    weights: SigmaWeights<T>,
+    x: SVector<T, N>,
+    p: SMatrix<T, N, N>,
+    /// Lower Cholesky factor of `spread · p`; always valid between steps.
+    sqrt: SMatrix<T, N, N>,
+    x_reset: SVector<T, N>,
+    p_reset: SMatrix<T, N, N>,
+    sqrt_reset: SMatrix<T, N, N>,
+    health: FilterHealth,
+}
+
+impl<T: Real, const N: usize, const M: usize> UnscentedKalmanFilter<T, N, M> {
+    /// A filter starting at `x0` with covariance `p0`, which are also the values the covariance
+    /// guard resets to.
+    ///
+    /// Fails if the sigma-point parameters give no real spread, or if `x0` or `p0` is not finite
+    /// or `p0` not positive definite (a reset target must itself be valid).
+    pub fn new(
+        points: MerweSigmaPoints<T>,
+        q: SMatrix<T, N, N>,
+        r: SMatrix<T, M, M>,
+        x0: SVector<T, N>,
+        p0: SMatrix<T, N, N>,
+    ) -> Result<Self, UkfError> {
+        let weights = points.weights::<N>()?;
+        if x0.iter().any(|v| !v.is_finite()) {
+            return Err(UkfError::InitialCovariance);
+        }
+        let sqrt = sigma_factor(&p0, weights.spread).ok_or(UkfError::InitialCovariance)?;
+        Ok(Self {
+            q,
+            r,
+            weights,
+            x: x0,
+            p: p0,
+            sqrt,
+            x_reset: x0,
+            p_reset: p0,
+            sqrt_reset: sqrt,
+            health: FilterHealth::default(),
+        })
+    }
+
+    /// Current state estimate.
+    pub fn state(&self) -> &SVector<T, N> {
+        &self.x
+    }
+
+    /// Current state covariance (symmetric positive definite between steps).
+    pub fn covariance(&self) -> &SMatrix<T, N, N> {
+        &self.p
+    }
+
+    /// Repair counters since construction.
+    pub fn health(&self) -> FilterHealth {
+        self.health
+    }
+
+    /// The sigma-point weights in use.
+    pub fn weights(&self) -> &SigmaWeights<T> {
+        &self.weights
+    }
+
+    /// Time update through `model.f`: `x⁻ = Σ Wmᵢ f(χᵢ)`, `P⁻ = Σ Wcᵢ (f(χᵢ) − x⁻)(…)ᵀ + Q`.
+    pub fn predict<F: UkfModel<T, N, M>>(&mut self, model: &F) {
+        let center = model.f(&self.x);
+        let mut plus = SMatrix::<T, N, N>::zeros();
+        let mut minus = SMatrix::<T, N, N>::zeros();
+        for (k, l) in self.sqrt.column_iter().enumerate() {
+            plus.set_column(k, &model.f(&(self.x + l)));
+            minus.set_column(k, &model.f(&(self.x - l)));
+        }
+        let (x, p, _, _) = moments(&self.weights, &center, &plus, &minus);
+        self.x = x;
+        self.p = p + self.q;
+        self.guard();
+    }
+
+    /// Measurement update with `y` through `model.h`. Returns the innovation `y − ẑ`, its
+    /// covariance `S` and NIS.
+    ///
+    /// A non-finite `y`, or an `S` that is not positive definite (including `h` returning NaN),
+    /// leaves the filter unchanged, is counted in [`FilterHealth::refused_updates`] and is returned
+    /// as an error.
+    pub fn update<F: UkfModel<T, N, M>>(
+        &mut self,
+        model: &F,
+        y: &SVector<T, M>,
+    ) -> Result<Innovation<T, M>, FilterError> {
+        if y.iter().any(|v| !v.is_finite()) {
+            self.health.refused_updates += 1;
+            return Err(FilterError::NonFiniteMeasurement);
+        }
+        let x = self.x;
+        let center = model.h(&x);
+        let mut plus = SMatrix::<T, M, N>::zeros();
+        let mut minus = SMatrix::<T, M, N>::zeros();
+        // State deviations of the actual sigma points, `(x ± l) − x` as filterpy forms them.
+        let mut dx_plus = SMatrix::<T, N, N>::zeros();
+        let mut dx_minus = SMatrix::<T, N, N>::zeros();
+        for (k, l) in self.sqrt.column_iter().enumerate() {
+            let (sp, sm) = (x + l, x - l);
+            plus.set_column(k, &model.h(&sp));
+            minus.set_column(k, &model.h(&sm));
+            dx_plus.set_column(k, &(sp - x));
+            dx_minus.set_column(k, &(sm - x));
+        }
+        let (z_pred, pzz, dz_plus, dz_minus) = moments(&self.weights, &center, &plus, &minus);
+        let s = pzz + self.r;
+        // The centre point's state deviation is exactly zero: it adds nothing to `Pxz`.
+        let mut pxz = SMatrix::<T, N, M>::zeros();
+        let side = self.weights.side;
+        for (dx, dz) in
+            dx_plus.column_iter().zip(dz_plus.column_iter()).chain(dx_minus.column_iter().zip(dz_minus.column_iter()))
+        {
+            pxz += (dx * dz.transpose()) * side;
+        }
+        let residual = y - z_pred;
+        let refuse = |health: &mut FilterHealth| {
+            health.refused_updates += 1;
+            Err(FilterError::InnovationCovariance)
+        };
+        if s.iter().any(|v| !v.is_finite()) || pxz.iter().any(|v| !v.is_finite()) {
+            return refuse(&mut self.health);
+        }
+        let Some(chol) = s.cholesky() else {
+            return refuse(&mut self.health);
+        };
+        // K = Pxz S⁻¹ = (S⁻¹ Pxzᵀ)ᵀ;  K S Kᵀ = W Wᵀ with Wᵀ = L⁻¹ Pxzᵀ.
+        let gain = chol.solve(&pxz.transpose()).transpose();
+        let l = chol.l();
+        let (Some(wt), Some(white)) = (l.solve_lower_triangular(&pxz.transpose()), l.solve_lower_triangular(&residual))
+        else {
+            return refuse(&mut self.health);
+        };
+        self.x = x + gain * residual;
+        self.p -= wt.transpose() * wt;
+        self.guard();
+        Ok(Innovation { residual, s, nis: white.norm_squared() })
+    }
+
+    /// Symmetrises `P`, refreshes the sigma-point factor, and resets what is broken (see the
+    /// type's documentation).
+    fn guard(&mut self) {
+        let half = T::of_f64(0.5);
+        self.p = (self.p + self.p.transpose()) * half;
+        let state_ok = self.x.iter().all(|v| v.is_finite());
+        match sigma_factor(&self.p, self.weights.spread) {
+            Some(l) if state_ok => self.sqrt = l,
+            _ => {
+                self.health.covariance_resets += 1;
+                self.p = self.p_reset;
+                self.sqrt = self.sqrt_reset;
+                if !state_ok {
+                    self.x = self.x_reset;
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::{Matrix1, Matrix2, RowVector2, Vector1, Vector2};
+
+    struct Linear {
+        a: Matrix2<f64>,
+        c: RowVector2<f64>,
+    }
+
+    impl UkfModel<f64, 2, 1> for Linear {
+        fn f(&self, x: &Vector2<f64>) -> Vector2<f64> {
+            self.a * x
+        }
+        fn h(&self, x: &Vector2<f64>) -> Vector1<f64> {
+            self.c * x
+        }
+    }
+
+    fn cv() -> (Linear, crate::filter::LinearModel<f64, 2, 1>) {
+        let dt = 0.1;
+        let a = Matrix2::new(1.0, dt, 0.0, 1.0);
+        let c = RowVector2::new(1.0, 0.0);
+        let q = Matrix2::new(dt * dt * dt / 3.0, dt * dt / 2.0, dt * dt / 2.0, dt) * 0.01;
+        (Linear { a, c }, crate::filter::LinearModel { a, c, q, r: Matrix1::new(0.25) })
+    }
+
+    #[test]
+    fn linear_model_reproduces_the_kalman_filter() {
+        // The unscented transform is exact for linear models, for any α, β, κ.
+        let (m, lin) = cv();
+        let p0 = Matrix2::new(2.0, 0.3, 0.3, 1.0);
+        let x0 = Vector2::new(1.0, -1.0);
+        for (alpha, kappa) in [(1e-3, 0.0), (0.5, 1.0), (1.0, 0.0)] {
+            let points = MerweSigmaPoints { alpha, beta: 2.0, kappa };
+            let mut ukf = UnscentedKalmanFilter::new(points, lin.q, lin.r, x0, p0).unwrap();
+            let mut kf = crate::filter::KalmanFilter::new(lin.clone(), x0, p0);
+            for k in 0..100 {
+                let y = Vector1::new(0.3 * k as f64 + if k % 2 == 0 { 0.2 } else { -0.2 });
+                ukf.predict(&m);
+                kf.predict();
+                let iu = ukf.update(&m, &y).unwrap();
+                let ik = kf.update(&y).unwrap();
+                let tol = if alpha < 1e-2 { 1e-6 } else { 1e-10 };
+                assert!((ukf.state() - kf.state()).abs().max() < tol, "α={alpha} k={k}");
+                assert!((ukf.covariance() - kf.covariance()).abs().max() < tol, "α={alpha} k={k}");
+                assert!((iu.nis - ik.nis).abs() < tol * 10.0);
+            }
+            assert_eq!(ukf.health(), FilterHealth::default());
+        }
+    }
+
+    #[test]
+    fn weights_match_filterpy_definition() {
+        let w = MerweSigmaPoints { alpha: 1e-3f64, beta: 2.0, kappa: 0.0 }.weights::<3>().unwrap();
+        let lambda = 1e-6 * 3.0 - 3.0;
+        assert_eq!(w.mean_center, lambda / (3.0 + lambda));
+        assert_eq!(w.cov_center, lambda / (3.0 + lambda) + (1.0 - 1e-6 + 2.0));
+        assert_eq!(w.side, 0.5 / (3.0 + lambda));
+        let sum = w.mean_center + 6.0 * w.side;
+        assert!((sum - 1.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn invalid_parameters_are_errors() {
+        let (_, lin) = cv();
+        let x0 = Vector2::zeros();
+        let bad_points = [(0.0, 0.0), (-1.0, 0.0), (f64::NAN, 0.0), (1.0, -2.0), (1.0, f64::INFINITY)];
+        for (alpha, kappa) in bad_points {
+            let points = MerweSigmaPoints { alpha, beta: 2.0, kappa };
+            let r = UnscentedKalmanFilter::new(points, lin.q, lin.r, x0, Matrix2::identity());
+            assert_eq!(r.err(), Some(UkfError::SigmaPoints), "α={alpha} κ={kappa}");
+        }
+        let points = MerweSigmaPoints { alpha: 1.0, beta: 2.0, kappa: 0.0 };
+        for p0 in [Matrix2::zeros(), Matrix2::new(1.0, 2.0, 2.0, 1.0), Matrix2::identity() * f64::NAN] {
+            let r = UnscentedKalmanFilter::new(points, lin.q, lin.r, x0, p0);
+            assert_eq!(r.err(), Some(UkfError::InitialCovariance));
+        }
+        let r = UnscentedKalmanFilter::new(points, lin.q, lin.r, Vector2::new(f64::NAN, 0.0), Matrix2::identity());
+        assert_eq!(r.err(), Some(UkfError::InitialCovariance));
+    }
+
+    #[test]
+    fn nan_measurement_is_refused_and_counted() {
+        let (m, lin) = cv();
+        let points = MerweSigmaPoints { alpha: 1.0, beta: 2.0, kappa: 0.0 };
+        let mut ukf = UnscentedKalmanFilter::new(points, lin.q, lin.r, Vector2::zeros(), Matrix2::identity()).unwrap();
+        let (x, p) = (*ukf.state(), *ukf.covariance());
+        assert_eq!(ukf.update(&m, &Vector1::new(f64::INFINITY)), Err(FilterError::NonFiniteMeasurement));
+        ukf.r = Matrix1::new(-10.0);
+        assert_eq!(ukf.update(&m, &Vector1::new(1.0)), Err(FilterError::InnovationCovariance));
+        assert_eq!((*ukf.state(), *ukf.covariance()), (x, p));
+        assert_eq!(ukf.health().refused_updates, 2);
+    }
+
+    /// A model whose `f` goes NaN past a threshold, and whose `h` does on demand.
+    struct Fragile;
+    impl UkfModel<f64, 2, 1> for Fragile {
+        fn f(&self, x: &Vector2<f64>) -> Vector2<f64> {
+            if x[0] > 4.3 {
+                Vector2::new(f64::NAN, 0.0)
+            } else {
+                x * 2.0
+            }
+        }
+        fn h(&self, x: &Vector2<f64>) -> Vector1<f64> {
+            Vector1::new(if x[1] > 100.0 { f64::NAN } else { x[0] })
+        }
+    }
+
+    #[test]
+    fn non_finite_model_output_resets_and_is_counted() {
+        let points = MerweSigmaPoints { alpha: 1.0, beta: 2.0, kappa: 0.0 };
+        let x0 = Vector2::new(1.0, 0.0);
+        let p0 = Matrix2::identity() * 0.01;
+        let mut ukf = UnscentedKalmanFilter::new(points, Matrix2::zeros(), Matrix1::new(1.0), x0, p0).unwrap();
+        ukf.predict(&Fragile); // x = 2
+        ukf.predict(&Fragile); // x = 4
+        assert_eq!(ukf.health().covariance_resets, 0);
+        ukf.predict(&Fragile); // a sigma point passes 4.3: NaN state
+        assert_eq!(ukf.health().covariance_resets, 1);
+        assert_eq!((*ukf.state(), *ukf.covariance()), (x0, p0));
+        // h NaN on a sigma point → S not finite → refused, state unchanged.
+        let mut ukf = UnscentedKalmanFilter::new(points, Matrix2::zeros(), Matrix1::new(1.0), x0, p0 * 1e6).unwrap();
+        assert_eq!(ukf.update(&Fragile, &Vector1::new(0.0)), Err(FilterError::InnovationCovariance));
+        assert_eq!(ukf.health().refused_updates, 1);
+        assert!(ukf.state().iter().chain(ukf.covariance().iter()).all(|v| v.is_finite()));
+    }
+
+    #[test]
+    fn indefinite_covariance_is_reset_and_counted() {
+        let (m, lin) = cv();
+        let points = MerweSigmaPoints { alpha: 1.0, beta: 2.0, kappa: 0.0 };
+        let p0 = Matrix2::identity();
+        let mut ukf = UnscentedKalmanFilter::new(points, lin.q, lin.r, Vector2::zeros(), p0).unwrap();
+        ukf.q = Matrix2::new(0.0, 0.0, 0.0, -1e3); // an indefinite Q
+        ukf.predict(&m);
+        assert_eq!(ukf.health().covariance_resets, 1);
+        assert_eq!(*ukf.covariance(), p0);
+        ukf.q = lin.q;
+        ukf.predict(&m);
+        assert!(ukf.update(&m, &Vector1::new(0.5)).is_ok());
+        assert_eq!(ukf.health().covariance_resets, 1);
+    }
+}
