@@ -2,7 +2,9 @@
 //! instruction counts under QEMU: `cargo xtask bench`.
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
-use edgekf::filter::{KalmanFilter, LinearModel, SteadyState, SteadyStateFilter};
+use edgekf::filter::{
+    KalmanFilter, LinearModel, MerweSigmaPoints, SteadyState, SteadyStateFilter, UkfModel, UnscentedKalmanFilter,
+};
 use edgekf::models::harmonic::{HarmonicForceEstimator, HarmonicForceParams};
 use edgekf::Real;
 use nalgebra::{SMatrix, SVector};
@@ -60,6 +62,37 @@ fn steady<const N: usize, const M: usize>(c: &mut Criterion) {
     });
 }
 
+/// The same 14-state nonlinear model as the chip benchmark (`firmware/src/bin/bench`).
+struct Nonlinear<const N: usize, const M: usize> {
+    a: SMatrix<f32, N, N>,
+    c: SMatrix<f32, M, N>,
+}
+
+impl<const N: usize, const M: usize> UkfModel<f32, N, M> for Nonlinear<N, M> {
+    fn f(&self, x: &SVector<f32, N>) -> SVector<f32, N> {
+        self.a * x - x.map(|v| 0.01 * v * v * v)
+    }
+    fn h(&self, x: &SVector<f32, N>) -> SVector<f32, M> {
+        let y = self.c * x;
+        y + y.map(|v| 0.05 * v * v)
+    }
+}
+
+fn ukf(c: &mut Criterion) {
+    let mut rng = Lcg(13);
+    let lin = dense_model::<14, 4>(&mut rng).cast::<f32>();
+    let model = Nonlinear { a: lin.a, c: lin.c };
+    let points = MerweSigmaPoints { alpha: 0.5f32, beta: 2.0, kappa: 0.0 };
+    let mut f = UnscentedKalmanFilter::new(points, lin.q, lin.r, SVector::zeros(), SMatrix::identity()).expect("ukf");
+    let y = SVector::<f32, 4>::from_fn(|_, _| rng.next() as f32);
+    c.bench_function("f32 ukf predict+update n=14 m=4", |b| {
+        b.iter(|| {
+            f.predict(&model);
+            black_box(f.update(&model, black_box(&y)).is_ok())
+        })
+    });
+}
+
 fn all(c: &mut Criterion) {
     let mut est = HarmonicForceEstimator::<f32>::new(&HarmonicForceParams::default()).expect("estimator");
     c.bench_function("f32 harmonic-force estimator step", |b| b.iter(|| black_box(est.step(black_box(Some(0.25))))));
@@ -69,6 +102,7 @@ fn all(c: &mut Criterion) {
     kalman::<f32, 12, 4>(c, "f32");
     kalman::<f32, 24, 4>(c, "f32");
     kalman::<f64, 24, 4>(c, "f64");
+    ukf(c);
 }
 
 criterion_group!(benches, all);

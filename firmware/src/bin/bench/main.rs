@@ -16,7 +16,9 @@
 use cortex_m_rt::{entry, exception, ExceptionFrame};
 use cortex_m_semihosting::heprintln;
 use defmt_semihosting as _;
-use edgekf::filter::{KalmanFilter, LinearModel, SteadyState, SteadyStateFilter};
+use edgekf::filter::{
+    KalmanFilter, LinearModel, MerweSigmaPoints, SteadyState, SteadyStateFilter, UkfModel, UnscentedKalmanFilter,
+};
 use edgekf::models::harmonic::{HarmonicForceEstimator, HarmonicForceParams};
 use edgekf_firmware::semihost::exit;
 use nalgebra::{SMatrix, SVector};
@@ -118,6 +120,43 @@ fn steady<const N: usize, const M: usize>(label: &str, rng: &mut Lcg) {
     defmt::info!("bench {=str} n={=usize} m={=usize} resets={=u32}", label, N, M, f.resets());
 }
 
+/// A 14-state nonlinear model (the size of the underwater vehicle's joint state: 12 motion
+/// states and 2 health factors): dense linear dynamics with cubic damping, quadratic sensors.
+struct Nonlinear<const N: usize, const M: usize> {
+    a: SMatrix<f32, N, N>,
+    c: SMatrix<f32, M, N>,
+}
+
+impl<const N: usize, const M: usize> UkfModel<f32, N, M> for Nonlinear<N, M> {
+    fn f(&self, x: &SVector<f32, N>) -> SVector<f32, N> {
+        self.a * x - x.map(|v| 0.01 * v * v * v)
+    }
+    fn h(&self, x: &SVector<f32, N>) -> SVector<f32, M> {
+        let y = self.c * x;
+        y + y.map(|v| 0.05 * v * v)
+    }
+}
+
+fn ukf<const N: usize, const M: usize>(rng: &mut Lcg) {
+    let lin = dense_model::<N, M>(rng).cast::<f32>();
+    let model = Nonlinear { a: lin.a, c: lin.c };
+    let points = MerweSigmaPoints { alpha: 0.5f32, beta: 2.0, kappa: 0.0 };
+    let Ok(mut f) = UnscentedKalmanFilter::new(points, lin.q, lin.r, SVector::zeros(), SMatrix::identity()) else {
+        defmt::error!("bench ukf: no filter");
+        exit(1)
+    };
+    for _ in 0..3 {
+        f.predict(&model);
+        core::hint::black_box(f.update(&model, &measurement(rng)).is_ok());
+    }
+    let y = measurement::<M>(rng);
+    bench_start();
+    f.predict(&model);
+    core::hint::black_box(f.update(&model, core::hint::black_box(&y)).is_ok());
+    bench_end();
+    defmt::info!("bench ukf n={=usize} m={=usize} resets={=u32}", N, M, f.health().covariance_resets);
+}
+
 fn harmonic() {
     let Ok(mut est) = HarmonicForceEstimator::<f32>::new(&HarmonicForceParams::default()) else {
         defmt::error!("bench harmonic: no estimator");
@@ -150,6 +189,7 @@ fn main() -> ! {
     kalman::<4, 4>("kalman_sequential", true, &mut rng);
     kalman::<12, 4>("kalman_sequential", true, &mut rng);
     kalman::<24, 4>("kalman_sequential", true, &mut rng);
+    ukf::<14, 4>(&mut rng);
     defmt::info!("done");
     exit(0)
 }
