@@ -2,37 +2,16 @@
 //! instruction counts under QEMU: `cargo xtask bench`.
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
-use edgekf::filter::{
-    KalmanFilter, LinearModel, MerweSigmaPoints, SteadyState, SteadyStateFilter, UkfModel, UnscentedKalmanFilter,
-};
+use edgekf::filter::{KalmanFilter, MerweSigmaPoints, SteadyState, SteadyStateFilter, UnscentedKalmanFilter};
 use edgekf::models::harmonic::{HarmonicForceEstimator, HarmonicForceParams};
+use edgekf::models::synthetic::{dense_model, CubicModel, Lcg};
 use edgekf::Real;
 use nalgebra::{SMatrix, SVector};
 
-/// Deterministic pseudo-random numbers in [−1, 1).
-struct Lcg(u32);
-
-impl Lcg {
-    fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-        (self.0 >> 8) as f64 / (1u32 << 23) as f64 - 1.0
-    }
-}
-
-fn dense_model<const N: usize, const M: usize>(rng: &mut Lcg) -> LinearModel<f64, N, M> {
-    let a = SMatrix::<f64, N, N>::from_fn(|_, _| rng.next());
-    let b = SMatrix::<f64, N, N>::from_fn(|_, _| 0.3 * rng.next());
-    LinearModel {
-        a: a * (0.9 / a.norm()),
-        c: SMatrix::from_fn(|_, _| rng.next()),
-        q: b * b.transpose() + SMatrix::identity() * 0.01,
-        r: SMatrix::identity() * 0.5,
-    }
-}
-
 fn kalman<T: Real, const N: usize, const M: usize>(c: &mut Criterion, name: &str) {
     let mut rng = Lcg(7);
-    let mut kf = KalmanFilter::<T, N, M>::new(dense_model::<N, M>(&mut rng).cast(), SVector::zeros(), SMatrix::identity());
+    let mut kf =
+        KalmanFilter::<T, N, M>::new(dense_model::<N, M>(&mut rng).cast(), SVector::zeros(), SMatrix::identity());
     let y = SVector::<T, M>::from_fn(|_, _| T::of_f64(rng.next()));
     c.bench_function(&format!("{name} kalman predict+update n={N} m={M}"), |b| {
         b.iter(|| {
@@ -62,26 +41,10 @@ fn steady<const N: usize, const M: usize>(c: &mut Criterion) {
     });
 }
 
-/// The same 14-state nonlinear model as the chip benchmark (`firmware/src/bin/bench`).
-struct Nonlinear<const N: usize, const M: usize> {
-    a: SMatrix<f32, N, N>,
-    c: SMatrix<f32, M, N>,
-}
-
-impl<const N: usize, const M: usize> UkfModel<f32, N, M> for Nonlinear<N, M> {
-    fn f(&self, x: &SVector<f32, N>) -> SVector<f32, N> {
-        self.a * x - x.map(|v| 0.01 * v * v * v)
-    }
-    fn h(&self, x: &SVector<f32, N>) -> SVector<f32, M> {
-        let y = self.c * x;
-        y + y.map(|v| 0.05 * v * v)
-    }
-}
-
 fn ukf(c: &mut Criterion) {
     let mut rng = Lcg(13);
     let lin = dense_model::<14, 4>(&mut rng).cast::<f32>();
-    let model = Nonlinear { a: lin.a, c: lin.c };
+    let model = CubicModel { a: lin.a, c: lin.c };
     let points = MerweSigmaPoints { alpha: 0.5f32, beta: 2.0, kappa: 0.0 };
     let mut f = UnscentedKalmanFilter::new(points, lin.q, lin.r, SVector::zeros(), SMatrix::identity()).expect("ukf");
     let y = SVector::<f32, 4>::from_fn(|_, _| rng.next() as f32);

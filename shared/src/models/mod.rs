@@ -7,3 +7,4 @@
 
 pub mod augmented;
 pub mod harmonic;
+pub mod synthetic;

@@ -16,10 +16,9 @@
 use cortex_m_rt::{entry, exception, ExceptionFrame};
 use cortex_m_semihosting::heprintln;
 use defmt_semihosting as _;
-use edgekf::filter::{
-    KalmanFilter, LinearModel, MerweSigmaPoints, SteadyState, SteadyStateFilter, UkfModel, UnscentedKalmanFilter,
-};
+use edgekf::filter::{KalmanFilter, MerweSigmaPoints, SteadyState, SteadyStateFilter, UnscentedKalmanFilter};
 use edgekf::models::harmonic::{HarmonicForceEstimator, HarmonicForceParams};
+use edgekf::models::synthetic::{dense_model, CubicModel, Lcg};
 use edgekf_firmware::semihost::exit;
 use nalgebra::{SMatrix, SVector};
 
@@ -37,29 +36,6 @@ pub extern "C" fn bench_start() {
 pub extern "C" fn bench_end() {
     // SAFETY: a single `nop`.
     unsafe { core::arch::asm!("nop") }
-}
-
-/// Deterministic pseudo-random numbers in [−1, 1).
-struct Lcg(u32);
-
-impl Lcg {
-    fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-        (self.0 >> 8) as f64 / (1u32 << 23) as f64 - 1.0
-    }
-}
-
-/// A dense stable model: `A` scaled to Frobenius norm 0.9, dense `C`, diagonally dominant `Q`,
-/// diagonal `R`.
-fn dense_model<const N: usize, const M: usize>(rng: &mut Lcg) -> LinearModel<f64, N, M> {
-    let a = SMatrix::<f64, N, N>::from_fn(|_, _| rng.next());
-    let b = SMatrix::<f64, N, N>::from_fn(|_, _| 0.3 * rng.next());
-    LinearModel {
-        a: a * (0.9 / a.norm()),
-        c: SMatrix::from_fn(|_, _| rng.next()),
-        q: b * b.transpose() + SMatrix::identity() * 0.01,
-        r: SMatrix::identity() * 0.5,
-    }
 }
 
 fn measurement<const M: usize>(rng: &mut Lcg) -> SVector<f32, M> {
@@ -120,26 +96,9 @@ fn steady<const N: usize, const M: usize>(label: &str, rng: &mut Lcg) {
     defmt::info!("bench {=str} n={=usize} m={=usize} resets={=u32}", label, N, M, f.resets());
 }
 
-/// A 14-state nonlinear model (the size of the underwater vehicle's joint state: 12 motion
-/// states and 2 health factors): dense linear dynamics with cubic damping, quadratic sensors.
-struct Nonlinear<const N: usize, const M: usize> {
-    a: SMatrix<f32, N, N>,
-    c: SMatrix<f32, M, N>,
-}
-
-impl<const N: usize, const M: usize> UkfModel<f32, N, M> for Nonlinear<N, M> {
-    fn f(&self, x: &SVector<f32, N>) -> SVector<f32, N> {
-        self.a * x - x.map(|v| 0.01 * v * v * v)
-    }
-    fn h(&self, x: &SVector<f32, N>) -> SVector<f32, M> {
-        let y = self.c * x;
-        y + y.map(|v| 0.05 * v * v)
-    }
-}
-
 fn ukf<const N: usize, const M: usize>(rng: &mut Lcg) {
     let lin = dense_model::<N, M>(rng).cast::<f32>();
-    let model = Nonlinear { a: lin.a, c: lin.c };
+    let model = CubicModel { a: lin.a, c: lin.c };
     let points = MerweSigmaPoints { alpha: 0.5f32, beta: 2.0, kappa: 0.0 };
     let Ok(mut f) = UnscentedKalmanFilter::new(points, lin.q, lin.r, SVector::zeros(), SMatrix::identity()) else {
         defmt::error!("bench ukf: no filter");
