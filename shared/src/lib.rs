@@ -5,13 +5,18 @@
 //!
 //! * [`linalg`]: matrix exponential, zero-order-hold and Van Loan discretisation (deterministic:
 //!   only `+ − × ÷`, so the chip and the host compute the same bits);
-//! * [`filter`]: a fixed-size linear Kalman filter with Joseph-form updates, symmetry enforcement
-//!   and a covariance guard that counts and recovers instead of panicking;
-//! * [`models`]: reduced physical models, starting with a single-mode oscillator driven by an
-//!   unknown harmonic force at a known frequency (the "unbalance" pattern of rotating machines);
+//! * [`filter`]: fixed-size linear Kalman filter (Joseph form, sequential scalar updates),
+//!   steady-state gain from the Riccati equation, unscented Kalman filter (Van der Merwe sigma
+//!   points) and joint state–parameter estimation; every filter guards its covariance and counts
+//!   and recovers instead of panicking;
+//! * [`models`]: reduced physical models: a single-mode oscillator driven by an unknown harmonic
+//!   force at a known frequency (the "unbalance" pattern of rotating machines), augmented Kalman
+//!   filter models for unknown inputs on structures, synthetic benchmark systems;
 //! * [`export`]: models and steady-state gains written as Rust constants for the firmware;
-//! * [`residual`]: innovation statistics cheap enough for the chip (running mean and variance,
-//!   normalised innovation squared with chi-square bounds).
+//! * [`residual`]: innovation diagnostics cheap enough for the chip: running mean and variance,
+//!   NIS with exact χ² bounds, Ljung–Box whiteness over a window, a Welch innovation spectrum
+//!   (microfft) with peak finding, and a classifier that places a spectral peak relative to the
+//!   running speed's orders and the model's natural frequencies.
 //!
 //! Every filter is generic over [`Real`] (`f32` on the chip, `f64` on the host) and over its sizes
 //! through const generics, so one implementation serves both.

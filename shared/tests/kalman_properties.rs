@@ -112,7 +112,7 @@ proptest! {
 
 /// Mean NIS over `systems` random systems, `steps` each (the first 50 steps of each discarded).
 fn mean_nis(systems: usize, steps: usize, bias: f64) -> (f64, usize) {
-    let mut rng = Rng(0x5EED_0F_1DEA);
+    let mut rng = Rng(0x005E_ED0F_1DEA);
     let (mut sum, mut n) = (0.0, 0usize);
     for _ in 0..systems {
         let model = random_system(&mut rng);

@@ -29,14 +29,24 @@ impl<T: Real> RunningStats<T> {
     }
 
     /// Adds one value (non-finite values are ignored: they are counted elsewhere).
+    ///
+    /// The count saturates at `u32::MAX` instead of overflowing (at 1 kHz that is 50 days); from
+    /// there on the statistics become an exponentially weighted average with that time
+    /// constant. In `f32`, the mean effectively stops moving after about 2²⁴ values (4.7 hours
+    /// at 1 kHz): for long runs on the chip, [`RunningStats::reset`] it per reporting period.
     pub fn push(&mut self, v: T) {
         if !v.is_finite() {
             return;
         }
-        self.n += 1;
+        self.n = self.n.saturating_add(1);
         let d = v - self.mean;
         self.mean += d / T::of_f64(self.n as f64);
         self.m2 += d * (v - self.mean);
+    }
+
+    /// Starts over.
+    pub fn reset(&mut self) {
+        *self = Self::new();
     }
 
     /// Number of values.
