@@ -70,6 +70,9 @@ fn test(long: bool) -> Result<()> {
     let qemu = firmware::build(firmware::Image::Qemu)?;
     firmware::print_footprint(firmware::Image::Qemu, &qemu)?;
 
+    step("chip benchmarks: instruction counts per filter step in QEMU (deterministic, checked against budgets)");
+    bench::run(&firmware::workspace_root())?;
+
     step("hardware-in-the-loop tests in QEMU");
     let mut hil = cargo_here();
     hil.args([

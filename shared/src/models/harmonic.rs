@@ -421,6 +421,19 @@ mod tests {
     }
 
     #[test]
+    fn time_varying_gain_is_healthy_in_f32() {
+        // The scaled state keeps C P Cᵀ + R from cancelling in single precision.
+        let p = HarmonicForceParams { gain: GainMode::TimeVarying, ..Default::default() };
+        let mut est = HarmonicForceEstimator::<f32>::new(&p).unwrap();
+        let mut amp = 0.0f32;
+        for a in forced_response(&p, 3.0, 0.7, 3200) {
+            amp = est.step(Some(a as f32)).force_amplitude;
+        }
+        assert_eq!(est.counters().filter, FilterHealth::default());
+        assert!((amp - 3.0).abs() < 3e-3, "amplitude {amp}");
+    }
+
+    #[test]
     fn f32_and_f64_agree() {
         let p = HarmonicForceParams::default();
         let mut e32 = HarmonicForceEstimator::<f32>::new(&p).unwrap();
