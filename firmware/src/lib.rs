@@ -9,6 +9,7 @@
 
 pub mod adxl355;
 pub mod line_feed;
+pub mod model;
 pub mod node;
 #[cfg(all(target_os = "none", feature = "qemu"))]
 pub mod semihost;

@@ -150,12 +150,13 @@ pub struct Node<I2C: I2c> {
 }
 
 impl<I2C: I2c> Node<I2C> {
-    /// Initialises the accelerometer (with retries) and builds the estimator. On failure the
+    /// Initialises the accelerometer (with retries) and builds the estimator from the compiled-in
+    /// model ([`crate::model`]; `config.estimator` supplies its scaling). On failure the
     /// bus is handed back with the reason, so the caller can retry later.
     #[allow(clippy::type_complexity)]
     #[inline(never)] // start-up temporaries stay out of the caller's (main's) frame
     pub fn start(i2c: I2C, config: NodeConfig) -> Result<Self, (StartError<I2C::Error>, I2C)> {
-        let estimator = match HarmonicForceEstimator::new(&config.estimator) {
+        let estimator = match crate::model::compiled_estimator(&config.estimator) {
             Ok(e) => e,
             Err(e) => return Err((StartError::Model(e), i2c)),
         };

@@ -121,12 +121,23 @@ impl<T: Real, const N: usize, const M: usize> SteadyStateFilter<T, N, M> {
         ss: &SteadyState<N, M>,
         x0: SVector<T, N>,
     ) -> Result<Self, RiccatiError> {
-        let s_inv = solve(&ss.innovation, &SMatrix::<f64, M, M>::identity()).ok_or(RiccatiError::Singular)?;
+        Self::from_gain(model, &ss.gain, &ss.innovation, x0)
+    }
+
+    /// Builds the filter from a gain `K` and innovation covariance `S` alone (what
+    /// [`crate::export::write_steady_state`] writes).
+    pub fn from_gain(
+        model: &LinearModel<f64, N, M>,
+        gain: &SMatrix<f64, N, M>,
+        innovation: &SMatrix<f64, M, M>,
+        x0: SVector<T, N>,
+    ) -> Result<Self, RiccatiError> {
+        let s_inv = solve(innovation, &SMatrix::<f64, M, M>::identity()).ok_or(RiccatiError::Singular)?;
         let cast = |v: f64| T::of_f64(v);
         Ok(Self {
             a: model.a.map(cast),
             c: model.c.map(cast),
-            gain: ss.gain.map(cast),
+            gain: gain.map(cast),
             s_inv: s_inv.map(cast),
             x: x0,
             x0,

@@ -19,11 +19,13 @@
 //! The model is time-invariant, so one discretisation (exact, Van Loan) serves every step, and a
 //! steady-state gain would serve too. The estimated force amplitude is `m |p|`.
 
-use crate::filter::{FilterHealth, KalmanFilter, LinearModel, RiccatiError, SteadyStateFilter};
+use crate::filter::{
+    solve_riccati, FilterHealth, KalmanFilter, LinearModel, RiccatiError, SteadyState, SteadyStateFilter,
+};
 use crate::linalg::{van_loan, LinalgError};
 use crate::residual::RunningStats;
 use crate::Real;
-use nalgebra::{Matrix1, Matrix4, RowVector4, SVector, Vector1, Vector4};
+use nalgebra::{Matrix1, Matrix4, RowVector4, SMatrix, SVector, Vector1, Vector4};
 
 /// Number of states: displacement, velocity and the two phasor components.
 pub const STATES: usize = 4;
@@ -274,19 +276,47 @@ impl<T: Real> HarmonicForceEstimator<T> {
     /// equation) in `f64`, then converts to `T`.
     pub fn new(params: &HarmonicForceParams) -> Result<Self, ModelError> {
         let model = params.discrete_model().map_err(ModelError::Model)?;
-        let core = match params.gain {
+        match params.gain {
             GainMode::SteadyState => {
-                Core::Steady(SteadyStateFilter::new(&model, SVector::zeros()).map_err(ModelError::Gain)?)
+                let ss = solve_riccati(&model, 1e-12, 100_000).map_err(ModelError::Gain)?;
+                Self::from_steady_state(params, &model, &ss)
             }
             GainMode::TimeVarying => {
                 let f0 = params.initial_force_std * params.initial_force_std;
                 // The mode's response is of the order of the force (per unit mass) near resonance.
                 let p0 = Matrix4::from_diagonal(&Vector4::new(f0, f0, f0, f0)).map(T::of_f64);
-                Core::Varying(KalmanFilter::new(model.cast::<T>(), SVector::zeros(), p0))
+                Ok(Self::with_core(params, Core::Varying(KalmanFilter::new(model.cast::<T>(), SVector::zeros(), p0))))
             }
-        };
+        }
+    }
+
+    /// A steady-state estimator from a model and gain computed elsewhere, typically on the host
+    /// and compiled in (`edgekf oscillator export`): no discretisation and no Riccati solve at
+    /// start-up. `params` supplies the physical scaling (ωn, modal mass) and the gate.
+    pub fn from_steady_state(
+        params: &HarmonicForceParams,
+        model: &LinearModel<f64, STATES, 1>,
+        ss: &SteadyState<STATES, 1>,
+    ) -> Result<Self, ModelError> {
+        Self::from_gain(params, model, &ss.gain, &ss.innovation)
+    }
+
+    /// Like [`HarmonicForceEstimator::from_steady_state`], from the gain `K` and innovation
+    /// covariance `S` alone (what `edgekf oscillator export` writes).
+    pub fn from_gain(
+        params: &HarmonicForceParams,
+        model: &LinearModel<f64, STATES, 1>,
+        gain: &SMatrix<f64, STATES, 1>,
+        innovation: &Matrix1<f64>,
+    ) -> Result<Self, ModelError> {
+        let filter =
+            SteadyStateFilter::from_gain(model, gain, innovation, SVector::zeros()).map_err(ModelError::Gain)?;
+        Ok(Self::with_core(params, Core::Steady(filter)))
+    }
+
+    fn with_core(params: &HarmonicForceParams, core: Core<T>) -> Self {
         let wn = params.omega_n();
-        Ok(Self {
+        Self {
             core,
             mass: T::of_f64(params.modal_mass_kg),
             to_displacement: T::of_f64(1.0 / (wn * wn)),
@@ -296,7 +326,7 @@ impl<T: Real> HarmonicForceEstimator<T> {
             gated_in_a_row: 0,
             counters: EstimatorCounters::default(),
             innovations: RunningStats::new(),
-        })
+        }
     }
 
     /// Advances one sample period. `None` marks a missing sample (dropout, stuck or saturated
