@@ -25,11 +25,14 @@
 #![deny(missing_docs)]
 #![forbid(unsafe_code)]
 
+pub mod crank;
 pub mod demo;
 pub mod estimate;
 pub mod export;
 pub mod io;
 pub mod reference;
 pub mod report;
+pub mod rotor;
+pub mod rotor_akf;
 pub mod scenario;
 pub mod sensor;

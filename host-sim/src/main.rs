@@ -46,6 +46,12 @@ enum Command {
     /// Single mode driven by a harmonic force: simulate data, estimate the force.
     #[command(subcommand)]
     Oscillator(Oscillator),
+    /// Planar slider-crank with revolute clearance joints: simulate, spectral feature.
+    #[command(subcommand)]
+    Crank(edgekf_sim::crank::cli::CrankCommand),
+    /// Flexible rotor (FE model): natural frequencies and whirl, time response with sensors.
+    #[command(subcommand)]
+    Rotor(edgekf_sim::rotor::cli::RotorCommand),
 }
 
 #[derive(Debug, Subcommand)]
@@ -127,6 +133,8 @@ fn scenario(config: Option<&Path>) -> anyhow::Result<Scenario> {
 
 fn run(command: Command) -> anyhow::Result<()> {
     match command {
+        Command::Crank(c) => edgekf_sim::crank::cli::run(c),
+        Command::Rotor(c) => edgekf_sim::rotor::cli::run(c),
         Command::Demo { out, config } => {
             let demo = Demo::run(&scenario(config.as_deref())?)?;
             println!("edgekf demo — {}", demo.summary());

@@ -1,0 +1,269 @@
+//! `edgekf crank …`: the slider-crank commands of the `edgekf` binary.
+//!
+//! ```text
+//! edgekf crank simulate [--config C] [--clearance A=0.25e-3]… --duration S --out data.csv
+//!                       [--seed N] [--integrator symplectic|adaptive] [--step H] [--tolerance TOL]
+//! edgekf crank feature  --data data.csv [--window 0.25] [--column crank_alpha]
+//! ```
+
+use super::config::CrankConfig;
+use super::feature::window_features;
+use super::integrate::Integrator;
+use super::simulate::{CrankRecording, SimOptions};
+use super::{Joint, Mechanism};
+use crate::io::data;
+use anyhow::Context as _;
+use clap::{Args, Subcommand, ValueEnum};
+use std::io::Write as _;
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// Planar slider-crank with revolute clearance joints (the clearance paper's mechanism).
+#[derive(Debug, Subcommand)]
+pub enum CrankCommand {
+    /// Simulate the mechanism falling from rest under gravity into a data CSV.
+    ///
+    /// Columns: t, crank_alpha (measured, rad/s²), truth_crank_alpha, truth_crank_angle,
+    /// truth_crank_rate, truth_slider_x, truth_contact_force_A/B/C (N), truth_eccentricity_A/B/C,
+    /// truth_clearance_A/B/C (m, 0 = ideal joint), truth_energy, truth_dissipated,
+    /// truth_balance (J). A summary goes to stdout, progress to stderr.
+    Simulate(SimulateArgs),
+    /// Print the spectral clearance feature (fit y = a·e^(b·f) of the FFT amplitude) of each
+    /// window of a data CSV.
+    Feature(FeatureArgs),
+}
+
+/// Arguments of `edgekf crank simulate`.
+#[derive(Debug, Args)]
+pub struct SimulateArgs {
+    /// Configuration file (default: the paper's case, as in host-sim/configs/crank_paper.toml).
+    #[arg(long, value_name = "TOML")]
+    pub config: Option<PathBuf>,
+    /// Radial clearance of a joint, JOINT=METRES (JOINT is A, B or C; 0 means ideal).
+    /// Repeat for several joints; joints not named are ideal.
+    #[arg(long = "clearance", value_name = "JOINT=M", value_parser = parse_clearance)]
+    pub clearances: Vec<(Joint, f64)>,
+    /// Simulated time, s.
+    #[arg(long, value_name = "S", allow_hyphen_values = true)]
+    pub duration: f64,
+    /// Data file to write.
+    #[arg(long, value_name = "CSV")]
+    pub out: PathBuf,
+    /// Seed of the sensor noise.
+    #[arg(long, value_name = "N", default_value_t = 1)]
+    pub seed: u64,
+    /// Integrator (default: the configuration's, symplectic Euler in the paper's case).
+    #[arg(long, value_enum)]
+    pub integrator: Option<IntegratorArg>,
+    /// Step of the symplectic Euler integrator, s (default: the configuration's).
+    #[arg(long, value_name = "H")]
+    pub step: Option<f64>,
+    /// Relative tolerance of the adaptive integrator (default: the configuration's).
+    #[arg(long, value_name = "TOL")]
+    pub tolerance: Option<f64>,
+}
+
+/// Integrator choice on the command line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum IntegratorArg {
+    /// Symplectic Euler at a fixed step (the paper's).
+    Symplectic,
+    /// Dormand–Prince 5(4) with error control and located contact events.
+    Adaptive,
+}
+
+/// Arguments of `edgekf crank feature`.
+#[derive(Debug, Args)]
+pub struct FeatureArgs {
+    /// Data file to read.
+    #[arg(long, value_name = "CSV")]
+    pub data: PathBuf,
+    /// Window length, s.
+    #[arg(long, value_name = "S", default_value_t = 0.25)]
+    pub window: f64,
+    /// Column holding the crank angular acceleration.
+    #[arg(long, value_name = "NAME", default_value = "crank_alpha")]
+    pub column: String,
+}
+
+/// `JOINT=METRES`, e.g. `A=0.25e-3`.
+fn parse_clearance(text: &str) -> Result<(Joint, f64), String> {
+    let (joint, value) =
+        text.split_once('=').ok_or_else(|| format!("`{text}`: expected JOINT=METRES, e.g. A=0.25e-3"))?;
+    let joint: Joint = joint.trim().parse()?;
+    let value: f64 =
+        value.trim().parse().map_err(|_| format!("`{value}` is not a number (clearance in metres, e.g. 0.25e-3)"))?;
+    if !(value.is_finite() && value >= 0.0) {
+        return Err(format!("clearance {value} m must be a non-negative number"));
+    }
+    if value > 0.01 {
+        return Err(format!("clearance {value} m is more than 1 cm: the value is in metres (0.25 mm = 0.25e-3)"));
+    }
+    Ok((joint, value))
+}
+
+/// Runs a `crank` command.
+pub fn run(command: CrankCommand) -> anyhow::Result<()> {
+    match command {
+        CrankCommand::Simulate(args) => simulate(args),
+        CrankCommand::Feature(args) => feature(args),
+    }
+}
+
+fn describe_clearances(c: &[Option<f64>; 3]) -> String {
+    Joint::ALL
+        .iter()
+        .map(|j| match c[j.index()] {
+            Some(v) => format!("{j} {:.4} mm", v * 1e3),
+            None => format!("{j} ideal"),
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+fn simulate(args: SimulateArgs) -> anyhow::Result<()> {
+    let mut config = match &args.config {
+        Some(path) => CrankConfig::load(path)?,
+        None => CrankConfig::default(),
+    };
+    if let Some(step) = args.step {
+        config.integrator.step = step;
+    }
+    if let Some(tol) = args.tolerance {
+        config.integrator.tolerance = tol;
+    }
+    if let Some(i) = args.integrator {
+        config.integrator.method = match i {
+            IntegratorArg::Symplectic => super::config::Method::Symplectic,
+            IntegratorArg::Adaptive => super::config::Method::Adaptive,
+        };
+    }
+    config.validate().context("invalid --step or --tolerance")?;
+    let mut clearances = [None; 3];
+    let mut named = [false; 3];
+    for (joint, c) in &args.clearances {
+        let j = joint.index();
+        if named[j] {
+            anyhow::bail!("--clearance given twice for joint {joint}");
+        }
+        named[j] = true;
+        clearances[j] = (*c > 0.0).then_some(*c);
+    }
+    let mech = Mechanism::new(&config, clearances)?;
+    let mut opts = SimOptions::from_config(&config, args.duration);
+    opts.seed = args.seed;
+    let started = Instant::now();
+    // Progress only for runs that take a while: at most one line per second of wall time.
+    let mut last_shown = 0.0;
+    let mut progress = |f: f64| {
+        let elapsed = started.elapsed().as_secs_f64();
+        if elapsed >= last_shown + 1.0 && f < 1.0 {
+            last_shown = elapsed;
+            eprintln!(
+                "crank simulate: {:3.0} % ({:.2} of {} s simulated, {elapsed:.1} s elapsed)",
+                f * 100.0,
+                f * args.duration,
+                args.duration,
+            );
+            let _ = std::io::stderr().flush();
+        }
+    };
+    let rec = mech.simulate_with_progress(&opts, &mut progress)?;
+    let wall = started.elapsed().as_secs_f64();
+    // The data error already names its cause; flatten it so the cause is printed once.
+    rec.write_csv(&args.out).map_err(|e| anyhow::anyhow!("{e}"))?;
+    println!(
+        "wrote {}: {} samples at {} Hz over {} s, seed {}",
+        args.out.display(),
+        rec.len(),
+        opts.sample_rate,
+        args.duration,
+        opts.seed
+    );
+    print!("{}", summary(&mech, &rec, &opts.integrator, wall));
+    Ok(())
+}
+
+/// The human-readable summary of a run.
+pub fn summary(mech: &Mechanism, rec: &CrankRecording, integrator: &Integrator, wall_s: f64) -> String {
+    let s = &rec.stats;
+    let method = match integrator {
+        Integrator::SymplecticEuler { step } => format!("symplectic Euler, step {step:e} s"),
+        Integrator::Adaptive { tolerance, max_step } => {
+            format!("adaptive Dormand–Prince 5(4), tolerance {tolerance:e}, max step {max_step:e} s")
+        }
+    };
+    let mut out = format!("clearances: {}\n", describe_clearances(&mech.clearances()));
+    out += &format!(
+        "integrator: {method}: {} steps ({} rejected), {} evaluations, steps {:.3e}–{:.3e} s, wall {:.2} s\n",
+        s.steps, s.rejected, s.evaluations, s.step_range.0, s.step_range.1, wall_s
+    );
+    for joint in Joint::ALL {
+        let kind = if mech.clearance(joint).is_some() { "contact" } else { "pin reaction" };
+        out += &format!(
+            "joint {joint}: {} impacts, peak {kind} force {:.1} N\n",
+            s.impacts[joint.index()],
+            rec.peak_force(joint)
+        );
+    }
+    let e0 = rec.truth_energy.first().copied().unwrap_or(0.0);
+    let e1 = rec.truth_energy.last().copied().unwrap_or(0.0);
+    let d1 = rec.truth_dissipated.last().copied().unwrap_or(0.0);
+    out += &format!(
+        "energy: start {e0:.6} J, end {e1:.6} J, dissipated {d1:.3e} J, balance error max {:.3e} J, largest climb {:.3e} J\n",
+        rec.energy_balance_error(),
+        rec.energy_rise()
+    );
+    out += &format!("constraints: largest residual {:.1e} m\n", rec.max_constraint_residual);
+    let rms = (rec.truth_crank_alpha.iter().map(|v| v * v).sum::<f64>() / rec.len().max(1) as f64).sqrt();
+    out += &format!(
+        "crank: angle {:.2}° → {:.2}°, angular acceleration RMS {rms:.1} rad/s² (truth)\n",
+        rec.truth_crank_angle.first().copied().unwrap_or(0.0).to_degrees(),
+        rec.truth_crank_angle.last().copied().unwrap_or(0.0).to_degrees(),
+    );
+    out
+}
+
+fn feature(args: FeatureArgs) -> anyhow::Result<()> {
+    let (file, report) = data::read(&args.data, &[args.column.as_str()])?;
+    eprintln!("{}: {report}", args.data.display());
+    let x =
+        file.column(&args.column).with_context(|| format!("{}: no column `{}`", args.data.display(), args.column))?;
+    if x.iter().any(|v| v.is_nan()) {
+        anyhow::bail!(
+            "{}: column `{}` has missing samples; the spectrum needs them all",
+            args.data.display(),
+            args.column
+        );
+    }
+    let rate = report.timing.sample_rate;
+    let feats = window_features(x, rate, args.window);
+    if feats.is_empty() {
+        anyhow::bail!("{}: shorter than one {} s window", args.data.display(), args.window);
+    }
+    println!(
+        "{}: spectral feature of `{}`, {} s windows at {rate:.1} Hz",
+        args.data.display(),
+        args.column,
+        args.window
+    );
+    println!("{:>8} {:>10} {:>14} {:>14}", "window", "t0 [s]", "a", "b [1/Hz]");
+    let mut a_values = Vec::new();
+    for (i, f) in feats.iter().enumerate() {
+        let t0 = file.t[0] + i as f64 * args.window;
+        match f {
+            Some(f) => {
+                println!("{i:>8} {t0:>10.3} {:>14.6} {:>14.6e}", f.a, f.b);
+                a_values.push(f.a);
+            }
+            None => println!("{i:>8} {t0:>10.3} {:>14} {:>14}", "—", "—"),
+        }
+    }
+    let n = a_values.len() as f64;
+    if n > 0.0 {
+        let mean = a_values.iter().sum::<f64>() / n;
+        let std = (a_values.iter().map(|a| (a - mean).powi(2)).sum::<f64>() / (n - 1.0).max(1.0)).sqrt();
+        println!("a: mean {mean:.6}, std {std:.6} over {} window(s)", a_values.len());
+    }
+    Ok(())
+}
