@@ -11,6 +11,7 @@ pub mod adxl355;
 pub mod line_feed;
 pub mod model;
 pub mod node;
+pub mod rotor;
 #[cfg(all(target_os = "none", feature = "qemu"))]
 pub mod semihost;
 #[cfg(target_os = "none")]

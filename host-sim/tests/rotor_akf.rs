@@ -97,3 +97,79 @@ fn the_papers_random_walk_forces_have_a_higher_floor() {
     eprintln!("phasor {:.3} µm vs best random walk {:.3} µm", rms * 1e6, best * 1e6);
     assert!(rms * 2.0 < best, "phasor {rms} vs random walk {best}");
 }
+
+/// The displacement-probe filter with the filter's model off: Young's modulus ±1 %, bearing
+/// stiffness +1 %, speed ±0.05 % (the data always from the nominal rotor).
+#[test]
+fn displacement_filter_under_model_error() {
+    let cfg = RotorConfig::from_toml_str(include_str!("../configs/rotor_paper.toml")).unwrap();
+    let truth = RotorModel::from_config(&cfg).unwrap();
+    let speed = cfg.operation.speed;
+    let rec = truth.simulate(&SimOptions { duration: 4.0, seed: 3, ..SimOptions::default() }).unwrap();
+    let data = rec.to_data_file();
+    let off = |bearing: f64, young: f64| {
+        let mut c = cfg.clone();
+        for b in &mut c.bearings {
+            b.kxx *= bearing;
+            b.kyy *= bearing;
+        }
+        c.shaft.young *= young;
+        RotorModel::from_config(&c).unwrap()
+    };
+    let cases = [
+        ("matched", off(1.0, 1.0), 1.0),
+        ("Young's modulus +1 %", off(1.0, 1.01), 1.0),
+        ("Young's modulus −1 %", off(1.0, 0.99), 1.0),
+        ("bearing stiffness +1 %", off(1.01, 1.0), 1.0),
+        ("speed +0.05 %", off(1.0, 1.0), 1.0005),
+        ("speed −0.05 %", off(1.0, 1.0), 0.9995),
+    ];
+    for (tname, tuning) in [("default", Tuning::default()), ("robust", Tuning::robust())] {
+        for (name, m, factor) in &cases {
+            let est = run(&reduce(m, speed * factor, &tuning).unwrap(), &data, FilterPrecision::F64).unwrap();
+            let (rms, _) = disk_errors(&est, &rec, 1.0, 0.2);
+            let nis: Vec<f64> = est.nis.iter().copied().skip(1000).filter(|v| v.is_finite()).collect();
+            eprintln!(
+                "displacement probes, {tname} tuning, {name}: disk RMS {:.3} µm, NIS mean {:.1}",
+                rms * 1e6,
+                nis.iter().sum::<f64>() / nis.len() as f64
+            );
+            assert_eq!(est.repairs, (0, 0));
+            if tname == "robust" {
+                assert!(rms <= 3e-6, "robust tuning, {name}: {rms}");
+            }
+        }
+    }
+}
+
+/// Time-varying gain for the first 0.5 s, then the steady-state gain: the chip's cheap filter
+/// after the start-up.
+#[test]
+fn switching_to_the_steady_state_gain_after_start_up() {
+    use edgekf_sim::rotor_akf::{run_with, RunOptions};
+    for (name, text) in [
+        ("displacement probes", include_str!("../configs/rotor_paper.toml")),
+        ("accelerometers", include_str!("../configs/rotor_paper_accel.toml")),
+    ] {
+        let cfg = RotorConfig::from_toml_str(text).unwrap();
+        let model = RotorModel::from_config(&cfg).unwrap();
+        let rec = model.simulate(&SimOptions { duration: 4.0, seed: 3, ..SimOptions::default() }).unwrap();
+        let data = rec.to_data_file();
+        let red = reduce(&model, cfg.operation.speed, &Tuning::default()).unwrap();
+        let tv = run(&red, &data, FilterPrecision::F64).unwrap();
+        let start = std::time::Instant::now();
+        let sw = run_with(&red, &data, FilterPrecision::F64, &RunOptions { steady_after: Some(0.5) }).unwrap();
+        let (tv_rms, tv_worst) = disk_errors(&tv, &rec, 1.0, 0.5);
+        let (sw_rms, sw_worst) = disk_errors(&sw, &rec, 1.0, 0.5);
+        eprintln!(
+            "{name}: time-varying disk RMS {:.3} µm (worst {:.3} µm for t ≥ 0.5 s); steady-state gain from 0.5 s: {:.3} µm (worst {:.3} µm), run incl. Riccati {:.2} s",
+            tv_rms * 1e6,
+            tv_worst * 1e6,
+            sw_rms * 1e6,
+            sw_worst * 1e6,
+            start.elapsed().as_secs_f64()
+        );
+        assert_eq!(sw.repairs, (0, 0));
+        assert!(sw_rms <= 2.0 * tv_rms + 0.1e-6, "{name}: switched {sw_rms} vs time-varying {tv_rms}");
+    }
+}

@@ -9,7 +9,8 @@ use crate::filter::{LinearModel, SteadyState};
 use core::fmt::{self, Write};
 use nalgebra::SMatrix;
 
-fn write_matrix<const R: usize, const C: usize>(
+/// Writes one matrix as `pub const {prefix}_{suffix}: [[f64; C]; R]` with a doc line.
+pub fn write_matrix<const R: usize, const C: usize>(
     out: &mut impl Write,
     prefix: &str,
     suffix: &str,

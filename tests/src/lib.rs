@@ -11,6 +11,7 @@ pub mod checks;
 pub mod host;
 pub mod qemu;
 pub mod report;
+pub mod rotor;
 
 /// Compares two runs block by block and returns a readable description of the first
 /// difference, or `None` if every reported number is bit-identical.

@@ -39,11 +39,21 @@ impl FirmwareRun {
 
 /// The firmware ELF to test: `$EDGEKF_FW_ELF` (set by `cargo xtask test`).
 pub fn firmware_elf() -> Result<PathBuf> {
-    let path = std::env::var_os("EDGEKF_FW_ELF")
-        .context("EDGEKF_FW_ELF is not set: run the HIL tests through `cargo xtask test` (it builds the image)")?;
+    elf_from("EDGEKF_FW_ELF")
+}
+
+/// The rotor virtual-sensing image: `$EDGEKF_ROTOR_ELF` (set by `cargo xtask test`).
+pub fn rotor_elf() -> Result<PathBuf> {
+    elf_from("EDGEKF_ROTOR_ELF")
+}
+
+fn elf_from(var: &str) -> Result<PathBuf> {
+    let path = std::env::var_os(var).with_context(|| {
+        format!("{var} is not set: run the HIL tests through `cargo xtask test` (it builds the image)")
+    })?;
     let path = PathBuf::from(path);
     if !path.is_file() {
-        bail!("EDGEKF_FW_ELF points to {}, which is not a file", path.display());
+        bail!("{var} points to {}, which is not a file", path.display());
     }
     Ok(path)
 }

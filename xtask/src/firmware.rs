@@ -15,6 +15,8 @@ pub enum Image {
     Board,
     /// `edgekf-bench`: per-step instruction counts under QEMU.
     Bench,
+    /// `edgekf-rotor-qemu`: rotor virtual sensing fed from a host CSV.
+    RotorQemu,
 }
 
 impl Image {
@@ -23,11 +25,12 @@ impl Image {
             Image::Qemu => "edgekf-qemu",
             Image::Board => "edgekf-board",
             Image::Bench => "edgekf-bench",
+            Image::RotorQemu => "edgekf-rotor-qemu",
         }
     }
     fn feature(self) -> &'static str {
         match self {
-            Image::Qemu | Image::Bench => "qemu",
+            Image::Qemu | Image::Bench | Image::RotorQemu => "qemu",
             Image::Board => "board",
         }
     }

@@ -69,6 +69,9 @@ fn test(long: bool) -> Result<()> {
     step("firmware: cross-build the QEMU image");
     let qemu = firmware::build(firmware::Image::Qemu)?;
     firmware::print_footprint(firmware::Image::Qemu, &qemu)?;
+    step("firmware: cross-build the rotor virtual-sensing QEMU image");
+    let rotor = firmware::build(firmware::Image::RotorQemu)?;
+    firmware::print_footprint(firmware::Image::RotorQemu, &rotor)?;
 
     step("chip benchmarks: instruction counts per filter step in QEMU (deterministic, checked against budgets)");
     bench::run(&firmware::workspace_root())?;

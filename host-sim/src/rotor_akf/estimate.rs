@@ -3,7 +3,7 @@
 use super::reduce::ReducedRotor;
 use crate::io::data::DataFile;
 use anyhow::{anyhow, bail, Result};
-use edgekf::filter::{KalmanFilter, LinearModel};
+use edgekf::filter::{solve_riccati, KalmanFilter, LinearModel, SteadyStateFilter};
 use edgekf::linalg::van_loan;
 use edgekf::Real;
 use nalgebra::{DMatrix, SMatrix, SVector};
@@ -30,13 +30,20 @@ pub struct Estimates {
     pub force_names: Vec<String>,
     /// `force[output][k]`, N.
     pub force: Vec<Vec<f64>>,
+    /// `sensor[channel][k]`: the filtered estimate of each sensor channel (`C x̂` after the
+    /// update, plus the channel's offset), in the channel's unit.
+    pub sensor: Vec<Vec<f64>>,
     /// `innovation[channel][k]`, in the channel's unit (NaN where the sample was missing).
     pub innovation: Vec<Vec<f64>>,
     /// NIS per sample (NaN where missing).
     pub nis: Vec<f64>,
+    /// `ln det S` of the innovation covariance per sample (NaN where missing): with the NIS,
+    /// the innovations' negative log-likelihood is `½ Σ (ln det S + NIS) + const`.
+    pub log_det_s: Vec<f64>,
     /// Samples whose measurement was missing (NaN in the file) and were bridged by prediction.
     pub missing: usize,
-    /// Covariance resets and refused updates of the filter (both 0 in a healthy run).
+    /// Covariance resets and refused updates of the filter (both 0 in a healthy run); after a
+    /// switch to the steady-state gain the first also counts that filter's state resets.
     pub repairs: (u32, u32),
 }
 
@@ -55,23 +62,60 @@ pub fn discrete<const N: usize, const M: usize, const N2: usize>(red: &ReducedRo
     Ok(LinearModel { a, c: fixed(&red.c)?, q, r: fixed(&red.r)? })
 }
 
-/// Runs the filter of `red` over `data` (channels named as the sensors).
+/// How the filter runs.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct RunOptions {
+    /// Switch from the time-varying gain to the steady-state gain (the DARE's, solved once in
+    /// f64) at this time, s; `None`: time-varying throughout.
+    pub steady_after: Option<f64>,
+}
+
+/// Runs the filter of `red` over `data` (channels named as the sensors); time-varying gain.
+pub fn run(red: &ReducedRotor, data: &DataFile, precision: FilterPrecision) -> Result<Estimates> {
+    run_with(red, data, precision, &RunOptions::default())
+}
+
+/// Runs the filter of `red` over `data` with `options`.
 ///
 /// Sizes are compile-time on the chip, so the host supports the sizes the firmware can run:
-/// 20 states × 4 sensors (8 modes, 2 unbalance nodes, 4 sensors: the paper's rotor).
-pub fn run(red: &ReducedRotor, data: &DataFile, precision: FilterPrecision) -> Result<Estimates> {
+/// 8 modes, 2 unbalance nodes and 4 sensors: 20 states × 4 (displacement probes), 28 × 4
+/// (accelerometers with 2nd-order low-passes), 24 × 4 (1st-order low-passes).
+pub fn run_with(
+    red: &ReducedRotor,
+    data: &DataFile,
+    precision: FilterPrecision,
+    options: &RunOptions,
+) -> Result<Estimates> {
+    let o = *options;
     match (red.states(), red.c.nrows(), precision) {
-        (20, 4, FilterPrecision::F64) => run_sized::<f64, 20, 4, 40>(red, data),
-        (20, 4, FilterPrecision::F32) => run_sized::<f32, 20, 4, 40>(red, data),
-        (n, m, _) => bail!("no filter build for {n} states × {m} sensors (supported: 20 × 4, i.e. 8 modes, 2 unbalance nodes, 4 sensors)"),
+        (20, 4, FilterPrecision::F64) => run_sized::<f64, 20, 4, 40>(red, data, o),
+        (20, 4, FilterPrecision::F32) => run_sized::<f32, 20, 4, 40>(red, data, o),
+        (24, 4, FilterPrecision::F64) => run_sized::<f64, 24, 4, 48>(red, data, o),
+        (24, 4, FilterPrecision::F32) => run_sized::<f32, 24, 4, 48>(red, data, o),
+        (28, 4, FilterPrecision::F64) => run_sized::<f64, 28, 4, 56>(red, data, o),
+        (28, 4, FilterPrecision::F32) => run_sized::<f32, 28, 4, 56>(red, data, o),
+        (n, m, _) => bail!(
+            "no filter build for {n} states × {m} sensors (supported with 4 sensors: 20 states for displacement probes, \
+             24 or 28 for accelerometers with 1st- or 2nd-order low-passes; i.e. 8 modes, 2 unbalance nodes)"
+        ),
     }
 }
 
 fn run_sized<T: Real, const N: usize, const M: usize, const N2: usize>(
     red: &ReducedRotor,
     data: &DataFile,
+    options: RunOptions,
 ) -> Result<Estimates> {
     let model = discrete::<N, M, N2>(red)?;
+    let steady = match options.steady_after {
+        Some(t) => {
+            let ss = solve_riccati(&model, 1e-10, 200_000).map_err(|e| anyhow!("no steady-state gain: {e:?}"))?;
+            Some((t, ss))
+        }
+        None => None,
+    };
+    let mut ssf: Option<SteadyStateFilter<T, N, M>> = None;
+    let mut ss_log_det = f64::NAN;
     let columns: Vec<&[f64]> = red
         .channels
         .iter()
@@ -89,18 +133,44 @@ fn run_sized<T: Real, const N: usize, const M: usize, const N2: usize>(
         force_names: red.force_nodes.iter().flat_map(|n| [format!("f{n}_x"), format!("f{n}_y")]).collect(),
         force: vec![Vec::with_capacity(data.t.len()); f_rows.nrows()],
         innovation: vec![Vec::with_capacity(data.t.len()); M],
+        sensor: vec![Vec::with_capacity(data.t.len()); M],
         nis: Vec::with_capacity(data.t.len()),
+        log_det_s: Vec::with_capacity(data.t.len()),
         ..Estimates::default()
     };
     for k in 0..data.t.len() {
-        let y = SVector::<f64, M>::from_fn(|i, _| columns[i].get(k).copied().unwrap_or(f64::NAN));
-        if y.iter().all(|v| v.is_finite()) {
+        let y = SVector::<f64, M>::from_fn(|i, _| columns[i].get(k).copied().unwrap_or(f64::NAN) - red.offsets[i]);
+        if let Some((t_switch, ss)) = &steady {
+            if ssf.is_none() && data.t[k] >= *t_switch {
+                ssf = Some(
+                    SteadyStateFilter::from_gain(&model, &ss.gain, &ss.innovation, *kf.state())
+                        .map_err(|e| anyhow!("steady-state filter: {e:?}"))?,
+                );
+                ss_log_det = log_det(&ss.innovation);
+            }
+        }
+        if let Some(f) = ssf.as_mut() {
+            match f.update(&y.map(T::of_f64)) {
+                Some((r, nis)) => {
+                    for i in 0..M {
+                        est.innovation[i].push(r[i].as_f64());
+                    }
+                    est.nis.push(nis.as_f64());
+                    est.log_det_s.push(ss_log_det);
+                }
+                None => {
+                    est.missing += 1;
+                    push_missing(&mut est, M);
+                }
+            }
+        } else if y.iter().all(|v| v.is_finite()) {
             match kf.update(&y.map(T::of_f64)) {
                 Ok(inn) => {
                     for i in 0..M {
                         est.innovation[i].push(inn.residual[i].as_f64());
                     }
                     est.nis.push(inn.nis.as_f64());
+                    est.log_det_s.push(log_det(&inn.s.map(|v| v.as_f64())));
                 }
                 Err(_) => push_missing(&mut est, M),
             }
@@ -108,19 +178,27 @@ fn run_sized<T: Real, const N: usize, const M: usize, const N2: usize>(
             est.missing += 1;
             push_missing(&mut est, M);
         }
-        let x = DMatrix::from_iterator(N, 1, kf.state().iter().map(|v| v.as_f64()));
+        let state = ssf.as_ref().map_or(kf.state(), |f| f.state());
+        let x = DMatrix::from_iterator(N, 1, state.iter().map(|v| v.as_f64()));
         let d = &d_rows * &x;
         for (i, out) in est.displacement.iter_mut().enumerate() {
             out.push(d[i]);
+        }
+        let yhat = &red.c * &x;
+        for (i, out) in est.sensor.iter_mut().enumerate() {
+            out.push(yhat[i] + red.offsets[i]);
         }
         let f = &f_rows * &x;
         for (i, out) in est.force.iter_mut().enumerate() {
             out.push(f[i]);
         }
-        kf.predict();
+        match ssf.as_mut() {
+            Some(f) => f.predict(),
+            None => kf.predict(),
+        }
     }
     let h = kf.health();
-    est.repairs = (h.covariance_resets, h.refused_updates);
+    est.repairs = (h.covariance_resets + ssf.as_ref().map_or(0, |f| f.resets()), h.refused_updates);
     Ok(est)
 }
 
@@ -129,4 +207,13 @@ fn push_missing(est: &mut Estimates, m: usize) {
         est.innovation[i].push(f64::NAN);
     }
     est.nis.push(f64::NAN);
+    est.log_det_s.push(f64::NAN);
+}
+
+/// `ln det S` of a symmetric positive definite `S` through its Cholesky factor (NaN if not).
+fn log_det<const M: usize>(s: &SMatrix<f64, M, M>) -> f64 {
+    match s.cholesky() {
+        Some(ch) => 2.0 * ch.l().diagonal().iter().map(|v| v.ln()).sum::<f64>(),
+        None => f64::NAN,
+    }
 }

@@ -8,6 +8,8 @@
 //!   random-walk forces).
 //! * [`estimate`]: discretisation (exact, Van Loan), the filter run over a data file, and the
 //!   virtual-sensing outputs.
+//! * [`tune`]: the noise parameters from data, by the paper's compromise objective under
+//!   differential evolution or by the innovations' maximum likelihood.
 //!
 //! Why a phasor: an unbalance force at constant speed is `F_x = A cos(Ωt + φ)`,
 //! `F_y = A sin(Ωt + φ)`, a vector rotating forward at the known running speed. Two states per
@@ -19,6 +21,7 @@
 pub mod cli;
 pub mod estimate;
 pub mod reduce;
+pub mod tune;
 
-pub use estimate::{run, Estimates, FilterPrecision};
+pub use estimate::{run, run_with, Estimates, FilterPrecision, RunOptions};
 pub use reduce::{reduce, ForceModel, ReducedRotor, Tuning};
