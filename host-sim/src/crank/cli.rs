@@ -4,6 +4,8 @@
 //! edgekf crank simulate [--config C] [--clearance A=0.25e-3]… --duration S --out data.csv
 //!                       [--seed N] [--integrator symplectic|adaptive] [--step H] [--tolerance TOL]
 //! edgekf crank feature  --data data.csv [--window 0.25] [--column crank_alpha]
+//! edgekf crank estimate --data data.csv --method ukf|fast [--config C] [--initial 0.1e-3]
+//!                       [--window 0.25] [--model map.toml] --out est.csv
 //! ```
 
 use super::config::CrankConfig;
@@ -31,6 +33,48 @@ pub enum CrankCommand {
     /// Print the spectral clearance feature (fit y = a·e^(b·f) of the FFT amplitude) of each
     /// window of a data CSV.
     Feature(FeatureArgs),
+    /// Estimate the clearance from a recording's crank angular acceleration into an estimate
+    /// CSV (t, clearance_A, clearance_B, clearance_C in m, 0 = tight; one row per window, the
+    /// last row the estimate for the whole recording).
+    Estimate(EstimateArgs),
+}
+
+/// Estimation method.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum MethodArg {
+    /// The paper's UKF: three sigma points, each a clearance simulation, one step per window.
+    Ukf,
+    /// The learned feature-to-clearance map (no simulation).
+    Fast,
+}
+
+/// Arguments of `edgekf crank estimate`.
+#[derive(Debug, Args)]
+pub struct EstimateArgs {
+    /// Configuration file of the mechanism (default: the paper's case).
+    #[arg(long, value_name = "TOML")]
+    pub config: Option<PathBuf>,
+    /// Data file with `t` and `crank_alpha` (rad/s²).
+    #[arg(long, value_name = "CSV")]
+    pub data: PathBuf,
+    /// Estimator.
+    #[arg(long, value_enum)]
+    pub method: MethodArg,
+    /// UKF: initial clearance guess, m.
+    #[arg(long, value_name = "M", default_value_t = 0.1e-3)]
+    pub initial: f64,
+    /// UKF: window (one filter step), s.
+    #[arg(long, value_name = "S", default_value_t = 0.25)]
+    pub window: f64,
+    /// UKF: measurement standard deviation of the feature a (default: from the recording).
+    #[arg(long, value_name = "RAD_S2")]
+    pub measurement_std: Option<f64>,
+    /// Fast: the learned map (default: the built-in one).
+    #[arg(long, value_name = "TOML")]
+    pub model: Option<PathBuf>,
+    /// Estimate file to write.
+    #[arg(long, value_name = "CSV")]
+    pub out: PathBuf,
 }
 
 /// Arguments of `edgekf crank simulate`.
@@ -107,6 +151,7 @@ pub fn run(command: CrankCommand) -> anyhow::Result<()> {
     match command {
         CrankCommand::Simulate(args) => simulate(args),
         CrankCommand::Feature(args) => feature(args),
+        CrankCommand::Estimate(args) => estimate(args),
     }
 }
 
@@ -265,5 +310,80 @@ fn feature(args: FeatureArgs) -> anyhow::Result<()> {
         let std = (a_values.iter().map(|a| (a - mean).powi(2)).sum::<f64>() / (n - 1.0).max(1.0)).sqrt();
         println!("a: mean {mean:.6}, std {std:.6} over {} window(s)", a_values.len());
     }
+    Ok(())
+}
+
+fn estimate(args: EstimateArgs) -> anyhow::Result<()> {
+    use super::estimate::{self, ukf, Recording};
+    let config = match &args.config {
+        Some(path) => CrankConfig::load(path)?,
+        None => CrankConfig::default(),
+    };
+    let rec = Recording::read(&args.data)?;
+    let truth = rec.truth_clearance.map(|c| describe_clearances(&c.map(|v| (v > 0.0).then_some(v))));
+    let started = Instant::now();
+    let rows = match args.method {
+        MethodArg::Ukf => {
+            if !(args.initial.is_finite() && args.initial > 0.0 && args.initial < 0.01) {
+                anyhow::bail!("--initial {} m must be a clearance in metres (0.1 mm = 0.1e-3)", args.initial);
+            }
+            let opts = ukf::UkfOptions {
+                initial: args.initial,
+                window: args.window,
+                measurement_std: args.measurement_std,
+                ..ukf::UkfOptions::default()
+            };
+            let mut progress = |k: usize, s: &ukf::UkfStep| {
+                eprintln!(
+                    "window {k:>3} (t {:.2} s): a measured {:>8} predicted {:7.1}, sigma {:.4}/{:.4}/{:.4} mm → A {:.4} ± {:.4} mm",
+                    s.t,
+                    s.measured.map_or("—".to_string(), |a| format!("{a:.1}")),
+                    s.predicted,
+                    s.sigma[0] * 1e3,
+                    s.sigma[1] * 1e3,
+                    s.sigma[2] * 1e3,
+                    s.clearance * 1e3,
+                    s.std * 1e3
+                );
+            };
+            let run = ukf::run(&config, &rec, &opts, &mut progress)?;
+            println!(
+                "ukf: {} windows of {} s, R std {:.1} rad/s², {} integration steps, wall {:.2} s",
+                run.steps.len(),
+                args.window,
+                run.measurement_std,
+                run.integration_steps,
+                started.elapsed().as_secs_f64()
+            );
+            println!(
+                "estimate: A {:.4} mm (last window {:.4} mm){}",
+                run.estimate * 1e3,
+                run.steps.last().map_or(f64::NAN, |s| s.clearance) * 1e3,
+                truth.map_or(String::new(), |t| format!("; truth: {t}"))
+            );
+            run.rows()
+        }
+        MethodArg::Fast => {
+            let map = match &args.model {
+                Some(path) => estimate::fast::FeatureMap::load(path)?,
+                None => estimate::fast::FeatureMap::builtin(),
+            };
+            let est = map.estimate(&rec)?;
+            println!(
+                "fast: {} windows, {} feature operations, wall {:.3} s",
+                est.windows,
+                est.operations,
+                started.elapsed().as_secs_f64()
+            );
+            println!(
+                "estimate: {}{}",
+                describe_clearances(&est.clearance.map(|v| (v > 0.0).then_some(v))),
+                truth.map_or(String::new(), |t| format!("; truth: {t}"))
+            );
+            est.rows(&rec)
+        }
+    };
+    estimate::write_estimates(&args.out, &rows).map_err(|e| anyhow::anyhow!("{e}"))?;
+    println!("wrote {}: {} rows", args.out.display(), rows.len());
     Ok(())
 }

@@ -20,7 +20,10 @@
 //! * [`simulate`](mod@simulate): [`SimOptions`] → [`CrankRecording`] (sensor channel, truth, final
 //!   state), CSV output;
 //! * [`spectrum`] and [`feature`]: the paper's spectral clearance feature;
-//! * [`cli`]: `edgekf crank simulate | feature`.
+//! * [`estimate`]: clearance estimation from a recording: the paper's UKF
+//!   ([`estimate::ukf`], sigma points are clearance simulations) and a fast feature map
+//!   ([`estimate::fast`], no simulation);
+//! * [`cli`]: `edgekf crank simulate | feature | estimate`.
 //!
 //! Measured (paper's mechanism, released at 30°; `cargo test -p edgekf-sim --test crank --
 //! --nocapture`, and `edgekf crank simulate … --duration 10` in release for the timings):
@@ -68,6 +71,7 @@ pub mod cli;
 pub mod config;
 pub mod contact;
 mod error;
+pub mod estimate;
 pub mod feature;
 pub mod integrate;
 pub mod mechanism;

@@ -1,0 +1,96 @@
+//! Clearance estimation from a recording of the crank angular acceleration.
+//!
+//! * [`ukf`]: the paper's estimator, a one-state unscented Kalman filter whose three sigma
+//!   points are full clearance simulations, one step per 0.25 s window, measuring the
+//!   spectral feature `a` ([`super::feature`]);
+//! * [`fast`]: a feature-to-clearance map learned on the host from the reference simulator
+//!   (`edgekf crank train`), cheap enough for the chip.
+//!
+//! Both read a [`Recording`] (a data CSV with `t` and `crank_alpha`; `truth_clearance_*`
+//! columns, when present, are only reported) and write one [`EstimateRow`] per window
+//! ([`write_estimates`]: columns `t, clearance_A, clearance_B, clearance_C` in m, 0 for a
+//! joint judged tight), the last row being the estimate for the whole recording.
+
+pub mod fast;
+pub mod ukf;
+
+use super::simulate::CrankRecording;
+use super::Joint;
+use crate::io::data::{self, DataError};
+use std::path::Path;
+
+/// The measured channel of a recording.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Recording {
+    /// Sample times, s (uniform).
+    pub t: Vec<f64>,
+    /// Measured crank angular acceleration, rad/s².
+    pub crank_alpha: Vec<f64>,
+    /// Sample rate, Hz.
+    pub sample_rate: f64,
+    /// The true clearances (m, 0 = ideal) if the file carries `truth_clearance_*` columns.
+    pub truth_clearance: Option<[f64; 3]>,
+}
+
+impl Recording {
+    /// The measured channel of a simulated run.
+    pub fn from_simulation(rec: &CrankRecording, sample_rate: f64) -> Self {
+        Self {
+            t: rec.t.clone(),
+            crank_alpha: rec.crank_alpha.clone(),
+            sample_rate,
+            truth_clearance: Some(rec.clearances.map(|c| c.unwrap_or(0.0))),
+        }
+    }
+
+    /// Reads `t` and `crank_alpha` (and `truth_clearance_A/B/C` if present) from a data CSV.
+    /// Missing samples are refused: the spectra need every sample.
+    pub fn read(path: &Path) -> anyhow::Result<Self> {
+        let names = ["crank_alpha", "truth_clearance_A", "truth_clearance_B", "truth_clearance_C"];
+        // The data error already names its cause and file.
+        let (file, report) = data::read(path, &names).map_err(|e| anyhow::anyhow!("{e}"))?;
+        let alpha =
+            file.column("crank_alpha").ok_or_else(|| anyhow::anyhow!("{}: no column `crank_alpha`", path.display()))?;
+        if alpha.iter().any(|v| !v.is_finite()) {
+            anyhow::bail!("{}: column `crank_alpha` has missing samples; the spectra need them all", path.display());
+        }
+        let truth: Vec<Option<f64>> = Joint::ALL
+            .iter()
+            .map(|j| file.column(&format!("truth_clearance_{j}")).and_then(|c| c.first().copied()))
+            .collect();
+        let truth_clearance = truth.iter().all(Option::is_some).then(|| [0, 1, 2].map(|i| truth[i].unwrap_or(0.0)));
+        Ok(Self {
+            t: file.t.clone(),
+            crank_alpha: alpha.to_vec(),
+            sample_rate: report.timing.sample_rate,
+            truth_clearance,
+        })
+    }
+
+    /// Samples in a window of `window_s` seconds (0 if not representable).
+    pub fn window_len(&self, window_s: f64) -> usize {
+        let n = (window_s * self.sample_rate).round();
+        if (1.0..1e12).contains(&n) {
+            n as usize
+        } else {
+            0
+        }
+    }
+}
+
+/// One line of an estimate file: the clearances after a window.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EstimateRow {
+    /// End of the window, s (for the last, whole-recording row: the end of the recording).
+    pub t: f64,
+    /// Clearance at A, B, C, m (0: judged tight).
+    pub clearance: [f64; 3],
+}
+
+/// Writes estimate rows as a data CSV with columns `t, clearance_A, clearance_B, clearance_C`.
+pub fn write_estimates(path: &Path, rows: &[EstimateRow]) -> Result<(), DataError> {
+    let t: Vec<f64> = rows.iter().map(|r| r.t).collect();
+    let cols: Vec<Vec<f64>> = (0..3).map(|j| rows.iter().map(|r| r.clearance[j]).collect()).collect();
+    let refs: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
+    data::write(path, &["clearance_A", "clearance_B", "clearance_C"], &t, &refs)
+}
