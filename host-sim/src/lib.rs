@@ -32,6 +32,7 @@ pub mod export;
 pub mod io;
 pub mod reference;
 pub mod report;
+pub mod residual_loop;
 pub mod rotor;
 pub mod rotor_akf;
 pub mod scenario;

@@ -52,6 +52,11 @@ enum Command {
     /// Flexible rotor (FE model): natural frequencies and whirl, time response with sensors.
     #[command(subcommand)]
     Rotor(edgekf_sim::rotor::cli::RotorCommand),
+    /// Close the loop with measured data: read the filter's innovations, add the model effects
+    /// they point at (sensor bias, harmonic force at k× running speed) when they pay for their
+    /// parameters, report before/after.
+    #[command(subcommand)]
+    Loop(edgekf_sim::residual_loop::cli::LoopCommand),
 }
 
 #[derive(Debug, Subcommand)]
@@ -135,6 +140,7 @@ fn run(command: Command) -> anyhow::Result<()> {
     match command {
         Command::Crank(c) => edgekf_sim::crank::cli::run(c),
         Command::Rotor(c) => edgekf_sim::rotor::cli::run(c),
+        Command::Loop(c) => edgekf_sim::residual_loop::cli::run(c),
         Command::Demo { out, config } => {
             let demo = Demo::run(&scenario(config.as_deref())?)?;
             println!("edgekf demo — {}", demo.summary());

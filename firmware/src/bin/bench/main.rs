@@ -116,6 +116,19 @@ fn ukf<const N: usize, const M: usize>(rng: &mut Lcg) {
     defmt::info!("bench ukf n={=usize} m={=usize} resets={=u32}", N, M, f.health().covariance_resets);
 }
 
+/// The rotor node's per-sample step: the 20-state time-varying filter of the paper rotor with
+/// its disk and force outputs.
+fn rotor() {
+    let mut est = edgekf_firmware::rotor::RotorEstimator::new();
+    for k in 0..3 {
+        est.step(Some([1e-6 * k as f32; 4]));
+    }
+    bench_start();
+    core::hint::black_box(est.step(core::hint::black_box(Some([2e-6, -1e-6, 3e-6, 0.5e-6]))));
+    bench_end();
+    defmt::info!("bench rotor_node_step n={=usize} m={=usize} resets={=u32}", 20usize, 4usize, est.health().covariance_resets);
+}
+
 fn harmonic() {
     let Ok(mut est) = HarmonicForceEstimator::<f32>::new(&HarmonicForceParams::default()) else {
         defmt::error!("bench harmonic: no estimator");
@@ -149,6 +162,7 @@ fn main() -> ! {
     kalman::<12, 4>("kalman_sequential", true, &mut rng);
     kalman::<24, 4>("kalman_sequential", true, &mut rng);
     ukf::<14, 4>(&mut rng);
+    rotor();
     defmt::info!("done");
     exit(0)
 }

@@ -1,0 +1,175 @@
+//! A dynamic-size Kalman filter for the host search: exact discretisation (Van Loan), the
+//! time-varying gain until the covariance has converged, then that gain frozen (the model is
+//! time-invariant, so this is the steady-state filter and costs `O(n²)` per sample).
+
+use super::model::AugmentedModel;
+use crate::rotor::linalg::expm;
+use anyhow::{anyhow, Result};
+use faer::Mat;
+use nalgebra::{DMatrix, DVector};
+
+/// The discrete model.
+#[derive(Debug, Clone)]
+pub struct Discrete {
+    /// Transition.
+    pub a: DMatrix<f64>,
+    /// Process noise per step.
+    pub q: DMatrix<f64>,
+}
+
+/// Exact discretisation of `a`, `qc` over `dt` (Van Loan).
+pub fn discretise(a: &DMatrix<f64>, qc: &DMatrix<f64>, dt: f64) -> Result<Discrete> {
+    let n = a.nrows();
+    let m = Mat::<f64>::from_fn(2 * n, 2 * n, |i, j| match (i < n, j < n) {
+        (true, true) => -a[(i, j)] * dt,
+        (true, false) => qc[(i, j - n)] * dt,
+        (false, false) => a[(j - n, i - n)] * dt,
+        (false, true) => 0.0,
+    });
+    let e = expm(m.as_ref()).map_err(|e| anyhow!("cannot discretise: {e}"))?;
+    let ad = DMatrix::from_fn(n, n, |i, j| e[(n + j, n + i)]);
+    let e12 = DMatrix::from_fn(n, n, |i, j| e[(i, n + j)]);
+    let mut q = &ad * e12;
+    q = (&q + q.transpose()) * 0.5;
+    Ok(Discrete { a: ad, q })
+}
+
+/// The converged filter: gain, diagonal of `S`, `S⁻¹`, `ln det S`.
+struct Frozen {
+    gain: DMatrix<f64>,
+    sdiag: Vec<f64>,
+    s_inv: DMatrix<f64>,
+    logdet: f64,
+}
+
+/// What one run produced.
+#[derive(Debug, Clone, Default)]
+pub struct Run {
+    /// `innovation[channel][k]` (NaN where missing).
+    pub innovation: Vec<Vec<f64>>,
+    /// `variance[channel][k]`: the diagonal of `S` (NaN where missing).
+    pub variance: Vec<Vec<f64>>,
+    /// NIS per sample (NaN where missing).
+    pub nis: Vec<f64>,
+    /// `ln det S` per sample (NaN where missing).
+    pub log_det_s: Vec<f64>,
+    /// Displacement estimates of the requested rows, `[row][k]`.
+    pub outputs: Vec<Vec<f64>>,
+    /// Estimates of the effects' states, `[effect state][k]`.
+    pub effect_states: Vec<Vec<f64>>,
+    /// Sample at which the gain was frozen (`None`: time-varying throughout).
+    pub frozen_at: Option<usize>,
+}
+
+impl Run {
+    /// `−½ Σ (ln det S + NIS)` over the updated samples (the constant `−½ m ln 2π` left out).
+    pub fn log_likelihood(&self) -> f64 {
+        -0.5 * self
+            .log_det_s
+            .iter()
+            .zip(&self.nis)
+            .filter(|(l, n)| l.is_finite() && n.is_finite())
+            .map(|(l, n)| l + n)
+            .sum::<f64>()
+    }
+
+    /// Scalar measurements used.
+    pub fn measurements(&self) -> usize {
+        self.nis.iter().filter(|v| v.is_finite()).count() * self.innovation.len()
+    }
+}
+
+/// Runs the filter of `model` over `columns` (`[channel][k]`, offsets removed) at `dt`, and
+/// reports the displacement rows `rows` of the model.
+pub fn run(model: &AugmentedModel, dt: f64, columns: &[&[f64]], rows: &[usize]) -> Result<Run> {
+    let d = discretise(&model.a, &model.qc, dt)?;
+    let n = model.a.nrows();
+    let m = model.c.nrows();
+    let len = columns.iter().map(|c| c.len()).min().unwrap_or(0);
+    let c = &model.c;
+    let ct = c.transpose();
+    let r = &model.r;
+    let out_rows = DMatrix::from_fn(rows.len(), n, |i, j| model.displacement[(rows[i], j)]);
+    let effect_idx: Vec<usize> = model.effects.iter().flat_map(|(e, s)| *s..*s + e.states()).collect();
+    let mut x = DVector::<f64>::zeros(n);
+    let mut p = model.p0.clone();
+    let mut run = Run {
+        innovation: vec![Vec::with_capacity(len); m],
+        variance: vec![Vec::with_capacity(len); m],
+        outputs: vec![Vec::with_capacity(len); rows.len()],
+        effect_states: vec![Vec::with_capacity(len); effect_idx.len()],
+        ..Run::default()
+    };
+    let mut frozen: Option<Frozen> = None;
+    let mut prev_diag: Option<DVector<f64>> = None;
+    let max_tv = 3000usize;
+    #[allow(clippy::needless_range_loop)]
+    for k in 0..len {
+        let y = DVector::from_fn(m, |i, _| columns[i][k]);
+        let finite = y.iter().all(|v| v.is_finite());
+        if finite {
+            let e = &y - c * &x;
+            let (nis, logdet, sdiag) = if let Some(Frozen { gain, sdiag, s_inv, logdet }) = &frozen {
+                let nis = (e.transpose() * s_inv * &e)[(0, 0)];
+                x += gain * &e;
+                (nis, *logdet, sdiag.clone())
+            } else {
+                let pct = &p * &ct;
+                let s = c * &pct + r;
+                let s = (&s + s.transpose()) * 0.5;
+                let chol = s
+                    .clone()
+                    .cholesky()
+                    .ok_or_else(|| anyhow!("innovation covariance not positive definite at sample {k}"))?;
+                let logdet = 2.0 * chol.l().diagonal().iter().map(|v| v.ln()).sum::<f64>();
+                let s_inv = chol.inverse();
+                let gain = &pct * &s_inv;
+                let nis = (e.transpose() * &s_inv * &e)[(0, 0)];
+                x += &gain * &e;
+                p -= &gain * &s * gain.transpose();
+                p = (&p + p.transpose()) * 0.5;
+                let sdiag: Vec<f64> = (0..m).map(|i| s[(i, i)]).collect();
+                let diag = p.diagonal();
+                if let Some(prev) = &prev_diag {
+                    let change = diag
+                        .iter()
+                        .zip(prev.iter())
+                        .map(|(a, b)| ((a - b) / b.abs().max(1e-300)).abs())
+                        .fold(0.0, f64::max);
+                    if change < 1e-7 || k >= max_tv {
+                        frozen =
+                            Some(Frozen { gain: gain.clone(), sdiag: sdiag.clone(), s_inv: s_inv.clone(), logdet });
+                        run.frozen_at = Some(k);
+                    }
+                }
+                prev_diag = Some(diag);
+                (nis, logdet, sdiag)
+            };
+            for i in 0..m {
+                run.innovation[i].push(e[i]);
+                run.variance[i].push(sdiag[i]);
+            }
+            run.nis.push(nis);
+            run.log_det_s.push(logdet);
+        } else {
+            for i in 0..m {
+                run.innovation[i].push(f64::NAN);
+                run.variance[i].push(f64::NAN);
+            }
+            run.nis.push(f64::NAN);
+            run.log_det_s.push(f64::NAN);
+        }
+        let o = &out_rows * &x;
+        for (i, out) in run.outputs.iter_mut().enumerate() {
+            out.push(o[i]);
+        }
+        for (j, &s) in effect_idx.iter().enumerate() {
+            run.effect_states[j].push(x[s]);
+        }
+        x = &d.a * &x;
+        if frozen.is_none() {
+            p = &d.a * &p * d.a.transpose() + &d.q;
+        }
+    }
+    Ok(run)
+}

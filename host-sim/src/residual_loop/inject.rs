@@ -1,0 +1,117 @@
+//! Undeclared effects added to a data file (simulated data with something the model lacks).
+
+use crate::io::data::{DataFile, TRUTH_PREFIX};
+use crate::rotor::linalg::expm;
+use crate::rotor::{dof, RotorModel, SensorKind};
+use anyhow::{anyhow, bail, Result};
+use faer::linalg::solvers::Solve;
+use faer::{c64, Mat};
+
+fn column_mut<'a>(data: &'a mut DataFile, name: &str) -> Option<&'a mut Vec<f64>> {
+    let i = data.names.iter().position(|n| n == name)?;
+    data.columns.get_mut(i)
+}
+
+/// Adds `value` to every sample of channel `channel` (a sensor offset; the truth is unchanged).
+pub fn inject_bias(data: &mut DataFile, channel: &str, value: f64) -> Result<()> {
+    let col = column_mut(data, channel).ok_or_else(|| anyhow!("the data file has no channel {channel}"))?;
+    col.iter_mut().for_each(|v| *v += value);
+    Ok(())
+}
+
+/// Steady complex response of every DOF to a force rotating forward at `order × speed` at
+/// `node`: `F_x = A cos(ωt + φ)`, `F_y = A sin(ωt + φ)`, `ω = order·speed`, from
+/// `(K − ω² M + iω (C + Ω G)) Q̂ = F̂` (the gyroscopic matrix scales with the spin speed Ω).
+pub fn harmonic_response(
+    model: &RotorModel,
+    speed: f64,
+    node: usize,
+    order: f64,
+    amplitude: f64,
+    phase_rad: f64,
+) -> Result<Vec<c64>> {
+    if node >= model.n_nodes() {
+        bail!("no node {node}");
+    }
+    let s = model.matrices();
+    let n = s.n();
+    let w = order * speed;
+    let z = Mat::<c64>::from_fn(n, n, |i, j| {
+        c64::new(s.k[(i, j)] - w * w * s.m[(i, j)], w * (s.c[(i, j)] + speed * s.g[(i, j)]))
+    });
+    let f = c64::from_polar(amplitude, phase_rad);
+    let rhs = Mat::<c64>::from_fn(n, 1, |i, _| {
+        if i == dof(node, 0) {
+            f
+        } else if i == dof(node, 1) {
+            f * c64::new(0.0, -1.0)
+        } else {
+            c64::new(0.0, 0.0)
+        }
+    });
+    let q = z.partial_piv_lu().solve(&rhs);
+    let q: Vec<c64> = (0..n).map(|i| q[(i, 0)]).collect();
+    if q.iter().any(|v| !(v.re.is_finite() && v.im.is_finite())) {
+        bail!("harmonic response at {w} rad/s: singular dynamic stiffness");
+    }
+    Ok(q)
+}
+
+/// Superposes the response to a harmonic force switched on at the first sample with the rotor
+/// at rest (as the reference simulator starts its unbalance) on the `truth_n*_x/y` columns and
+/// the displacement-probe channels of `data` (accelerometer channels are not supported).
+///
+/// By linearity that is the steady response (see [`harmonic_response`]) minus the free
+/// response of the FE model from the steady response's initial state, `e^{A t} x_ss(0)`
+/// (exact, through the matrix exponential of the first-order state matrix).
+pub fn inject_harmonic_force(
+    data: &mut DataFile,
+    model: &RotorModel,
+    speed: f64,
+    node: usize,
+    order: f64,
+    amplitude: f64,
+    phase_rad: f64,
+) -> Result<()> {
+    let q = harmonic_response(model, speed, node, order, amplitude, phase_rad)?;
+    let w = order * speed;
+    let t = data.t.clone();
+    let t0 = t.first().copied().unwrap_or(0.0);
+    let n = q.len();
+    // Free response from x_ss(t0): q = Re(q̂ e^{iωt0}), q̇ = Re(iω q̂ e^{iωt0}).
+    let e0 = c64::from_polar(1.0, w * t0);
+    let mut x =
+        Mat::<f64>::from_fn(
+            2 * n,
+            1,
+            |i, _| if i < n { (q[i] * e0).re } else { (q[i - n] * e0 * c64::new(0.0, w)).re },
+        );
+    let a = model.state_matrix(speed).map_err(|e| anyhow!("{e}"))?;
+    let dt = if t.len() > 1 { (t[t.len() - 1] - t0) / (t.len() - 1) as f64 } else { 0.0 };
+    let step = expm((&a * dt).as_ref()).map_err(|e| anyhow!("{e}"))?;
+    let mut delta = vec![vec![0.0; t.len()]; n];
+    for (k, tk) in t.iter().enumerate() {
+        let e = c64::from_polar(1.0, w * tk);
+        for (i, d) in delta.iter_mut().enumerate() {
+            d[k] = (q[i] * e).re - x[(i, 0)];
+        }
+        x = &step * &x;
+    }
+    let add = |col: &mut Vec<f64>, d: &[f64]| col.iter_mut().zip(d).for_each(|(v, d)| *v += d);
+    for k in 0..model.n_nodes() {
+        for (d, dir) in ["x", "y"].iter().enumerate() {
+            if let Some(col) = column_mut(data, &format!("{TRUTH_PREFIX}n{k}_{dir}")) {
+                add(col, &delta[dof(k, d)]);
+            }
+        }
+    }
+    for s in &model.config().sensors {
+        if !matches!(s.kind, SensorKind::Displacement { .. }) {
+            bail!("inject_harmonic_force supports displacement probes only ({} is not one)", s.channel_name());
+        }
+        if let Some(col) = column_mut(data, &s.channel_name()) {
+            add(col, &delta[dof(s.node, s.direction.dof())]);
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,57 @@
+//! `edgekf loop rotor` as a user runs it: report.json has the documented shape.
+
+use edgekf_sim::residual_loop::inject::inject_bias;
+use edgekf_sim::rotor::{RotorConfig, RotorModel, SimOptions};
+use std::path::Path;
+use std::process::Command;
+
+const PAPER: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/configs/rotor_paper.toml");
+
+#[test]
+fn loop_rotor_writes_the_report() {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("residual-loop-cli");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let cfg = RotorConfig::load(Path::new(PAPER)).unwrap();
+    let model = RotorModel::from_config(&cfg).unwrap();
+    let mut data =
+        model.simulate(&SimOptions { duration: 3.0, seed: 7, ..SimOptions::default() }).unwrap().to_data_file();
+    inject_bias(&mut data, "n32_y", -15e-6).unwrap();
+    let csv = dir.join("data.csv");
+    std::fs::write(&csv, data.to_csv_string().unwrap()).unwrap();
+    let report = dir.join("report");
+    let out = Command::new(env!("CARGO_BIN_EXE_edgekf"))
+        .args(["loop", "rotor", "--config", PAPER, "--data"])
+        .arg(&csv)
+        .arg("--report")
+        .arg(&report)
+        .output()
+        .expect("run edgekf");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(stdout.contains("sensor_bias") && stdout.contains("before") && stdout.contains("after"), "{stdout}");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(report.join("report.json")).unwrap()).unwrap();
+    assert_eq!(v["system"], "rotor");
+    let added = v["effects_added"].as_array().unwrap();
+    assert_eq!(added.len(), 1, "{added:?}");
+    assert_eq!(added[0]["kind"], "sensor_bias");
+    assert_eq!(added[0]["location"], "n32_y");
+    assert_eq!(added[0]["unit"], "m");
+    assert!((added[0]["value"].as_f64().unwrap() + 15e-6).abs() < 3e-6);
+    for side in ["before", "after"] {
+        let s = &v[side];
+        for key in ["nis_mean", "whiteness_p"] {
+            assert!(s[key].is_number(), "{side}.{key}");
+        }
+        for ch in ["n5_x", "n5_y", "n32_x", "n32_y"] {
+            assert!(s["innovation_rms"][ch].is_number(), "{side}.innovation_rms.{ch}");
+        }
+        for ch in ["n12_x", "n12_y", "n23_x", "n23_y"] {
+            assert!(s["error_rms"][ch].is_number(), "{side}.error_rms.{ch}");
+        }
+    }
+    assert!((v["after"]["nis_mean"].as_f64().unwrap() - 1.0).abs() < 0.1);
+    assert!(v["before"]["nis_mean"].as_f64().unwrap() > 10.0);
+    assert!(v["not_identifiable"].is_array() && v["unexplained"].is_array());
+}
