@@ -126,7 +126,12 @@ fn rotor() {
     bench_start();
     core::hint::black_box(est.step(core::hint::black_box(Some([2e-6, -1e-6, 3e-6, 0.5e-6]))));
     bench_end();
-    defmt::info!("bench rotor_node_step n={=usize} m={=usize} resets={=u32}", 20usize, 4usize, est.health().covariance_resets);
+    defmt::info!(
+        "bench rotor_node_step n={=usize} m={=usize} resets={=u32}",
+        20usize,
+        4usize,
+        est.health().covariance_resets
+    );
 }
 
 fn harmonic() {
