@@ -134,7 +134,13 @@ fn estimate_command_writes_the_estimate_file() {
         let mut lines = text.lines();
         assert_eq!(lines.next(), Some("t,clearance_A,clearance_B,clearance_C"));
         let rows = if method == "ukf" { 5 } else { 1 };
-        assert_eq!(lines.count(), rows, "{method}: {text}");
+        let body: Vec<&str> = lines.collect();
+        assert_eq!(body.len(), rows, "{method}: {text}");
+        if method == "fast" {
+            // The fast estimator names one joint: one non-zero clearance column.
+            let cells: Vec<f64> = body[0].split(',').skip(1).map(|c| c.parse().unwrap()).collect();
+            assert_eq!(cells.iter().filter(|c| **c > 0.0).count(), 1, "{text}");
+        }
         let back = Recording::read(&data).unwrap();
         assert_eq!(back.truth_clearance, Some([0.25e-3, 0.0, 0.0]));
     }
@@ -147,5 +153,22 @@ fn estimate_command_writes_the_estimate_file() {
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("--initial"));
     write_estimates(&dir.join("empty.csv"), &[]).ok();
+    // `crank train` writes a model that `estimate --method fast --model` reads.
+    let model = dir.join("model.toml");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_edgekf"))
+        .args(["crank", "train", "--out", model.to_str().unwrap(), "--clearances", "0.2e-3,0.4e-3"])
+        .args(["--variants", "2", "--duration", "0.5", "--threads", "2"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("training set: joint right in"));
+    let out = dir.join("est_model.csv");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_edgekf"))
+        .args(["crank", "estimate", "--data", data.to_str().unwrap(), "--method", "fast"])
+        .args(["--model", model.to_str().unwrap(), "--out", out.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("estimate: joint "));
     std::fs::remove_dir_all(&dir).ok();
 }

@@ -5,7 +5,11 @@
 //!                       [--seed N] [--integrator symplectic|adaptive] [--step H] [--tolerance TOL]
 //! edgekf crank feature  --data data.csv [--window 0.25] [--column crank_alpha]
 //! edgekf crank estimate --data data.csv --method ukf|fast [--config C] [--initial 0.1e-3]
-//!                       [--window 0.25] [--model map.toml] --out est.csv
+//!                       [--window 0.25] [--model model.toml] --out est.csv
+//! edgekf crank train    --out model.toml [--config C] [--clearances 0.08e-3,…] [--variants 8]
+//!                       [--duration 10] [--threads 2] [--ridge 1e-4] [--linear] [--seed-base 1000]
+//!                       [--test-variants 0] [--test-seed-base 900000] [--test-clearances …]
+//!                       [--save-features F.csv] [--load-features F.csv] [--load-test-features T.csv]
 //! ```
 
 use super::config::CrankConfig;
@@ -37,6 +41,63 @@ pub enum CrankCommand {
     /// CSV (t, clearance_A, clearance_B, clearance_C in m, 0 = tight; one row per window, the
     /// last row the estimate for the whole recording).
     Estimate(EstimateArgs),
+    /// Learn the fast estimator's model (joint discriminant and per-joint clearance regression)
+    /// from simulated runs, and write it as TOML (`--model` of `estimate --method fast`; the
+    /// built-in model is host-sim/src/crank/estimate/fast_model.toml, written by this command
+    /// with its defaults).
+    Train(TrainArgs),
+}
+
+/// Arguments of `edgekf crank train`.
+#[derive(Debug, Args)]
+pub struct TrainArgs {
+    /// Configuration file of the mechanism (default: the paper's case).
+    #[arg(long, value_name = "TOML")]
+    pub config: Option<PathBuf>,
+    /// Model file to write.
+    #[arg(long, value_name = "TOML")]
+    pub out: PathBuf,
+    /// Training clearances, m, comma-separated (each simulated at every joint).
+    #[arg(long, value_name = "M,…", value_delimiter = ',', default_values_t = [0.08e-3, 0.1e-3, 0.15e-3, 0.2e-3, 0.25e-3, 0.3e-3, 0.35e-3, 0.4e-3, 0.45e-3, 0.5e-3, 0.55e-3])]
+    pub clearances: Vec<f64>,
+    /// Runs per joint and clearance (release angle 20–40° and journal radius × 0.8–1.2 drawn
+    /// at random, one noise seed each).
+    #[arg(long, value_name = "N", default_value_t = 8)]
+    pub variants: usize,
+    /// Length of each run, s.
+    #[arg(long, value_name = "S", default_value_t = 10.0)]
+    pub duration: f64,
+    /// Simulation threads.
+    #[arg(long, value_name = "N", default_value_t = 2)]
+    pub threads: usize,
+    /// Ridge regularisation on the standardised features.
+    #[arg(long, value_name = "L", default_value_t = 1e-4)]
+    pub ridge: f64,
+    /// First noise seed of the training grid (also seeds its random draws).
+    #[arg(long, value_name = "N", default_value_t = 1000)]
+    pub seed_base: u64,
+    /// Runs per joint and clearance of an unseen test grid to score the model on (0: none).
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    pub test_variants: usize,
+    /// First noise seed of the test grid.
+    #[arg(long, value_name = "N", default_value_t = 900_000)]
+    pub test_seed_base: u64,
+    /// Regress ln c on the standardised features only (default: on their squares too).
+    #[arg(long)]
+    pub linear: bool,
+    /// Write the training runs' features to this CSV.
+    #[arg(long, value_name = "CSV")]
+    pub save_features: Option<PathBuf>,
+    /// Fit to the runs and features of this CSV (from --save-features) instead of simulating.
+    #[arg(long, value_name = "CSV")]
+    pub load_features: Option<PathBuf>,
+    /// Score on the runs and features of this CSV (the `.test.csv` that --save-features writes
+    /// next to its file) instead of simulating the test grid.
+    #[arg(long, value_name = "CSV")]
+    pub load_test_features: Option<PathBuf>,
+    /// Test clearances, m, comma-separated.
+    #[arg(long, value_name = "M,…", value_delimiter = ',', default_values_t = [0.1e-3, 0.2e-3, 0.3e-3, 0.4e-3, 0.5e-3])]
+    pub test_clearances: Vec<f64>,
 }
 
 /// Estimation method.
@@ -69,7 +130,8 @@ pub struct EstimateArgs {
     /// UKF: measurement standard deviation of the feature a (default: from the recording).
     #[arg(long, value_name = "RAD_S2")]
     pub measurement_std: Option<f64>,
-    /// Fast: the learned map (default: the built-in one).
+    /// Fast: the learned model from `edgekf crank train` (default: the built-in one); a legacy
+    /// impact-rate map (`impact_rate`, `clearance`; joint A only) is also accepted.
     #[arg(long, value_name = "TOML")]
     pub model: Option<PathBuf>,
     /// Estimate file to write.
@@ -152,6 +214,7 @@ pub fn run(command: CrankCommand) -> anyhow::Result<()> {
         CrankCommand::Simulate(args) => simulate(args),
         CrankCommand::Feature(args) => feature(args),
         CrankCommand::Estimate(args) => estimate(args),
+        CrankCommand::Train(args) => train(args),
     }
 }
 
@@ -364,19 +427,45 @@ fn estimate(args: EstimateArgs) -> anyhow::Result<()> {
             run.rows()
         }
         MethodArg::Fast => {
-            let map = match &args.model {
-                Some(path) => estimate::fast::FeatureMap::load(path)?,
-                None => estimate::fast::FeatureMap::builtin(),
+            let model = match &args.model {
+                Some(path) => match estimate::model::FastModel::load(path) {
+                    Ok(m) => Some(m),
+                    Err(e) => match estimate::fast::FeatureMap::load(path) {
+                        Ok(map) => {
+                            let est = map.estimate(&rec)?;
+                            println!(
+                                "fast (legacy impact-rate map, joint A): {} windows, {} feature operations",
+                                est.windows, est.operations
+                            );
+                            println!(
+                                "estimate: {}{}",
+                                describe_clearances(&est.clearance.map(|v| (v > 0.0).then_some(v))),
+                                truth.clone().map_or(String::new(), |t| format!("; truth: {t}"))
+                            );
+                            let rows = est.rows(&rec);
+                            estimate::write_estimates(&args.out, &rows).map_err(|e| anyhow::anyhow!("{e}"))?;
+                            println!("wrote {}: {} rows", args.out.display(), rows.len());
+                            return Ok(());
+                        }
+                        Err(_) => return Err(e),
+                    },
+                },
+                None => Some(estimate::model::FastModel::builtin()),
             };
-            let est = map.estimate(&rec)?;
+            let model = model.expect("set above");
+            let est = model.estimate(&rec)?;
             println!(
-                "fast: {} windows, {} feature operations, wall {:.3} s",
-                est.windows,
+                "fast: {} windows, {} operations, wall {:.3} s; joint scores A {:.2}, B {:.2}, C {:.2}",
+                est.features.windows,
                 est.operations,
-                started.elapsed().as_secs_f64()
+                started.elapsed().as_secs_f64(),
+                est.scores[0],
+                est.scores[1],
+                est.scores[2]
             );
             println!(
-                "estimate: {}{}",
+                "estimate: joint {}: {}{}",
+                est.joint,
                 describe_clearances(&est.clearance.map(|v| (v > 0.0).then_some(v))),
                 truth.map_or(String::new(), |t| format!("; truth: {t}"))
             );
@@ -385,5 +474,108 @@ fn estimate(args: EstimateArgs) -> anyhow::Result<()> {
     };
     estimate::write_estimates(&args.out, &rows).map_err(|e| anyhow::anyhow!("{e}"))?;
     println!("wrote {}: {} rows", args.out.display(), rows.len());
+    Ok(())
+}
+
+fn train(args: TrainArgs) -> anyhow::Result<()> {
+    use super::estimate::train;
+    let config = match &args.config {
+        Some(path) => CrankConfig::load(path)?,
+        None => CrankConfig::default(),
+    };
+    let ok = |c: &[f64]| !c.is_empty() && c.iter().all(|v| v.is_finite() && *v > 0.0 && *v < 0.01);
+    if !ok(&args.clearances) || !ok(&args.test_clearances) {
+        anyhow::bail!("--clearances and --test-clearances must be clearances in metres (0.1 mm = 0.1e-3)");
+    }
+    if args.variants == 0 || !(args.duration.is_finite() && args.duration >= 0.5) {
+        anyhow::bail!("--variants must be at least 1 and --duration at least 0.5 s");
+    }
+    if !(args.ridge.is_finite() && args.ridge >= 0.0) {
+        anyhow::bail!("--ridge {} must be non-negative", args.ridge);
+    }
+    let window = 0.25;
+    let started = Instant::now();
+    let grid = train::grid(&args.clearances, args.variants, args.seed_base, args.duration);
+    let total = grid.len();
+    let show = |k: usize, r: &train::Run| {
+        eprintln!(
+            "crank train: run {:>4}/{total}: {} {:.3} mm, release {:.1}°, radius ×{:.2}, seed {} ({:.0} s elapsed)",
+            k + 1,
+            r.joint,
+            r.clearance * 1e3,
+            r.release_deg,
+            r.radius,
+            r.seed,
+            started.elapsed().as_secs_f64()
+        );
+    };
+    let (runs, feats) = match &args.load_features {
+        Some(path) => train::read_features(path)?,
+        None => {
+            let feats = train::features_of(&config, &grid, window, args.threads, &show)?;
+            (grid, feats)
+        }
+    };
+    if let Some(path) = &args.save_features {
+        train::write_features(path, &runs, &feats).with_context(|| format!("{}: cannot write", path.display()))?;
+    }
+    let desc = format!(
+        "{} runs of {} s: joints A, B, C × clearances {:?} mm × {} draws (release 20–40°, journal radius × 0.8–1.2), seeds from {}, adaptive integrator, ridge {}{}",
+        runs.len(),
+        args.duration,
+        args.clearances.iter().map(|c| c * 1e3).collect::<Vec<_>>(),
+        args.variants,
+        args.seed_base,
+        args.ridge,
+        if !args.linear { ", with squares" } else { "" }
+    );
+    let model = train::fit(&runs, &feats, window, args.ridge, !args.linear, desc);
+    let (rate, worst, rms) = train::score(&model, &runs, &feats);
+    println!(
+        "training set: joint right in {:.1} % of {} runs; clearance error RMS {:.1} %, worst {:.1} %",
+        rate * 100.0,
+        runs.len(),
+        rms * 100.0,
+        worst * 100.0
+    );
+    std::fs::write(&args.out, model.to_toml()).with_context(|| format!("{}: cannot write", args.out.display()))?;
+    println!("wrote {}", args.out.display());
+    if args.test_variants > 0 || args.load_test_features.is_some() {
+        let (test, tf) = match &args.load_test_features {
+            Some(path) => train::read_features(path)?,
+            None => {
+                let test = train::grid(&args.test_clearances, args.test_variants, args.test_seed_base, args.duration);
+                let tf = train::features_of(&config, &test, window, args.threads, &|_, _| {})?;
+                (test, tf)
+            }
+        };
+        if let Some(path) = &args.save_features {
+            let path = path.with_extension("test.csv");
+            train::write_features(&path, &test, &tf).with_context(|| format!("{}: cannot write", path.display()))?;
+        }
+        for (r, f) in test.iter().zip(&tf) {
+            let e = model.estimate_features(*f);
+            println!(
+                "test {} {:.3} mm (release {:.1}°, radius ×{:.2}, seed {}): named {} {:.4} mm ({:+.1} %)",
+                r.joint,
+                r.clearance * 1e3,
+                r.release_deg,
+                r.radius,
+                r.seed,
+                e.joint,
+                e.per_joint[r.joint.index()] * 1e3,
+                (e.per_joint[r.joint.index()] / r.clearance - 1.0) * 100.0
+            );
+        }
+        let (rate, worst, rms) = train::score(&model, &test, &tf);
+        println!(
+            "test set (unseen seeds and draws): joint right in {:.1} % of {} runs; clearance error RMS {:.1} %, worst {:.1} %",
+            rate * 100.0,
+            test.len(),
+            rms * 100.0,
+            worst * 100.0
+        );
+    }
+    println!("wall {:.1} s", started.elapsed().as_secs_f64());
     Ok(())
 }

@@ -21,9 +21,9 @@
 //!   state), CSV output;
 //! * [`spectrum`] and [`feature`]: the paper's spectral clearance feature;
 //! * [`estimate`]: clearance estimation from a recording: the paper's UKF
-//!   ([`estimate::ukf`], sigma points are clearance simulations) and a fast feature map
-//!   ([`estimate::fast`], no simulation);
-//! * [`cli`]: `edgekf crank simulate | feature | estimate`.
+//!   ([`estimate::ukf`], sigma points are clearance simulations) and a fast learned model
+//!   ([`estimate::model`], no simulation) that also names the joint;
+//! * [`cli`]: `edgekf crank simulate | feature | estimate | train`.
 //!
 //! Measured (paper's mechanism, released at 30°; `cargo test -p edgekf-sim --test crank --
 //! --nocapture`, and `edgekf crank simulate … --duration 10` in release for the timings):

@@ -1,6 +1,10 @@
 //! A fast clearance estimator: features of the crank angular acceleration averaged over the
 //! recording, mapped to the clearance by a map learned on the host from the reference
 //! simulator. No simulation at run time.
+//!
+//! The single-feature, joint-A-only predecessor of [`super::model`] (which `edgekf crank
+//! estimate --method fast` now uses); kept for old `--model` files with `impact_rate` and
+//! `clearance`.
 
 use super::{EstimateRow, Recording};
 

@@ -1,0 +1,304 @@
+//! The multi-feature fast estimator: which joint has the clearance, and how large it is, from
+//! ten features of the crank angular acceleration, with no simulation at run time.
+//!
+//! * [`feature_vector`]: per 0.25 s window, cheap time-domain statistics (levels of α, of its
+//!   first and second differences and of a high-pass residual, kurtoses, impact rate, impact
+//!   peak and width), averaged over the windows and taken in logarithms;
+//! * [`FastModel`]: standardised features → a linear discriminant per joint (the largest names
+//!   the joint) and a ridge regression per joint for `ln c`. Learned by [`super::train`]
+//!   (`edgekf crank train --out model.toml`); the built-in model ([`FastModel::builtin`]) is
+//!   `fast_model.toml` next to this file, written by that command with its defaults
+//!   (`edgekf crank train --out host-sim/src/crank/estimate/fast_model.toml`: 264 runs of 10 s,
+//!   about 3 minutes on two cores in release).
+
+use super::{EstimateRow, Recording};
+use crate::crank::Joint;
+use serde::{Deserialize, Serialize};
+
+/// Number of features.
+pub const FEATURES: usize = 10;
+
+/// Names of the features, in order (all natural logarithms of window means).
+pub const FEATURE_NAMES: [&str; FEATURES] = [
+    "ln_rms",
+    "ln_diff_rms",
+    "ln_diff2_rms",
+    "ln_highpass_rms",
+    "ln_diff_kurtosis",
+    "ln_kurtosis",
+    "ln_impact_rate",
+    "ln_impact_peak",
+    "ln_impact_width",
+    "ln_diff_median",
+];
+
+/// Arithmetic operations per sample counted for [`feature_vector`], before the median: about
+/// 4 for the differences, 3 for the 8-sample box filter, 3 + 3 + 3 + 3 for the four sums of
+/// squares, 2 + 2 for the two fourth powers, 3 for the impact detector.
+pub const OPS_PER_SAMPLE: u64 = 29;
+
+/// The feature vector of a recording.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FeatureVector {
+    /// The features ([`FEATURE_NAMES`]).
+    pub values: [f64; FEATURES],
+    /// Windows averaged.
+    pub windows: usize,
+    /// Arithmetic operations spent (per sample [`OPS_PER_SAMPLE`] plus the median of `|Δα|`
+    /// by quickselect, ~3 comparisons per sample).
+    pub operations: u64,
+}
+
+/// Features of `x` sampled at `rate` Hz, from windows of `window_s` (a trailing partial window
+/// is dropped). `windows == 0` if `x` is shorter than one window.
+pub fn feature_vector(x: &[f64], rate: f64, window_s: f64) -> FeatureVector {
+    let n = ((window_s * rate).round() as usize).max(16);
+    let mut acc = [0.0; FEATURES];
+    let mut windows = 0usize;
+    let mut ops = 0u64;
+    let mut mags: Vec<f64> = Vec::with_capacity(n);
+    for w in x.chunks_exact(n) {
+        let m = n as f64;
+        let mean = w.iter().sum::<f64>() / m;
+        let (mut s2, mut s4) = (0.0, 0.0);
+        for v in w {
+            let e = v - mean;
+            s2 += e * e;
+            s4 += e * e * e * e;
+        }
+        let (mut d2, mut d4, mut dd2, mut hp2) = (0.0, 0.0, 0.0, 0.0);
+        mags.clear();
+        for k in 1..n {
+            let d = w[k] - w[k - 1];
+            d2 += d * d;
+            d4 += d * d * d * d;
+            mags.push(d.abs());
+            if k >= 2 {
+                let dd = w[k] - 2.0 * w[k - 1] + w[k - 2];
+                dd2 += dd * dd;
+            }
+        }
+        // High-pass: α minus its centred 8-sample mean.
+        let mut box_sum: f64 = w[..8].iter().sum();
+        for k in 4..n - 4 {
+            let e = w[k] - box_sum / 8.0;
+            hp2 += e * e;
+            box_sum += w[k + 4] - w[k - 4];
+        }
+        let md = mags.len() as f64;
+        let mid = mags.len() / 2;
+        let median = *mags.select_nth_unstable_by(mid, f64::total_cmp).1;
+        // Impacts: upward crossings of |Δα| over 6 × its median; peak and width per impact.
+        let thr = 6.0 * median;
+        let (mut count, mut above_n, mut peak_sum, mut peak) = (0usize, 0usize, 0.0, 0.0_f64);
+        let mut above = false;
+        for k in 1..n {
+            let a = (w[k] - w[k - 1]).abs();
+            if a > thr {
+                if !above {
+                    count += 1;
+                    peak = 0.0;
+                }
+                above_n += 1;
+                peak = peak.max(a);
+            } else if above {
+                peak_sum += peak;
+            }
+            above = a > thr;
+        }
+        if above {
+            peak_sum += peak;
+        }
+        let vals = [
+            (s2 / m).sqrt(),
+            (d2 / md).sqrt(),
+            (dd2 / (m - 2.0)).sqrt(),
+            (hp2 / (m - 8.0)).sqrt(),
+            (d4 / md) / (d2 / md).powi(2).max(1e-300),
+            (s4 / m) / (s2 / m).powi(2).max(1e-300),
+            count as f64 * rate / m,
+            if count > 0 { peak_sum / count as f64 / median.max(1e-12) } else { 6.0 },
+            if count > 0 { above_n as f64 / count as f64 } else { 1.0 },
+            median,
+        ];
+        for (a, v) in acc.iter_mut().zip(vals) {
+            *a += v;
+        }
+        windows += 1;
+        ops += OPS_PER_SAMPLE * n as u64 + 3 * n as u64;
+    }
+    let k = windows.max(1) as f64;
+    FeatureVector { values: acc.map(|v| (v / k).max(1e-12).ln()), windows, operations: ops }
+}
+
+/// Regressor `c` of standardised features `z`: 1, then `z₁ … z_F`, then `z₁² … z_F²`.
+pub fn regressor(z: &[f64], c: usize) -> f64 {
+    match c {
+        0 => 1.0,
+        c if c <= FEATURES => z[c - 1],
+        c => z[c - 1 - FEATURES].powi(2),
+    }
+}
+
+/// The learned map: standardisation, one linear discriminant and one regression per joint.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FastModel {
+    /// What it was trained on (free text).
+    pub trained_on: String,
+    /// Window length of the features, s.
+    pub window: f64,
+    /// Feature names, must equal [`FEATURE_NAMES`].
+    pub features: Vec<String>,
+    /// Feature means of the training set (standardisation).
+    pub mean: Vec<f64>,
+    /// Feature standard deviations of the training set.
+    pub scale: Vec<f64>,
+    /// Per joint A, B, C: `[bias, w₁ … w_F]` of the discriminant score on standardised
+    /// features; the largest score names the joint.
+    pub discriminant: Vec<Vec<f64>>,
+    /// Per joint A, B, C: `[bias, w₁ … w_F]` of `ln(clearance / m)` on standardised features,
+    /// optionally followed by `F` weights on their squares ([`regressor`]).
+    pub regression: Vec<Vec<f64>>,
+}
+
+/// Result of [`FastModel::estimate`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct ModelEstimate {
+    /// The joint judged to have the clearance.
+    pub joint: Joint,
+    /// Clearances A, B, C, m: the estimate at `joint`, 0 at the others.
+    pub clearance: [f64; 3],
+    /// Discriminant scores of A, B, C.
+    pub scores: [f64; 3],
+    /// The clearance each joint's regression gives (m), whichever joint is named.
+    pub per_joint: [f64; 3],
+    /// The features.
+    pub features: FeatureVector,
+    /// Arithmetic operations: features plus the model (at most `12 (F + 1)` and 3 exp of ~20).
+    pub operations: u64,
+}
+
+impl ModelEstimate {
+    /// Rows of the estimate file: one, the whole recording.
+    pub fn rows(&self, rec: &Recording) -> Vec<EstimateRow> {
+        vec![EstimateRow { t: rec.t.last().copied().unwrap_or(0.0), clearance: self.clearance }]
+    }
+}
+
+/// The built-in model, written by `edgekf crank train --out host-sim/src/crank/estimate/fast_model.toml`.
+pub const BUILTIN_MODEL: &str = include_str!("fast_model.toml");
+
+impl FastModel {
+    /// The built-in model ([`BUILTIN_MODEL`]).
+    pub fn builtin() -> Self {
+        Self::from_toml_str(BUILTIN_MODEL).expect("the built-in fast model is valid")
+    }
+
+    /// Parses and checks a model.
+    pub fn from_toml_str(text: &str) -> anyhow::Result<Self> {
+        let m: Self = toml::from_str(text)?;
+        m.validate().map_err(|e| anyhow::anyhow!(e))?;
+        Ok(m)
+    }
+
+    /// Reads a model file.
+    pub fn load(path: &std::path::Path) -> anyhow::Result<Self> {
+        let text =
+            std::fs::read_to_string(path).map_err(|e| anyhow::anyhow!("{}: cannot read: {e}", path.display()))?;
+        Self::from_toml_str(&text).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
+    }
+
+    /// The model as TOML.
+    pub fn to_toml(&self) -> String {
+        // Written by hand (the crate's toml has no serialiser); `{:?}` of an f64 is its shortest
+        // round-trip form, valid TOML.
+        let list = |v: &[f64]| format!("[{}]", v.iter().map(|x| format!("{x:?}")).collect::<Vec<_>>().join(", "));
+        let rows =
+            |r: &[Vec<f64>]| format!("[\n{}]", r.iter().map(|w| format!("    {},\n", list(w))).collect::<String>());
+        let names = self.features.iter().map(|n| format!("{n:?}")).collect::<Vec<_>>().join(", ");
+        format!(
+            "# edgekf crank fast model: written by `edgekf crank train`.\ntrained_on = {:?}\nwindow = {:?}\nfeatures = [{names}]\nmean = {}\nscale = {}\n# rows A, B, C: [bias, weights on the standardised features]\ndiscriminant = {}\nregression = {}\n",
+            self.trained_on,
+            self.window,
+            list(&self.mean),
+            list(&self.scale),
+            rows(&self.discriminant),
+            rows(&self.regression)
+        )
+    }
+
+    fn validate(&self) -> Result<(), String> {
+        if self.features.len() != FEATURES || self.features.iter().zip(FEATURE_NAMES).any(|(a, b)| a != b) {
+            return Err(format!("features must be {FEATURE_NAMES:?}"));
+        }
+        let rows_ok = |r: &Vec<Vec<f64>>, squares: bool| {
+            r.len() == 3 && r.iter().all(|w| w.len() == FEATURES + 1 || (squares && w.len() == 2 * FEATURES + 1))
+        };
+        if self.mean.len() != FEATURES
+            || self.scale.len() != FEATURES
+            || !rows_ok(&self.discriminant, false)
+            || !rows_ok(&self.regression, true)
+        {
+            return Err(format!(
+                "mean and scale need {FEATURES} values, discriminant 3 rows of {}, regression 3 rows of {} or {} (with squares)",
+                FEATURES + 1,
+                FEATURES + 1,
+                2 * FEATURES + 1
+            ));
+        }
+        let all = self
+            .mean
+            .iter()
+            .chain(&self.scale)
+            .chain(self.discriminant.iter().flatten())
+            .chain(self.regression.iter().flatten());
+        if !all.clone().all(|v| v.is_finite()) || self.scale.iter().any(|s| *s <= 0.0) {
+            return Err("every coefficient must be finite and every scale positive".into());
+        }
+        if !(self.window.is_finite() && self.window > 0.0) {
+            return Err(format!("window {} s must be positive", self.window));
+        }
+        Ok(())
+    }
+
+    /// Standardised features.
+    pub fn standardise(&self, f: &[f64; FEATURES]) -> [f64; FEATURES] {
+        let mut z = [0.0; FEATURES];
+        for i in 0..FEATURES {
+            z[i] = (f[i] - self.mean[i]) / self.scale[i];
+        }
+        z
+    }
+
+    fn linear(w: &[f64], z: &[f64; FEATURES]) -> f64 {
+        (0..w.len()).map(|c| w[c] * regressor(z, c)).sum()
+    }
+
+    /// Joint and clearance from a feature vector.
+    pub fn estimate_features(&self, f: FeatureVector) -> ModelEstimate {
+        let z = self.standardise(&f.values);
+        let scores = [0, 1, 2].map(|j| Self::linear(&self.discriminant[j], &z));
+        let per_joint = [0, 1, 2].map(|j| Self::linear(&self.regression[j], &z).exp().clamp(1e-5, 1e-3));
+        let j = (0..3).max_by(|&a, &b| scores[a].total_cmp(&scores[b])).unwrap_or(0);
+        let mut clearance = [0.0; 3];
+        clearance[j] = per_joint[j];
+        ModelEstimate {
+            joint: Joint::ALL[j],
+            clearance,
+            scores,
+            per_joint,
+            features: f,
+            operations: f.operations + 12 * (FEATURES as u64 + 1) + 3 * 20,
+        }
+    }
+
+    /// Joint and clearance from a recording.
+    pub fn estimate(&self, rec: &Recording) -> anyhow::Result<ModelEstimate> {
+        let f = feature_vector(&rec.crank_alpha, rec.sample_rate, self.window);
+        if f.windows == 0 {
+            anyhow::bail!("the recording is shorter than one {} s window", self.window);
+        }
+        Ok(self.estimate_features(f))
+    }
+}
