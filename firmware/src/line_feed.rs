@@ -24,35 +24,38 @@ impl ByteSource for &[u8] {
     }
 }
 
-/// Longest CSV line accepted, bytes (a rotor file with every node's truth has ~90 columns).
-pub const MAX_LINE: usize = 4096;
+/// Longest CSV line a [`LineFeed`] accepts, bytes (`t, ax, ay, az` and a few more columns).
+pub const MAX_LINE: usize = 256;
+/// Longest CSV line a [`ChannelReader`] accepts, bytes (a rotor file with every node's truth
+/// has about 90 columns).
+pub const MAX_WIDE_LINE: usize = 4096;
 
-/// Lines of a byte stream, one at a time, in a fixed buffer.
+/// Lines of a byte stream, one at a time, in a fixed buffer of `L` bytes.
 ///
 /// ```
 /// use edgekf_firmware::line_feed::LineReader;
-/// let mut r = LineReader::new(&b"a,b\r\n1,2\n"[..]);
+/// let mut r = LineReader::<_, 16>::new(&b"a,b\r\n1,2\n"[..]);
 /// assert_eq!(r.next_line(), Some(Ok("a,b")));
 /// assert_eq!(r.next_line(), Some(Ok("1,2")));
 /// assert_eq!(r.next_line(), None);
 /// ```
-pub struct LineReader<S: ByteSource> {
+pub struct LineReader<S: ByteSource, const L: usize> {
     source: S,
     chunk: [u8; 64],
     chunk_len: usize,
     chunk_pos: usize,
-    line: [u8; MAX_LINE],
+    line: [u8; L],
     eof: bool,
 }
 
-/// A line that could not be used: longer than [`MAX_LINE`] or not UTF-8.
+/// A line that could not be used: longer than the buffer or not UTF-8.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct BadLine;
 
-impl<S: ByteSource> LineReader<S> {
+impl<S: ByteSource, const L: usize> LineReader<S, L> {
     /// Reads from `source`.
     pub fn new(source: S) -> Self {
-        Self { source, chunk: [0; 64], chunk_len: 0, chunk_pos: 0, line: [0; MAX_LINE], eof: false }
+        Self { source, chunk: [0; 64], chunk_len: 0, chunk_pos: 0, line: [0; L], eof: false }
     }
 
     fn next_byte(&mut self) -> Option<u8> {
@@ -82,7 +85,7 @@ impl<S: ByteSource> LineReader<S> {
             if b == b'\n' {
                 break;
             }
-            if len < MAX_LINE {
+            if len < L {
                 self.line[len] = b;
                 len += 1;
             } else {
@@ -113,7 +116,7 @@ impl<S: ByteSource> LineReader<S> {
 /// assert_eq!(feed.bad_lines(), 1);
 /// ```
 pub struct LineFeed<S: ByteSource> {
-    reader: LineReader<S>,
+    reader: LineReader<S, MAX_LINE>,
     columns: CsvColumns,
     bad_lines: u32,
     lines: u32,
@@ -191,7 +194,7 @@ pub const MAX_COLUMNS: usize = 128;
 /// assert_eq!(r.ignored_columns(), 2);
 /// ```
 pub struct ChannelReader<S: ByteSource, const M: usize> {
-    reader: LineReader<S>,
+    reader: LineReader<S, MAX_WIDE_LINE>,
     index: [u8; M],
     width: usize,
     ignored: usize,

@@ -91,7 +91,8 @@ fn test(long: bool) -> Result<()> {
         "--test-threads",
         "1",
     ])
-    .env("EDGEKF_FW_ELF", &qemu);
+    .env("EDGEKF_FW_ELF", &qemu)
+    .env("EDGEKF_ROTOR_ELF", &rotor);
     status(hil, "HIL tests")?;
     step("all tests passed");
     Ok(())
