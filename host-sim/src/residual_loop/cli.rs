@@ -67,9 +67,10 @@ pub fn summary_table(r: &LoopReport) -> String {
     s.push_str(&format!("{}: {} effect(s) added; {}\n", r.system, r.effects_added.len(), r.stopped));
     for e in &r.effects_added {
         let order = e.order.map(|o| format!(" at {o}x")).unwrap_or_default();
+        let what = e.parameter.as_ref().or(e.line.as_ref()).map(|p| format!(" {p}")).unwrap_or_default();
         s.push_str(&format!(
-            "  + {}{} at {}: {:.4e} {} (Δ log-likelihood {:.1}, BIC cost {:.1})\n",
-            e.kind, order, e.location, e.value, e.unit, e.delta_log_likelihood, e.bic_penalty
+            "  + {}{} at {}{}: {:.4e} {} (Δ log-likelihood {:.1}, BIC cost {:.1})\n",
+            e.kind, order, e.location, what, e.value, e.unit, e.delta_log_likelihood, e.bic_penalty
         ));
     }
     let row = |name: &str, f: &dyn Fn(&RunSummary) -> String| {
@@ -88,10 +89,11 @@ pub fn summary_table(r: &LoopReport) -> String {
         }));
     }
     for u in &r.not_identifiable {
-        s.push_str(&format!("  not identifiable: {u}\n"));
+        let what = u.parameter.as_ref().map(|p| format!(" {p}")).unwrap_or_default();
+        s.push_str(&format!("  not identifiable: {} {}{}: {}\n", u.kind, u.location, what, u.reason));
     }
     for u in &r.unexplained {
-        s.push_str(&format!("  unexplained: {u}\n"));
+        s.push_str(&format!("  unexplained: {}: {}\n", u.channel, u.description));
     }
     s
 }

@@ -90,7 +90,7 @@ pub fn run(model: &AugmentedModel, dt: f64, columns: &[&[f64]], rows: &[usize]) 
     let ct = c.transpose();
     let r = &model.r;
     let out_rows = DMatrix::from_fn(rows.len(), n, |i, j| model.displacement[(rows[i], j)]);
-    let effect_idx: Vec<usize> = model.effects.iter().flat_map(|(e, s)| *s..*s + e.states()).collect();
+    let effect_idx: Vec<usize> = model.effects.iter().flat_map(|(e, _, s)| *s..*s + e.states(m)).collect();
     let mut x = DVector::<f64>::zeros(n);
     let mut p = model.p0.clone();
     let mut run = Run {

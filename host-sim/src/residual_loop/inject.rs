@@ -115,3 +115,16 @@ pub fn inject_harmonic_force(
     }
     Ok(())
 }
+
+/// Multiplies channel `channel` by `factor` from time `from` on (s, in the file's clock; `None`:
+/// the whole run): a sensor scale error, or a gain that switches during the run.
+pub fn inject_scale(data: &mut DataFile, channel: &str, factor: f64, from: Option<f64>) -> Result<()> {
+    let t = data.t.clone();
+    let col = column_mut(data, channel).ok_or_else(|| anyhow!("the data file has no channel {channel}"))?;
+    for (v, tk) in col.iter_mut().zip(&t) {
+        if from.is_none_or(|f| *tk >= f) {
+            *v *= factor;
+        }
+    }
+    Ok(())
+}

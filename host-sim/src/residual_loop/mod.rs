@@ -1,14 +1,19 @@
 //! Closing the loop with measured data (issue 6): run the filter, read the innovations'
-//! signatures (bias, NIS, whiteness, spectral peaks placed at running-speed orders or natural
-//! frequencies), propose small model augmentations ("effects"), and keep an effect only if it
-//! raises the innovations' log-likelihood by more than its BIC cost; repeat until the
-//! innovations are consistent or nothing helps.
+//! signatures (bias, NIS, whiteness, spectral lines placed at running-speed orders, natural
+//! frequencies or bearing lines, steps in power), propose small model augmentations
+//! ("effects"), and keep an effect only if it raises the innovations' log-likelihood by more
+//! than its BIC cost in both halves of the run; repeat until the innovations are consistent or
+//! nothing helps, then report what is left.
 //!
-//! * [`model`]: the effects (`sensor_bias`, `harmonic_force`) and the augmented continuous
-//!   model composed from the [`ReducedRotor`](crate::rotor_akf::ReducedRotor)'s public matrices.
+//! * [`model`]: the library of effects (`sensor_bias`, `sensor_scale`, `sensor_delay`,
+//!   `harmonic_force`, `unknown_input`, `parameter`, `extra_mode`, `bearing_defect`) and the
+//!   augmented continuous model composed from the
+//!   [`ReducedRotor`](crate::rotor_akf::ReducedRotor)'s public matrices.
 //! * [`filter`]: a dynamic-size Kalman filter for the host search (time-varying gain until the
 //!   covariance converges, then frozen).
-//! * [`search`]: signatures, candidates, the loop and its report.
+//! * [`signature`]: the innovations' statistics and what is left unexplained.
+//! * [`optimize`]: the one-dimensional maximum-likelihood fit of an effect's scalar.
+//! * [`search`]: candidates, the loop and its report.
 //! * [`inject`]: undeclared effects added to simulated data (for tests and demonstrations).
 //! * [`cli`]: `edgekf loop rotor`.
 
@@ -16,7 +21,10 @@ pub mod cli;
 pub mod filter;
 pub mod inject;
 pub mod model;
+pub mod optimize;
 pub mod search;
+pub mod signature;
 
-pub use model::{augment, AugmentedModel, Effect, EffectTuning, Flexibility};
-pub use search::{close_loop, AddedEffect, LoopOptions, LoopReport, RunSummary};
+pub use model::{augment, AugmentedModel, Effect, EffectTuning, Flexibility, Parameter};
+pub use search::{close_loop, AddedEffect, LoopOptions, LoopReport, NotIdentifiable, RunSummary, Traces};
+pub use signature::{Signature, SignatureOptions};

@@ -1,14 +1,19 @@
-//! Signatures of the innovations, candidate effects, and the accept-by-BIC loop.
+//! The search: candidates from the signatures, each fitted (its states by the filter, its
+//! scalar by maximum likelihood) and kept only if it pays for its parameters (BIC) in both
+//! halves of the run; then what is left is reported.
 
 use super::filter::{self, Run};
-use super::model::{augment, AugmentedModel, Effect, EffectTuning, Flexibility};
+use super::model::{apply_parameters, augment, AugmentedModel, Effect, EffectTuning, Flexibility, Parameter};
+use super::optimize::maximise;
+use super::signature::{summarise, unexplained, Signature, SignatureOptions};
 use crate::io::data::DataFile;
-use crate::rotor::RotorModel;
+use crate::rotor::bearing_geometry::BearingLine;
+use crate::rotor::{RotorConfig, RotorModel};
 use crate::rotor_akf::{reduce, ReducedRotor, Tuning};
 use anyhow::{anyhow, Result};
-use edgekf::residual::{locate_peak, NisBounds, PeakClass, PeakTolerance, RunningStats, Welch, WhitenessWindow};
 use serde::Serialize;
-use std::collections::BTreeMap;
+
+pub use super::signature::{ChannelSignature, PeakSignature, RunSummary};
 
 /// How the loop runs.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -17,21 +22,21 @@ pub struct LoopOptions {
     pub tuning: Tuning,
     /// The effects' noise and priors.
     pub effect_tuning: EffectTuning,
-    /// Samples before this time (s after the first) are left out of the statistics.
-    pub settle: f64,
-    /// Virtual-sensing errors are computed from this time on (s after the first sample).
-    pub error_after: f64,
+    /// What counts as a signature.
+    pub signatures: SignatureOptions,
     /// At most this many effects are added.
     pub max_effects: usize,
-    /// A channel's innovation mean this many standard errors from zero proposes a bias.
-    pub bias_z: f64,
-    /// False-alarm probability of the whiteness and NIS tests.
-    pub alpha: f64,
-    /// Spectral peaks of the normalised innovations at least this far above the median, dB.
-    pub peak_db: f32,
-    /// Two locations whose log-likelihoods differ by less than this are reported as not
-    /// identifiable from each other.
+    /// Each half of the run must gain at least this fraction of an effect's BIC cost: an
+    /// effect that only helps part of the run is not a constant property of the machine.
+    pub half_gain: f64,
+    /// Two locations of the same kind whose log-likelihoods differ by less than this are
+    /// reported as not identifiable from each other.
     pub identifiable_margin: f64,
+    /// Check at the end which component parameters the data cannot see (halving or doubling
+    /// each changes the log-likelihood by less than its BIC cost).
+    pub screen_parameters: bool,
+    /// Print progress to standard error.
+    pub progress: bool,
 }
 
 impl Default for LoopOptions {
@@ -39,91 +44,66 @@ impl Default for LoopOptions {
         Self {
             tuning: Tuning::default(),
             effect_tuning: EffectTuning::default(),
-            settle: 0.5,
-            error_after: 1.0,
+            signatures: SignatureOptions::default(),
             max_effects: 4,
-            bias_z: 5.0,
-            alpha: 0.01,
-            peak_db: 10.0,
+            half_gain: 0.25,
             identifiable_margin: 2.0,
+            screen_parameters: true,
+            progress: false,
         }
     }
-}
-
-/// A spectral peak of one channel's normalised innovation.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct PeakSignature {
-    /// Frequency, Hz.
-    pub frequency_hz: f64,
-    /// Above the median level, dB.
-    pub prominence_db: f64,
-    /// Where it sits (`2x`, `natural 0`, `2x at natural 1`, `unexplained`).
-    pub class: String,
-    /// The integer order of the running speed it sits at, if any.
-    pub order: Option<u32>,
-}
-
-/// Innovation statistics of one channel.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct ChannelSignature {
-    /// Channel.
-    pub name: String,
-    /// Mean innovation.
-    pub mean: f64,
-    /// Its standard error.
-    pub standard_error: f64,
-    /// `mean / standard_error`.
-    pub z: f64,
-    /// RMS innovation.
-    pub rms: f64,
-    /// Mean of `e² / S_ii` (1 when consistent).
-    pub nis: f64,
-    /// Ljung–Box p-value (20 lags over the last 2048 samples).
-    pub whiteness_p: f64,
-    /// Spectral peaks.
-    pub peaks: Vec<PeakSignature>,
-}
-
-/// A run's summary as reported.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct RunSummary {
-    /// RMS innovation per channel.
-    pub innovation_rms: BTreeMap<String, f64>,
-    /// Mean NIS divided by the number of channels (1.0 when consistent).
-    pub nis_mean: f64,
-    /// Whether the mean NIS lies within its χ² bounds at `alpha`.
-    pub nis_consistent: bool,
-    /// Smallest Ljung–Box p-value over the channels.
-    pub whiteness_p: f64,
-    /// RMS error of the disk/unbalance-node displacement against `truth_` columns, m.
-    pub error_rms: BTreeMap<String, f64>,
-    /// `−½ Σ (ln det S + NIS)` over the run.
-    pub log_likelihood: f64,
-    /// Per-channel signatures.
-    pub channels: Vec<ChannelSignature>,
 }
 
 /// An effect the loop kept.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct AddedEffect {
-    /// `sensor_bias`, `harmonic_force`.
+    /// One of `sensor_bias`, `sensor_scale`, `sensor_delay`, `harmonic_force`,
+    /// `unknown_input`, `parameter`, `extra_mode`, `bearing_defect`.
     pub kind: String,
-    /// Channel name or `node N`.
+    /// Channel name, `node N`, or a component (`disk 12`, `shaft`, `bearing 4`).
     pub location: String,
-    /// Estimated size (bias; force amplitude), averaged over the second half of the run.
+    /// Estimated size in SI units (a force's amplitude averaged over the second half of the
+    /// run), or the factor on the declared value for `sensor_scale` and `parameter`.
     pub value: f64,
-    /// Unit of `value`.
+    /// Unit of `value` (`1` for a factor).
     pub unit: String,
-    /// Order of the running speed (harmonic forces).
+    /// Order of the running speed (harmonic forces, bearing lines).
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub order: Option<u32>,
+    pub order: Option<f64>,
+    /// The parameter (`mass`, `young`, `kxx`, …) of a `parameter` effect.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub parameter: Option<String>,
+    /// The bearing line (`BPFO`, `BPFI`, `BSF`, `FTF`) of a `bearing_defect`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub line: Option<String>,
+    /// Spectral lines (Hz) of the innovations that were there before this effect and are gone
+    /// after it.
+    pub explains: Vec<f64>,
     /// Gain in log-likelihood.
     pub delta_log_likelihood: f64,
     /// Its cost: `½ p ln n`.
     pub bic_penalty: f64,
-    /// The effect.
+    /// The effect and its fitted scalar.
     #[serde(skip)]
-    pub effect: Effect,
+    pub effect: (Effect, f64),
+}
+
+/// An effect (or location) the data cannot resolve.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct NotIdentifiable {
+    /// Kind.
+    pub kind: String,
+    /// Location.
+    pub location: String,
+    /// The parameter, for `parameter`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub parameter: Option<String>,
+    /// The statistic behind the verdict (`max_delta_log_likelihood`, `delta_log_likelihood_gap`).
+    pub statistic: String,
+    /// Its value.
+    pub value: f64,
+    /// Why, in words.
+    pub reason: String,
 }
 
 /// One candidate evaluated.
@@ -135,19 +115,44 @@ pub struct Trial {
     pub kind: String,
     /// Location.
     pub location: String,
-    /// Order (harmonic forces).
+    /// Order (harmonic forces, bearing lines).
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub order: Option<u32>,
+    pub order: Option<f64>,
+    /// Parameter name (parameter effects).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub parameter: Option<String>,
+    /// Fitted value (scalar effects), as reported.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub value: Option<f64>,
     /// Gain in log-likelihood over the current model.
     pub delta_log_likelihood: f64,
+    /// The gain in the first and in the second half of the run.
+    pub delta_halves: [f64; 2],
     /// `½ p ln n`.
     pub bic_penalty: f64,
     /// Kept.
     pub accepted: bool,
 }
 
+/// The series behind the report's plots (not serialised).
+#[derive(Debug, Clone, Default)]
+pub struct Traces {
+    /// Time, s.
+    pub t: Vec<f64>,
+    /// Sensor channels.
+    pub channels: Vec<String>,
+    /// Virtual-sensing rows (`n12_x`, …).
+    pub rows: Vec<String>,
+    /// `truth_` column of each row, where the file has one.
+    pub truth: Vec<Option<Vec<f64>>>,
+    /// The base model's run.
+    pub before: Run,
+    /// The final model's run.
+    pub after: Run,
+}
+
 /// What the loop found.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, Serialize)]
 pub struct LoopReport {
     /// The system (`rotor`).
     pub system: String,
@@ -157,160 +162,198 @@ pub struct LoopReport {
     pub before: RunSummary,
     /// The final model.
     pub after: RunSummary,
-    /// Effects whose location (or kind) the data cannot tell apart.
-    pub not_identifiable: Vec<String>,
-    /// Signatures left that no kept effect explains.
-    pub unexplained: Vec<String>,
+    /// Effects the data cannot resolve.
+    pub not_identifiable: Vec<NotIdentifiable>,
+    /// Signatures left that no effect of the library explains (empty when the final
+    /// innovations are consistent).
+    pub unexplained: Vec<Signature>,
     /// Every candidate evaluated.
     pub trials: Vec<Trial>,
     /// Why the loop stopped.
     pub stopped: String,
+    /// The series behind the plots.
+    #[serde(skip)]
+    pub traces: Traces,
+}
+
+/// A candidate fitted to the data.
+struct Fitted {
+    effect: Effect,
+    theta: f64,
+    model: AugmentedModel,
+    run: Run,
+    delta: f64,
+    halves: [f64; 2],
+    penalty: f64,
 }
 
 struct Context<'a> {
-    red: ReducedRotor,
+    cfg: &'a RotorConfig,
     model: &'a RotorModel,
+    red: ReducedRotor,
     flex: Flexibility,
     columns: Vec<Vec<f64>>,
     t: Vec<f64>,
-    /// Displacement rows reported (disk and unbalance nodes, x and y) and their names.
     rows: Vec<usize>,
     row_names: Vec<String>,
-    /// Nodes where a harmonic force is tried.
+    /// Nodes where forces are tried (disks and unbalances).
     force_sites: Vec<usize>,
+    /// Bearing lines as orders: (bearing index, line, order).
+    lines: Vec<(usize, BearingLine, f64)>,
     options: LoopOptions,
     data: &'a DataFile,
+    n_meas: f64,
 }
 
 impl Context<'_> {
-    fn run(&self, effects: &[Effect]) -> Result<(AugmentedModel, Run)> {
-        let m = augment(&self.red, self.model, &self.flex, effects, &self.options.effect_tuning)?;
+    fn channels(&self) -> usize {
+        self.red.channels.len()
+    }
+
+    fn run(&self, effects: &[(Effect, f64)]) -> Result<(AugmentedModel, Run)> {
         let cols: Vec<&[f64]> = self.columns.iter().map(Vec::as_slice).collect();
-        let run = filter::run(&m, 1.0 / self.red.sample_rate, &cols, &self.rows)?;
+        let dt = 1.0 / self.red.sample_rate;
+        let tuning = &self.options.effect_tuning;
+        let m = if effects.iter().any(|(e, _)| matches!(e, Effect::Parameter(_))) {
+            let cfg = apply_parameters(self.cfg, effects)?;
+            let model = RotorModel::from_config(&cfg)?;
+            let red = reduce(&model, self.red.speed, &self.options.tuning)?;
+            let flex = Flexibility::new(&model, self.red.speed);
+            augment(&red, &model, &flex, effects, tuning)?
+        } else {
+            augment(&self.red, self.model, &self.flex, effects, tuning)?
+        };
+        let run = filter::run(&m, dt, &cols, &self.rows)?;
         Ok((m, run))
     }
 
     fn summarise(&self, run: &Run) -> RunSummary {
-        let t0 = self.t.first().copied().unwrap_or(0.0);
-        let keep: Vec<usize> = (0..self.t.len()).filter(|&k| self.t[k] - t0 >= self.options.settle).collect();
-        let mut channels = Vec::new();
-        let naturals = &self.red.frequencies_hz;
-        for (i, name) in self.red.channels.iter().enumerate() {
-            let mut stats = RunningStats::<f64>::new();
-            let mut nis = RunningStats::<f64>::new();
-            let mut white = WhitenessWindow::<f64, 2048>::new();
-            let mut welch = Welch::<1024>::new(self.red.sample_rate as f32);
-            for &k in &keep {
-                let e = run.innovation[i][k];
-                let s = run.variance[i][k];
-                if !(e.is_finite() && s.is_finite()) {
-                    continue;
-                }
-                stats.push(e);
-                nis.push(e * e / s);
-                let z = e / s.sqrt();
-                white.push(z);
-                if let Some(w) = welch.as_mut() {
-                    w.push(z);
-                }
+        let truth: Vec<Option<&[f64]>> =
+            self.row_names.iter().map(|n| self.data.column(&format!("truth_{n}"))).collect();
+        summarise(
+            run,
+            &self.t,
+            &self.red.channels,
+            &self.row_names,
+            &truth,
+            self.red.speed,
+            &self.red.frequencies_hz,
+            &self.lines,
+            self.red.sample_rate,
+            &self.options.signatures,
+        )
+    }
+
+    fn penalty(&self, e: &Effect) -> f64 {
+        0.5 * e.parameters(self.channels()) as f64 * self.n_meas.ln()
+    }
+
+    fn location(&self, e: &Effect) -> String {
+        e.location(&self.red.channels, self.cfg)
+    }
+
+    /// The value the report gives an effect: its fitted scalar, or its states' size over the
+    /// second half of the run.
+    fn value(&self, model: &AugmentedModel, run: &Run, effect: Effect, theta: f64) -> f64 {
+        let Some(pos) = model.effects.iter().position(|(e, _, _)| *e == effect) else { return f64::NAN };
+        let m = self.channels();
+        let offset: usize = model.effects[..pos].iter().map(|(e, _, _)| e.states(m)).sum();
+        let n = self.t.len();
+        let half = n / 2;
+        let avg = |f: &dyn Fn(usize) -> f64| (half..n).map(f).sum::<f64>() / (n - half).max(1) as f64;
+        let s = &run.effect_states;
+        match effect {
+            Effect::SensorBias { .. } => avg(&|k| s[offset][k]),
+            Effect::HarmonicForce { .. } | Effect::BearingDefect { .. } => {
+                avg(&|k| s[offset][k].hypot(s[offset + 1][k]))
             }
-            let lb = white.ljung_box(20);
-            let mut peaks = Vec::new();
-            if let Some(w) = welch.as_ref().filter(|w| w.blocks() > 0) {
-                let tol = PeakTolerance::new(1.2 * w.bin_width_hz() as f64);
-                for p in w.peaks::<8>(self.options.peak_db).iter() {
-                    let loc = locate_peak(p.frequency_hz as f64, self.red.speed, naturals, &tol);
-                    let (class, order) = match loc.class {
-                        PeakClass::Order(o) => {
-                            (format!("{}/{}x", o.numerator, o.denominator), o.is_integer().then_some(o.numerator))
-                        }
-                        PeakClass::OrderAtNatural { order: o, natural } => (
-                            format!("{}/{}x at natural {natural}", o.numerator, o.denominator),
-                            o.is_integer().then_some(o.numerator),
-                        ),
-                        PeakClass::Natural(n) => (format!("natural {n}"), None),
-                        PeakClass::Unexplained => ("unexplained".to_string(), None),
-                    };
-                    peaks.push(PeakSignature {
-                        frequency_hz: p.frequency_hz as f64,
-                        prominence_db: p.prominence_db as f64,
-                        class: class.replace("/1x", "x"),
-                        order,
-                    });
-                }
-            }
-            let se = stats.standard_error();
-            channels.push(ChannelSignature {
-                name: name.clone(),
-                mean: stats.mean(),
-                standard_error: se,
-                z: stats.mean() / se,
-                rms: stats.rms(),
-                nis: nis.mean(),
-                whiteness_p: lb.p_value,
-                peaks,
-            });
-        }
-        let mut nis_total = RunningStats::<f64>::new();
-        for &k in &keep {
-            nis_total.push(run.nis[k]);
-        }
-        let m = self.red.channels.len();
-        let bounds = NisBounds::new(m, nis_total.count().max(1) as usize, self.options.alpha);
-        let mut error_rms = BTreeMap::new();
-        for (j, name) in self.row_names.iter().enumerate() {
-            if let Some(truth) = self.data.column(&format!("truth_{name}")) {
-                let (mut s, mut n) = (0.0, 0usize);
-                for ((tk, est), tr) in self.t.iter().zip(&run.outputs[j]).zip(truth) {
-                    if tk - t0 >= self.options.error_after && tr.is_finite() {
-                        s += (est - tr).powi(2);
-                        n += 1;
-                    }
-                }
-                if n > 0 {
-                    error_rms.insert(name.clone(), (s / n as f64).sqrt());
-                }
-            }
-        }
-        RunSummary {
-            innovation_rms: channels.iter().map(|c| (c.name.clone(), c.rms)).collect(),
-            nis_mean: nis_total.mean() / m as f64,
-            nis_consistent: bounds.contains(nis_total.mean()),
-            whiteness_p: channels.iter().map(|c| c.whiteness_p).fold(1.0, f64::min),
-            error_rms,
-            log_likelihood: run.log_likelihood(),
-            channels,
+            Effect::UnknownInput { .. } => avg(&|k| s[offset][k].powi(2) + s[offset + 1][k].powi(2)).sqrt(),
+            Effect::SensorScale { .. } | Effect::Parameter(_) => theta.exp(),
+            Effect::SensorDelay { .. } | Effect::ExtraMode { .. } => theta,
         }
     }
 
-    /// Whether the innovations are white (Bonferroni over the channels), unbiased and NIS
-    /// consistent.
-    fn consistent(&self, s: &RunSummary) -> bool {
-        let m = s.channels.len().max(1) as f64;
-        s.nis_consistent
-            && s.whiteness_p >= self.options.alpha / m
-            && s.channels.iter().all(|c| c.z.abs() < self.options.bias_z)
+    /// Gain in log-likelihood of `run` over `base`, in the first and the second half.
+    fn halves(&self, run: &Run, base: &Run) -> [f64; 2] {
+        let n = run.nis.len().min(base.nis.len());
+        let mid = n / 2;
+        let part = |r: &Run, lo: usize, hi: usize| -> f64 {
+            -0.5 * (lo..hi)
+                .filter(|&k| r.nis[k].is_finite() && r.log_det_s[k].is_finite())
+                .map(|k| r.nis[k] + r.log_det_s[k])
+                .sum::<f64>()
+        };
+        [part(run, 0, mid) - part(base, 0, mid), part(run, mid, n) - part(base, mid, n)]
     }
 
-    /// Candidates from the signatures, strongest first, not already in `effects`.
-    fn candidates(&self, s: &RunSummary, effects: &[Effect]) -> Vec<Effect> {
-        let mut out = Vec::new();
+    /// Fits `cand` on top of `effects`: its scalar by maximum likelihood, its states by the
+    /// filter.
+    fn fit(&self, effects: &[(Effect, f64)], cand: Effect, base: &Run) -> Result<Fitted> {
+        let with = |theta: f64| {
+            let mut e = effects.to_vec();
+            e.push((cand, theta));
+            e
+        };
+        let theta = match cand.scalar(self.red.sample_rate) {
+            Some(range) => {
+                let grid = match cand {
+                    Effect::Parameter(_) => 7,
+                    _ => 4,
+                };
+                let best = maximise(
+                    |th| self.run(&with(th)).ok().map(|(_, r)| r.log_likelihood()),
+                    range.low,
+                    range.high,
+                    grid,
+                    range.tolerance,
+                )
+                .ok_or_else(|| anyhow!("no value of the scalar gives a usable model"))?;
+                best.x
+            }
+            None => 0.0,
+        };
+        let (model, run) = self.run(&with(theta))?;
+        let delta = run.log_likelihood() - base.log_likelihood();
+        let halves = self.halves(&run, base);
+        Ok(Fitted { effect: cand, theta, model, run, delta, halves, penalty: self.penalty(&cand) })
+    }
+
+    /// Candidates named directly by a signature (a bias, a line at an order, a bearing line or
+    /// elsewhere), then the structural ones (scales, delays, parameters, 1× forces off the
+    /// unbalance nodes) when the innovations carry lines or colour, then the catch-all.
+    fn candidates(&self, s: &RunSummary, effects: &[(Effect, f64)]) -> [Vec<Effect>; 2] {
+        let mut named = Vec::new();
         let mut biased: Vec<(f64, usize)> = s
             .channels
             .iter()
             .enumerate()
-            .filter(|(_, c)| c.z.abs() >= self.options.bias_z)
+            .filter(|(_, c)| c.z.abs() >= self.options.signatures.bias_z)
             .map(|(i, c)| (c.z.abs(), i))
             .collect();
         biased.sort_by(|a, b| b.0.total_cmp(&a.0));
-        out.extend(biased.into_iter().map(|(_, channel)| Effect::SensorBias { channel }));
+        named.extend(biased.into_iter().map(|(_, channel)| Effect::SensorBias { channel }));
+        let mut structural = false;
+        let mut modes: Vec<u32> = Vec::new();
         let mut orders: Vec<(f64, u32)> = Vec::new();
         for c in &s.channels {
+            if c.whiteness_p < self.options.signatures.alpha || !c.peaks.is_empty() {
+                structural = true;
+            }
             for p in &c.peaks {
-                if let Some(k) = p.order {
+                if let Some((bearing, line)) = p.line {
+                    if let Some(&(_, _, order)) = self.lines.iter().find(|(b, l, _)| *b == bearing && *l == line) {
+                        named.push(Effect::BearingDefect { bearing, line, order_milli: (order * 1e3).round() as u32 });
+                    }
+                } else if let Some(k) = p.order {
                     match orders.iter_mut().find(|(_, o)| *o == k) {
                         Some(e) => e.0 = e.0.max(p.prominence_db),
                         None => orders.push((p.prominence_db, k)),
+                    }
+                } else if p.class == "unexplained" {
+                    let mhz = (p.frequency_hz * 1e3).round() as u32;
+                    let near = |m: &u32| (*m as f64 - mhz as f64).abs() * 1e-3 < 2.0 * s.bin_width_hz;
+                    if !modes.iter().any(near) {
+                        modes.push(mhz);
                     }
                 }
             }
@@ -321,43 +364,85 @@ impl Context<'_> {
                 if order == 1 && self.red.force_nodes.contains(&node) {
                     continue;
                 }
-                out.push(Effect::HarmonicForce { node, order });
+                named.push(Effect::HarmonicForce { node, order });
             }
         }
-        out.retain(|e| !effects.contains(e));
-        out
+        named.extend(modes.into_iter().map(|seed_mhz| Effect::ExtraMode { seed_mhz }));
+        if structural || !s.nis_consistent {
+            for channel in 0..self.channels() {
+                named.push(Effect::SensorScale { channel });
+                named.push(Effect::SensorDelay { channel });
+            }
+            named.extend(Parameter::all(self.cfg).into_iter().map(Effect::Parameter));
+        }
+        let catch_all: Vec<Effect> = self.force_sites.iter().map(|&node| Effect::UnknownInput { node }).collect();
+        let fresh = |v: Vec<Effect>| -> Vec<Effect> {
+            let mut out: Vec<Effect> = Vec::new();
+            for e in v {
+                if !effects.iter().any(|(x, _)| *x == e) && !out.contains(&e) {
+                    out.push(e);
+                }
+            }
+            out
+        };
+        [fresh(named), fresh(catch_all)]
     }
 
-    fn value(&self, model: &AugmentedModel, run: &Run, effect: Effect) -> f64 {
-        let Some(start) = model.effects.iter().position(|(e, _)| *e == effect) else { return f64::NAN };
-        let offset: usize = model.effects[..start].iter().map(|(e, _)| e.states()).sum();
-        let n = self.t.len();
-        let half = n / 2;
-        let avg = |f: &dyn Fn(usize) -> f64| (half..n).map(f).sum::<f64>() / (n - half).max(1) as f64;
-        match effect {
-            Effect::SensorBias { .. } => avg(&|k| run.effect_states[offset][k]),
-            Effect::HarmonicForce { .. } => {
-                avg(&|k| run.effect_states[offset][k].hypot(run.effect_states[offset + 1][k]))
-            }
+    fn trial(&self, iteration: usize, f: &Fitted, accepted: bool) -> Trial {
+        Trial {
+            iteration,
+            kind: f.effect.kind().to_string(),
+            location: self.location(&f.effect),
+            order: f.effect.order(),
+            parameter: parameter_name(&f.effect),
+            value: f.effect.scalar(self.red.sample_rate).map(|_| self.value(&f.model, &f.run, f.effect, f.theta)),
+            delta_log_likelihood: f.delta,
+            delta_halves: f.halves,
+            bic_penalty: f.penalty,
+            accepted,
+        }
+    }
+
+    fn progress(&self, msg: impl FnOnce() -> String) {
+        if self.options.progress {
+            eprintln!("loop: {}", msg());
         }
     }
 }
 
-fn order_of(e: &Effect) -> Option<u32> {
-    match *e {
-        Effect::HarmonicForce { order, .. } => Some(order),
-        Effect::SensorBias { .. } => None,
+fn parameter_name(e: &Effect) -> Option<String> {
+    match e {
+        Effect::Parameter(p) => Some(p.name().to_string()),
+        _ => None,
     }
 }
 
 /// The family of an effect for identifiability: same kind and order, different location.
-fn family(e: &Effect) -> (&'static str, Option<u32>) {
-    (e.kind(), order_of(e))
+fn family(e: &Effect) -> (&'static str, Option<u64>, Option<&'static str>) {
+    (e.kind(), e.order().map(f64::to_bits), parameter_name(e).map(|_| "parameter"))
 }
 
-/// Closes the loop on `data` with the rotor `model` (its configured sensors, unbalance nodes
-/// and operating speed): runs the base filter, then adds effects while the innovations are
-/// not consistent and an effect pays for its parameters (BIC).
+/// Frequencies (Hz) of the lines in `before` that `after` no longer has (per channel, within
+/// two bins).
+fn explained(before: &RunSummary, after: &RunSummary) -> Vec<f64> {
+    let tol = 2.0 * before.bin_width_hz.max(after.bin_width_hz);
+    let mut out: Vec<f64> = Vec::new();
+    for (b, a) in before.channels.iter().zip(&after.channels) {
+        for p in &b.peaks {
+            let gone = !a.peaks.iter().any(|q| (q.frequency_hz - p.frequency_hz).abs() <= tol);
+            if gone && !out.iter().any(|f| (f - p.frequency_hz).abs() <= tol) {
+                out.push((p.frequency_hz * 100.0).round() / 100.0);
+            }
+        }
+    }
+    out.sort_by(f64::total_cmp);
+    out
+}
+
+/// Closes the loop on `data` with the rotor `model` (its configured sensors, unbalance nodes,
+/// bearings and operating speed): runs the base filter, then adds effects while the
+/// innovations are not consistent and an effect pays for its parameters (BIC) in both halves of
+/// the run.
 pub fn close_loop(model: &RotorModel, data: &DataFile, options: &LoopOptions) -> Result<LoopReport> {
     let cfg = model.config();
     let speed = cfg.operation.speed;
@@ -377,7 +462,15 @@ pub fn close_loop(model: &RotorModel, data: &DataFile, options: &LoopOptions) ->
     force_sites.dedup();
     let rows: Vec<usize> = force_sites.iter().flat_map(|&n| [2 * n, 2 * n + 1]).collect();
     let row_names: Vec<String> = force_sites.iter().flat_map(|&n| [format!("n{n}_x"), format!("n{n}_y")]).collect();
-    let ctx = Context {
+    let lines = cfg
+        .bearings
+        .iter()
+        .enumerate()
+        .filter_map(|(i, b)| b.geometry.map(|g| (i, g)))
+        .flat_map(|(i, g)| BearingLine::ALL.map(|l| (i, l, g.order(l))))
+        .collect();
+    let mut ctx = Context {
+        cfg,
         flex: Flexibility::new(model, speed),
         red,
         model,
@@ -386,21 +479,26 @@ pub fn close_loop(model: &RotorModel, data: &DataFile, options: &LoopOptions) ->
         rows,
         row_names,
         force_sites,
+        lines,
         options: *options,
         data,
+        n_meas: 2.0,
     };
-    let mut effects: Vec<Effect> = Vec::new();
+    let mut effects: Vec<(Effect, f64)> = Vec::new();
+    ctx.progress(|| "running the base model".into());
     let (mut cur_model, mut cur_run) = ctx.run(&effects)?;
+    ctx.n_meas = cur_run.measurements().max(2) as f64;
+    let base_run = cur_run.clone();
     let before = ctx.summarise(&cur_run);
     let mut current = before.clone();
-    let mut added = Vec::new();
+    let mut added: Vec<(Effect, f64, f64, f64, Vec<f64>)> = Vec::new();
     let mut trials = Vec::new();
     let mut not_identifiable = Vec::new();
-    let n_meas = cur_run.measurements().max(2) as f64;
+    let mut partial: Vec<Signature> = Vec::new();
     let stopped;
     let mut iteration = 0;
     loop {
-        if ctx.consistent(&current) {
+        if current.consistent {
             stopped = "the innovations are white, unbiased and NIS-consistent".to_string();
             break;
         }
@@ -408,88 +506,153 @@ pub fn close_loop(model: &RotorModel, data: &DataFile, options: &LoopOptions) ->
             stopped = format!("reached the limit of {} effects", options.max_effects);
             break;
         }
-        let cands = ctx.candidates(&current, &effects);
-        if cands.is_empty() {
-            stopped = "no candidate effect matches the remaining signatures".to_string();
-            break;
-        }
         iteration += 1;
-        let base_ll = cur_run.log_likelihood();
-        let mut results = Vec::new();
-        for cand in cands {
-            let mut trial = effects.clone();
-            trial.push(cand);
-            match ctx.run(&trial) {
-                Ok((m, r)) => {
-                    let d = r.log_likelihood() - base_ll;
-                    results.push((cand, d, m, r));
-                }
-                Err(e) => eprintln!("candidate {} at {}: {e:#}", cand.kind(), cand.location(&ctx.red.channels)),
+        let tiers = ctx.candidates(&current, &effects);
+        let mut chosen: Option<Fitted> = None;
+        let mut evaluated: Vec<Fitted> = Vec::new();
+        for cands in tiers {
+            if chosen.is_some() || cands.is_empty() {
+                continue;
             }
+            let total = cands.len();
+            let mut results = Vec::new();
+            for (i, cand) in cands.into_iter().enumerate() {
+                ctx.progress(|| {
+                    format!("iteration {iteration}: candidate {}/{total}: {} at {}", i + 1, cand.kind(), ctx.location(&cand))
+                });
+                match ctx.fit(&effects, cand, &cur_run) {
+                    Ok(f) => results.push(f),
+                    Err(e) => ctx.progress(|| format!("  {} at {}: {e:#}", cand.kind(), ctx.location(&cand))),
+                }
+            }
+            let min_half = |f: &Fitted| f.halves[0].min(f.halves[1]) >= options.half_gain * f.penalty;
+            let best = results
+                .iter()
+                .enumerate()
+                .filter(|(_, f)| f.delta > f.penalty && min_half(f))
+                .max_by(|a, b| (a.1.delta - a.1.penalty).total_cmp(&(b.1.delta - b.1.penalty)))
+                .map(|(i, _)| i);
+            for f in &results {
+                if f.delta > f.penalty && !min_half(f) {
+                    partial.push(Signature {
+                        channel: ctx.location(&f.effect),
+                        frequency_hz: None,
+                        statistic: "delta_log_likelihood_halves".into(),
+                        value: f.halves[0].min(f.halves[1]),
+                        description: format!(
+                            "{} at {} would gain {:.1} in log-likelihood (BIC cost {:.1}) but {:.1} and {:.1} in the two halves of the run: it helps only part of the run, so it is not a constant property",
+                            f.effect.kind(),
+                            ctx.location(&f.effect),
+                            f.delta,
+                            f.penalty,
+                            f.halves[0],
+                            f.halves[1]
+                        ),
+                    });
+                }
+            }
+            if let Some(i) = best {
+                let winner = results.swap_remove(i);
+                let rivals: Vec<&Fitted> = results
+                    .iter()
+                    .filter(|f| {
+                        family(&f.effect) == family(&winner.effect)
+                            && ctx.location(&f.effect) != ctx.location(&winner.effect)
+                            && (winner.delta - f.delta).abs() < options.identifiable_margin
+                    })
+                    .collect();
+                for r in rivals {
+                    not_identifiable.push(NotIdentifiable {
+                        kind: winner.effect.kind().into(),
+                        location: ctx.location(&r.effect),
+                        parameter: parameter_name(&r.effect),
+                        statistic: "delta_log_likelihood_gap".into(),
+                        value: winner.delta - r.delta,
+                        reason: format!(
+                            "fits the data as well as {} (log-likelihoods {:.2} apart): the sensors cannot tell the two apart",
+                            ctx.location(&winner.effect),
+                            winner.delta - r.delta
+                        ),
+                    });
+                }
+                chosen = Some(winner);
+            }
+            evaluated.extend(results);
         }
-        let Some(best) = results.iter().enumerate().max_by(|a, b| a.1 .1.total_cmp(&b.1 .1)).map(|(i, _)| i) else {
-            stopped = "no candidate could be evaluated".to_string();
+        for f in &evaluated {
+            trials.push(ctx.trial(iteration, f, false));
+        }
+        let Some(win) = chosen else {
+            let best = evaluated.iter().max_by(|a, b| (a.delta - a.penalty).total_cmp(&(b.delta - b.penalty)));
+            stopped = match best {
+                Some(f) => format!(
+                    "no candidate pays for itself in both halves of the run (best: {} at {}, Δ log-likelihood {:.1}, BIC cost {:.1}, halves {:.1} / {:.1})",
+                    f.effect.kind(),
+                    ctx.location(&f.effect),
+                    f.delta,
+                    f.penalty,
+                    f.halves[0],
+                    f.halves[1]
+                ),
+                None => "no candidate effect matches the remaining signatures".into(),
+            };
             break;
         };
-        let best_effect = results[best].0;
-        let best_d = results[best].1;
-        let penalty = 0.5 * best_effect.parameters() as f64 * n_meas.ln();
-        let accepted = best_d > penalty;
-        for (cand, d, _, _) in &results {
-            trials.push(Trial {
-                iteration,
-                kind: cand.kind().to_string(),
-                location: cand.location(&ctx.red.channels),
-                order: order_of(cand),
-                delta_log_likelihood: *d,
-                bic_penalty: 0.5 * cand.parameters() as f64 * n_meas.ln(),
-                accepted: accepted && *cand == best_effect,
-            });
-        }
-        if !accepted {
-            stopped = format!(
-                "the best candidate ({} at {}) gains {best_d:.2} in log-likelihood, less than its BIC cost {penalty:.2}",
-                best_effect.kind(),
-                best_effect.location(&ctx.red.channels)
-            );
-            break;
-        }
-        let rivals: Vec<String> = results
-            .iter()
-            .filter(|(c, d, _, _)| {
-                *c != best_effect && family(c) == family(&best_effect) && best_d - d < options.identifiable_margin
-            })
-            .map(|(c, d, _, _)| format!("{} (Δ log-likelihood {:.2} lower)", c.location(&ctx.red.channels), best_d - d))
-            .collect();
-        if !rivals.is_empty() {
-            not_identifiable.push(format!(
-                "{} at {} is not distinguishable from {}",
-                best_effect.kind(),
-                best_effect.location(&ctx.red.channels),
-                rivals.join(", ")
-            ));
-        }
-        let (_, _, m, r) = results.swap_remove(best);
-        cur_model = m;
-        cur_run = r;
-        effects.push(best_effect);
-        added.push((best_effect, best_d, penalty));
-        current = ctx.summarise(&cur_run);
+        trials.push(ctx.trial(iteration, &win, true));
+        ctx.progress(|| {
+            format!(
+                "iteration {iteration}: kept {} at {} (Δ log-likelihood {:.1}, BIC cost {:.1})",
+                win.effect.kind(),
+                ctx.location(&win.effect),
+                win.delta,
+                win.penalty
+            )
+        });
+        let next = ctx.summarise(&win.run);
+        added.push((win.effect, win.theta, win.delta, win.penalty, explained(&current, &next)));
+        effects.push((win.effect, win.theta));
+        cur_model = win.model;
+        cur_run = win.run;
+        current = next;
+    }
+    if options.screen_parameters {
+        not_identifiable.extend(screen_parameters(&ctx, &effects, &cur_run)?);
     }
     let effects_added = added
         .into_iter()
-        .map(|(e, d, penalty)| AddedEffect {
+        .map(|(e, theta, d, penalty, explains)| AddedEffect {
             kind: e.kind().to_string(),
-            location: e.location(&ctx.red.channels),
-            value: ctx.value(&cur_model, &cur_run, e),
+            location: ctx.location(&e),
+            value: ctx.value(&cur_model, &cur_run, e, theta),
             unit: e.unit().to_string(),
-            order: order_of(&e),
+            order: e.order(),
+            parameter: parameter_name(&e),
+            line: match e {
+                Effect::BearingDefect { line, .. } => Some(line.name().to_string()),
+                _ => None,
+            },
+            explains,
             delta_log_likelihood: d,
             bic_penalty: penalty,
-            effect: e,
+            effect: (e, theta),
         })
         .collect();
-    let unexplained = unexplained(&ctx, &current);
+    let unexplained = if current.consistent {
+        Vec::new()
+    } else {
+        let mut u = unexplained(&current, &options.signatures);
+        u.extend(partial);
+        u
+    };
+    let truth = ctx.row_names.iter().map(|n| data.column(&format!("truth_{n}")).map(<[f64]>::to_vec)).collect();
+    let traces = Traces {
+        t: ctx.t.clone(),
+        channels: ctx.red.channels.clone(),
+        rows: ctx.row_names.clone(),
+        truth,
+        before: base_run,
+        after: cur_run,
+    };
     Ok(LoopReport {
         system: "rotor".to_string(),
         effects_added,
@@ -499,28 +662,44 @@ pub fn close_loop(model: &RotorModel, data: &DataFile, options: &LoopOptions) ->
         unexplained,
         trials,
         stopped,
+        traces,
     })
 }
 
-fn unexplained(ctx: &Context<'_>, s: &RunSummary) -> Vec<String> {
+/// Component parameters the data cannot see: neither halving nor doubling one changes the
+/// final model's log-likelihood by more than its BIC cost.
+fn screen_parameters(ctx: &Context<'_>, effects: &[(Effect, f64)], run: &Run) -> Result<Vec<NotIdentifiable>> {
+    let base = run.log_likelihood();
     let mut out = Vec::new();
-    let m = s.channels.len().max(1) as f64;
-    for c in &s.channels {
-        if c.z.abs() >= ctx.options.bias_z {
-            out.push(format!("{}: innovation mean {:.3e} is {:.1} standard errors from zero", c.name, c.mean, c.z));
+    for p in Parameter::all(ctx.cfg) {
+        let e = Effect::Parameter(p);
+        if effects.iter().any(|(x, _)| *x == e) {
+            continue;
         }
-        if c.whiteness_p < ctx.options.alpha / m {
-            out.push(format!("{}: not white (Ljung–Box p = {:.2e})", c.name, c.whiteness_p));
+        let penalty = ctx.penalty(&e);
+        let mut worst: f64 = 0.0;
+        for factor in [0.5f64, 2.0] {
+            let mut trial = effects.to_vec();
+            trial.push((e, factor.ln()));
+            let (_, r) = ctx.run(&trial)?;
+            worst = worst.max((r.log_likelihood() - base).abs());
+            if worst > penalty {
+                break;
+            }
         }
-        for p in &c.peaks {
-            out.push(format!(
-                "{}: spectral peak at {:.2} Hz ({:.1} dB, {})",
-                c.name, p.frequency_hz, p.prominence_db, p.class
-            ));
+        ctx.progress(|| format!("screen: {} of {}: |Δ log-likelihood| ≤ {worst:.2}", p.name(), p.component(ctx.cfg)));
+        if worst <= penalty {
+            out.push(NotIdentifiable {
+                kind: "parameter".into(),
+                location: p.component(ctx.cfg),
+                parameter: Some(p.name().into()),
+                statistic: "max_delta_log_likelihood".into(),
+                value: worst,
+                reason: format!(
+                    "halving or doubling it changes the log-likelihood by at most {worst:.2}, less than its BIC cost {penalty:.1}: these sensors cannot see it"
+                ),
+            });
         }
     }
-    if !s.nis_consistent {
-        out.push(format!("NIS mean {:.3} per channel outside its χ² bounds", s.nis_mean));
-    }
-    out
+    Ok(out)
 }

@@ -32,6 +32,7 @@
 //! ```
 
 use super::RotorError;
+use super::bearing_geometry::BearingGeometry;
 use serde::Deserialize;
 use std::fmt;
 use std::path::Path;
@@ -277,6 +278,10 @@ pub struct BearingConfig {
     /// Cross damping, N·s/m; default 0.
     #[serde(default)]
     pub cyx: f64,
+    /// Rolling-element geometry, if the bearing is one (used to name defect lines in the
+    /// residual loop); default none.
+    #[serde(default)]
+    pub geometry: Option<BearingGeometry>,
 }
 
 /// An unbalance `U = m e` at a node: `F_x = U Ω² cos(Ωt + φ)`, `F_y = U Ω² sin(Ωt + φ)`.
@@ -618,6 +623,9 @@ impl RotorConfig {
             non_negative(format!("{at}.kyy"), b.kyy)?;
             non_negative(format!("{at}.cxx"), b.cxx)?;
             non_negative(format!("{at}.cyy"), b.cyy)?;
+            if let Some(g) = &b.geometry {
+                g.validate().map_err(|e| format!("{at}.geometry: {e}"))?;
+            }
         }
         for (i, u) in self.unbalances.iter().enumerate() {
             let at = At("unbalance", i);

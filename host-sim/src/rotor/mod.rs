@@ -49,6 +49,7 @@
 //! ```
 
 pub mod assembly;
+pub mod bearing_geometry;
 pub mod cli;
 pub mod config;
 pub mod element;

@@ -1,0 +1,332 @@
+//! Signatures of a run's innovations: bias (mean against its standard error), NIS against its
+//! χ² bounds, whiteness (Ljung–Box), spectral lines placed at running-speed orders, natural
+//! frequencies or bearing lines, and a step in a channel's innovation power (a change during the
+//! run). The statistics come from `edgekf::residual`, the same code the node runs.
+
+use super::filter::Run;
+use crate::rotor::bearing_geometry::BearingLine;
+use edgekf::residual::{locate_peak, NisBounds, PeakClass, PeakTolerance, RunningStats, Welch, WhitenessWindow};
+use serde::Serialize;
+use std::collections::BTreeMap;
+
+/// Welch segment length of the innovation spectra.
+pub const SEGMENT: usize = 1024;
+
+/// What counts as a signature.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SignatureOptions {
+    /// Samples before this time (s after the first) are left out of the statistics.
+    pub settle: f64,
+    /// Virtual-sensing errors are computed from this time on (s after the first sample; 0: the
+    /// whole run).
+    pub error_after: f64,
+    /// A channel's innovation mean this many standard errors from zero is a bias.
+    pub bias_z: f64,
+    /// False-alarm probability of the whiteness and NIS tests.
+    pub alpha: f64,
+    /// Spectral lines of the normalised innovations at least this far above the median, dB.
+    pub peak_db: f32,
+}
+
+impl Default for SignatureOptions {
+    fn default() -> Self {
+        Self { settle: 0.5, error_after: 0.0, bias_z: 5.0, alpha: 0.01, peak_db: 10.0 }
+    }
+}
+
+/// A spectral line of one channel's normalised innovation.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PeakSignature {
+    /// Frequency, Hz.
+    pub frequency_hz: f64,
+    /// Above the median level, dB.
+    pub prominence_db: f64,
+    /// Where it sits (`2x`, `natural 0`, `2x at natural 1`, `BPFO at bearing 4`,
+    /// `unexplained`).
+    pub class: String,
+    /// The integer order of the running speed it sits at, if any.
+    pub order: Option<u32>,
+    /// The bearing line it sits at (bearing index, line), if any.
+    #[serde(skip)]
+    pub line: Option<(usize, BearingLine)>,
+}
+
+/// Innovation statistics of one channel.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ChannelSignature {
+    /// Channel.
+    pub name: String,
+    /// Mean innovation.
+    pub mean: f64,
+    /// Its standard error.
+    pub standard_error: f64,
+    /// `mean / standard_error`.
+    pub z: f64,
+    /// RMS innovation.
+    pub rms: f64,
+    /// Mean of `e² / S_ii` (1 when consistent).
+    pub nis: f64,
+    /// The same over the first and the second half of the analysed samples.
+    pub nis_halves: [f64; 2],
+    /// Where a step in `e² / S_ii` is most likely (CUSUM), s from the first sample, and the
+    /// ratio of its mean after to before.
+    pub step: Option<(f64, f64)>,
+    /// Ljung–Box p-value (20 lags over the last 2048 samples).
+    pub whiteness_p: f64,
+    /// Spectral lines.
+    pub peaks: Vec<PeakSignature>,
+}
+
+/// A run's summary as reported.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RunSummary {
+    /// RMS innovation per channel.
+    pub innovation_rms: BTreeMap<String, f64>,
+    /// Mean NIS divided by the number of channels (1.0 when consistent).
+    pub nis_mean: f64,
+    /// Whether the mean NIS lies within its χ² bounds at `alpha`.
+    pub nis_consistent: bool,
+    /// Smallest Ljung–Box p-value over the channels.
+    pub whiteness_p: f64,
+    /// Unbiased, white (Bonferroni over the channels) and NIS-consistent.
+    pub consistent: bool,
+    /// RMS error of the virtual-sensing rows against `truth_` columns, m.
+    pub error_rms: BTreeMap<String, f64>,
+    /// `−½ Σ (ln det S + NIS)` over the run.
+    pub log_likelihood: f64,
+    /// Per-channel signatures.
+    pub channels: Vec<ChannelSignature>,
+    /// Bin width of the spectra, Hz.
+    pub bin_width_hz: f64,
+    /// Welch PSD of each channel's normalised innovation (1/Hz), for the plots.
+    #[serde(skip)]
+    pub spectra: Vec<Vec<f32>>,
+}
+
+/// A residual signature left over: a channel (or location), the frequency if it is a line,
+/// and the statistic that flags it.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Signature {
+    /// Channel (or the location a rejected effect would act at).
+    pub channel: String,
+    /// Frequency of a line, Hz.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub frequency_hz: Option<f64>,
+    /// `innovation_mean_z`, `ljung_box_p`, `peak_db`, `nis_step`, `nis_mean`, `delta_log_likelihood_halves`.
+    pub statistic: String,
+    /// Its value.
+    pub value: f64,
+    /// In words.
+    pub description: String,
+}
+
+/// Summarises `run`: per-channel signatures over the samples after `settle`, the NIS, and the
+/// virtual-sensing error of `rows` against `truth` (where given).
+#[allow(clippy::too_many_arguments)]
+pub fn summarise(
+    run: &Run,
+    t: &[f64],
+    channels: &[String],
+    rows: &[String],
+    truth: &[Option<&[f64]>],
+    speed: f64,
+    naturals: &[f64],
+    lines: &[(usize, BearingLine, f64)],
+    sample_rate: f64,
+    o: &SignatureOptions,
+) -> RunSummary {
+    let t0 = t.first().copied().unwrap_or(0.0);
+    let keep: Vec<usize> = (0..t.len()).filter(|&k| t[k] - t0 >= o.settle).collect();
+    let mut out = Vec::new();
+    let mut spectra = Vec::new();
+    let mut bin_width_hz = sample_rate / SEGMENT as f64;
+    for (i, name) in channels.iter().enumerate() {
+        let mut stats = RunningStats::<f64>::new();
+        let mut nis = RunningStats::<f64>::new();
+        let mut white = WhitenessWindow::<f64, 2048>::new();
+        let mut welch = Welch::<SEGMENT>::new(sample_rate as f32);
+        let mut z2 = Vec::with_capacity(keep.len());
+        for &k in &keep {
+            let e = run.innovation[i][k];
+            let s = run.variance[i][k];
+            if !(e.is_finite() && s.is_finite()) {
+                continue;
+            }
+            stats.push(e);
+            nis.push(e * e / s);
+            z2.push((t[k] - t0, e * e / s));
+            let z = e / s.sqrt();
+            white.push(z);
+            if let Some(w) = welch.as_mut() {
+                w.push(z);
+            }
+        }
+        let lb = white.ljung_box(20);
+        let mut peaks = Vec::new();
+        match welch.as_ref().filter(|w| w.blocks() > 0) {
+            Some(w) => {
+                bin_width_hz = w.bin_width_hz() as f64;
+                spectra.push(w.psd().to_vec());
+                let tol = PeakTolerance::new(1.2 * bin_width_hz);
+                for p in w.peaks::<8>(o.peak_db).iter() {
+                    let f = p.frequency_hz as f64;
+                    let line = lines
+                        .iter()
+                        .find(|(_, _, order)| (f - order * speed / std::f64::consts::TAU).abs() <= tol.abs_hz);
+                    let (class, order) = if let Some((b, l, _)) = line {
+                        (format!("{} at bearing #{b}", l.name()), None)
+                    } else {
+                        match locate_peak(f, speed, naturals, &tol).class {
+                            PeakClass::Order(o) => {
+                                (format!("{}/{}x", o.numerator, o.denominator), o.is_integer().then_some(o.numerator))
+                            }
+                            PeakClass::OrderAtNatural { order: o, natural } => (
+                                format!("{}/{}x at natural {natural}", o.numerator, o.denominator),
+                                o.is_integer().then_some(o.numerator),
+                            ),
+                            PeakClass::Natural(n) => (format!("natural {n}"), None),
+                            PeakClass::Unexplained => ("unexplained".to_string(), None),
+                        }
+                    };
+                    peaks.push(PeakSignature {
+                        frequency_hz: f,
+                        prominence_db: p.prominence_db as f64,
+                        class: class.replace("/1x", "x"),
+                        order,
+                        line: line.map(|(b, l, _)| (*b, *l)),
+                    });
+                }
+            }
+            None => spectra.push(Vec::new()),
+        }
+        let se = stats.standard_error();
+        let half = z2.len() / 2;
+        let mean = |s: &[(f64, f64)]| s.iter().map(|v| v.1).sum::<f64>() / s.len().max(1) as f64;
+        out.push(ChannelSignature {
+            name: name.clone(),
+            mean: stats.mean(),
+            standard_error: se,
+            z: stats.mean() / se,
+            rms: stats.rms(),
+            nis: nis.mean(),
+            nis_halves: [mean(&z2[..half]), mean(&z2[half..])],
+            step: step(&z2),
+            whiteness_p: lb.p_value,
+            peaks,
+        });
+    }
+    let mut nis_total = RunningStats::<f64>::new();
+    for &k in &keep {
+        nis_total.push(run.nis[k]);
+    }
+    let m = channels.len().max(1);
+    let bounds = NisBounds::new(m, nis_total.count().max(1) as usize, o.alpha);
+    let mut error_rms = BTreeMap::new();
+    for (j, name) in rows.iter().enumerate() {
+        if let Some(Some(truth)) = truth.get(j) {
+            let (mut s, mut n) = (0.0, 0usize);
+            for ((tk, est), tr) in t.iter().zip(&run.outputs[j]).zip(truth.iter()) {
+                if tk - t0 >= o.error_after && tr.is_finite() && est.is_finite() {
+                    s += (est - tr).powi(2);
+                    n += 1;
+                }
+            }
+            if n > 0 {
+                error_rms.insert(name.clone(), (s / n as f64).sqrt());
+            }
+        }
+    }
+    let nis_consistent = bounds.contains(nis_total.mean());
+    let whiteness_p = out.iter().map(|c| c.whiteness_p).fold(1.0, f64::min);
+    let consistent =
+        nis_consistent && whiteness_p >= o.alpha / m as f64 && out.iter().all(|c| c.z.abs() < o.bias_z);
+    RunSummary {
+        innovation_rms: out.iter().map(|c| (c.name.clone(), c.rms)).collect(),
+        nis_mean: nis_total.mean() / m as f64,
+        nis_consistent,
+        whiteness_p,
+        consistent,
+        error_rms,
+        log_likelihood: run.log_likelihood(),
+        channels: out,
+        bin_width_hz,
+        spectra,
+    }
+}
+
+/// The most likely step in the mean of `z²` (CUSUM of `z² − mean`): its time and the ratio of
+/// the mean after to the mean before.
+fn step(z2: &[(f64, f64)]) -> Option<(f64, f64)> {
+    if z2.len() < 20 {
+        return None;
+    }
+    let mean = z2.iter().map(|v| v.1).sum::<f64>() / z2.len() as f64;
+    let (mut s, mut best, mut at) = (0.0f64, 0.0f64, 0usize);
+    for (k, v) in z2.iter().enumerate() {
+        s += v.1 - mean;
+        if s.abs() > best.abs() {
+            (best, at) = (s, k + 1);
+        }
+    }
+    if at < 5 || at + 5 > z2.len() {
+        return None;
+    }
+    let m = |s: &[(f64, f64)]| s.iter().map(|v| v.1).sum::<f64>() / s.len() as f64;
+    Some((z2[at].0, m(&z2[at..]) / m(&z2[..at])))
+}
+
+/// The signatures of a summary that are not consistent with a correct model.
+pub fn unexplained(s: &RunSummary, o: &SignatureOptions) -> Vec<Signature> {
+    let mut out = Vec::new();
+    let m = s.channels.len().max(1) as f64;
+    for c in &s.channels {
+        if c.z.abs() >= o.bias_z {
+            out.push(Signature {
+                channel: c.name.clone(),
+                frequency_hz: None,
+                statistic: "innovation_mean_z".into(),
+                value: c.z,
+                description: format!("innovation mean {:.3e} is {:.1} standard errors from zero", c.mean, c.z),
+            });
+        }
+        if c.whiteness_p < o.alpha / m {
+            out.push(Signature {
+                channel: c.name.clone(),
+                frequency_hz: None,
+                statistic: "ljung_box_p".into(),
+                value: c.whiteness_p,
+                description: format!("not white (Ljung–Box p = {:.2e})", c.whiteness_p),
+            });
+        }
+        if let Some((at, ratio)) = c.step.filter(|(_, r)| !(0.5..=2.0).contains(r)) {
+            out.push(Signature {
+                channel: c.name.clone(),
+                frequency_hz: None,
+                statistic: "nis_step".into(),
+                value: ratio,
+                description: format!(
+                    "the normalised innovation power steps by ×{ratio:.2} at t ≈ {at:.2} s: something changed during the run"
+                ),
+            });
+        }
+        for p in &c.peaks {
+            out.push(Signature {
+                channel: c.name.clone(),
+                frequency_hz: Some(p.frequency_hz),
+                statistic: "peak_db".into(),
+                value: p.prominence_db,
+                description: format!("spectral line at {:.2} Hz, {:.1} dB ({})", p.frequency_hz, p.prominence_db, p.class),
+            });
+        }
+    }
+    if !s.nis_consistent {
+        out.push(Signature {
+            channel: "all".into(),
+            frequency_hz: None,
+            statistic: "nis_mean".into(),
+            value: s.nis_mean,
+            description: format!("NIS mean {:.3} per channel outside its χ² bounds", s.nis_mean),
+        });
+    }
+    out
+}
