@@ -42,6 +42,10 @@ enum Command {
         /// Use this scenario instead of the built-in demo.
         #[arg(long, value_name = "TOML")]
         config: Option<PathBuf>,
+        /// Skip the second part, the residual loop on the paper rotor with an undeclared
+        /// effect (about half a minute).
+        #[arg(long)]
+        skip_loop: bool,
     },
     /// Single mode driven by a harmonic force: simulate data, estimate the force.
     #[command(subcommand)]
@@ -141,12 +145,28 @@ fn run(command: Command) -> anyhow::Result<()> {
         Command::Crank(c) => edgekf_sim::crank::cli::run(c),
         Command::Rotor(c) => edgekf_sim::rotor::cli::run(c),
         Command::Loop(c) => edgekf_sim::residual_loop::cli::run(c),
-        Command::Demo { out, config } => {
+        Command::Demo { out, config, skip_loop } => {
             let demo = Demo::run(&scenario(config.as_deref())?)?;
             println!("edgekf demo — {}", demo.summary());
-            if let Some(dir) = out {
-                demo.write(&dir)?;
+            if let Some(dir) = &out {
+                demo.write(dir)?;
                 println!("wrote {0}/data.csv, {0}/est.csv and {0}/est_f32.csv", dir.display());
+            }
+            if skip_loop {
+                return Ok(());
+            }
+            use edgekf_sim::residual_loop::{cli, demo::LoopDemo};
+            println!("\nclosing the loop — {}", LoopDemo::describe());
+            let demo = LoopDemo::run(true)?;
+            print!("{}", cli::summary_table(&demo.report));
+            if let Some(dir) = out {
+                let dir = dir.join("loop");
+                cli::write_report(&demo.report, &dir)?;
+                let d = &demo.data;
+                let names: Vec<&str> = d.names.iter().map(String::as_str).collect();
+                let cols: Vec<&[f64]> = d.columns.iter().map(Vec::as_slice).collect();
+                data::write(&dir.join("data.csv"), &names, &d.t, &cols)?;
+                println!("wrote {0}/data.csv and the report in {0}", dir.display());
             }
             Ok(())
         }

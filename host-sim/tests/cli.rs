@@ -55,6 +55,19 @@ fn demo_prints_the_summary_and_writes_files() {
     assert!(est.starts_with("t,force_amplitude,force_cos,force_sin,displacement,velocity,innovation,nis\n"));
     assert_eq!(est.lines().count(), 12_001);
     assert!(dir.join("est_f32.csv").exists());
+
+    // The second part: the residual loop finds the disk the demo made 10 % heavier without
+    // saying so, and the error drops from tens of µm to under one.
+    assert!(stdout.contains("closing the loop"), "{stdout}");
+    assert!(stdout.contains("+ parameter at disk 12 mass: ×1.1"), "{stdout}");
+    let err = row(&stdout, "  error RMS n12_y µm");
+    let (before, after): (f64, f64) = (err[0].parse().unwrap(), err[1].parse().unwrap());
+    assert!(before > 10.0 && after < 1.0, "{before} → {after}");
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("loop/report.json")).unwrap()).unwrap();
+    let factor = report["effects_added"][0]["value"].as_f64().unwrap();
+    assert!((factor - 1.10).abs() < 0.02, "{factor}");
+    assert!(dir.join("loop/data.csv").exists());
 }
 
 #[test]

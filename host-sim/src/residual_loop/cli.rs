@@ -11,8 +11,10 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, Subcommand)]
 pub enum LoopCommand {
     /// Rotor: run the virtual-sensing filter on a data file, read its innovations, add the
-    /// effects (sensor bias, harmonic force at k× running speed) that the data asks for and
-    /// that pay for their parameters (BIC), and report before/after.
+    /// effects the data asks for (sensor bias, scale or delay; a force at k× the running speed;
+    /// a wrong disk, shaft or bearing parameter; an extra mode; a bearing defect line; an unknown
+    /// input) and that pay for their parameters (BIC) in both halves of the run, and report
+    /// before/after (report.json, report.html).
     Rotor {
         /// Rotor configuration (model, sensors, unbalance nodes, speed, sample rate).
         #[arg(long, value_name = "TOML")]
@@ -26,17 +28,22 @@ pub enum LoopCommand {
         /// At most this many effects.
         #[arg(long, value_name = "N", default_value_t = 4)]
         max_effects: usize,
+        /// Do not print each candidate as it is tried.
+        #[arg(long)]
+        quiet: bool,
     },
 }
 
 /// Runs a `loop` command.
 pub fn run(command: LoopCommand) -> Result<()> {
     match command {
-        LoopCommand::Rotor { config, data, report, max_effects } => rotor(&config, &data, &report, max_effects),
+        LoopCommand::Rotor { config, data, report, max_effects, quiet } => {
+            rotor(&config, &data, &report, max_effects, quiet)
+        }
     }
 }
 
-fn rotor(config: &Path, data_path: &Path, dir: &Path, max_effects: usize) -> Result<()> {
+fn rotor(config: &Path, data_path: &Path, dir: &Path, max_effects: usize, quiet: bool) -> Result<()> {
     let cfg = RotorConfig::load(config).with_context(|| format!("{}: cannot load the rotor", config.display()))?;
     let model = RotorModel::from_config(&cfg)?;
     let channels: Vec<String> = cfg.sensors.iter().map(|s| s.channel_name()).collect();
@@ -51,13 +58,19 @@ fn rotor(config: &Path, data_path: &Path, dir: &Path, max_effects: usize) -> Res
             notes.timing.sample_rate
         );
     }
-    let report = close_loop(&model, &file, &LoopOptions { max_effects, ..LoopOptions::default() })?;
+    let options = LoopOptions { max_effects, progress: !quiet, ..LoopOptions::default() };
+    let report = close_loop(&model, &file, &options)?;
+    print!("{}", summary_table(&report));
+    write_report(&report, dir)?;
+    println!("wrote {0}/report.json and {0}/report.html", dir.display());
+    Ok(())
+}
+
+/// Writes `dir/report.json` and `dir/report.html`, creating `dir` if needed.
+pub fn write_report(report: &LoopReport, dir: &Path) -> Result<()> {
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     let path = dir.join("report.json");
-    std::fs::write(&path, serde_json::to_string_pretty(&report)?)
-        .with_context(|| format!("writing {}", path.display()))?;
-    print!("{}", summary_table(&report));
-    println!("wrote {}", path.display());
+    std::fs::write(&path, serde_json::to_string_pretty(report)?).with_context(|| format!("writing {}", path.display()))?;
     Ok(())
 }
 
@@ -69,8 +82,14 @@ pub fn summary_table(r: &LoopReport) -> String {
         let order = e.order.map(|o| format!(" at {o}x")).unwrap_or_default();
         let what = e.parameter.as_ref().or(e.line.as_ref()).map(|p| format!(" {p}")).unwrap_or_default();
         s.push_str(&format!(
-            "  + {}{} at {}{}: {:.4e} {} (Δ log-likelihood {:.1}, BIC cost {:.1})\n",
-            e.kind, order, e.location, what, e.value, e.unit, e.delta_log_likelihood, e.bic_penalty
+            "  + {}{} at {}{}: {} (Δ log-likelihood {:.1}, BIC cost {:.1})\n",
+            e.kind,
+            order,
+            e.location,
+            what,
+            show_value(e.value, &e.unit),
+            e.delta_log_likelihood,
+            e.bic_penalty
         ));
     }
     let row = |name: &str, f: &dyn Fn(&RunSummary) -> String| {
@@ -96,4 +115,15 @@ pub fn summary_table(r: &LoopReport) -> String {
         s.push_str(&format!("  unexplained: {}: {}\n", u.channel, u.description));
     }
     s
+}
+
+/// A value with its unit as people read it: factors as `×1.0500 (+5.00 %)`, metres in µm,
+/// seconds in ms.
+pub fn show_value(v: f64, unit: &str) -> String {
+    match unit {
+        "1" => format!("×{v:.4} ({:+.2} %)", (v - 1.0) * 100.0),
+        "m" => format!("{:.3} µm", v * 1e6),
+        "s" => format!("{:.3} ms", v * 1e3),
+        _ => format!("{v:.4} {unit}"),
+    }
 }

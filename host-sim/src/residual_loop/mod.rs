@@ -15,10 +15,12 @@
 //! * [`optimize`]: the one-dimensional maximum-likelihood fit of an effect's scalar.
 //! * [`search`]: candidates, the loop and its report.
 //! * [`inject`]: undeclared effects added to simulated data (for tests and demonstrations).
-//! * [`cli`]: `edgekf loop rotor`.
+//! * [`cli`]: `edgekf loop rotor`; [`demo`]: the loop's part of `edgekf demo`.
 
 pub mod cli;
+pub mod demo;
 pub mod filter;
+pub mod html;
 pub mod inject;
 pub mod model;
 pub mod optimize;
