@@ -14,9 +14,11 @@
 //! * [`signature`]: the innovations' statistics and what is left unexplained.
 //! * [`optimize`]: the one-dimensional maximum-likelihood fit of an effect's scalar.
 //! * [`search`]: candidates, the loop and its report.
-//! * [`inject`]: undeclared effects added to simulated data (for tests and demonstrations).
+//! * [`inject`]: undeclared effects added to simulated data; [`cases`]: the ones the tests and
+//!   the README use.
 //! * [`cli`]: `edgekf loop rotor`; [`demo`]: the loop's part of `edgekf demo`.
 
+pub mod cases;
 pub mod cli;
 pub mod demo;
 pub mod filter;
