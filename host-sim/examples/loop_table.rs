@@ -36,7 +36,11 @@ fn main() -> anyhow::Result<()> {
         let s = seed(case);
         eprintln!("{} (seed {s})…", case.describe());
         let r = close_loop(&model, &case.data(s)?, &LoopOptions::default())?;
-        let clean = close_loop(&model, &Case::Clean.data(s)?, &LoopOptions { screen_parameters: false, ..LoopOptions::default() })?;
+        let clean = close_loop(
+            &model,
+            &Case::Clean.data(s)?,
+            &LoopOptions { screen_parameters: false, ..LoopOptions::default() },
+        )?;
         let mut added: Vec<String> = r
             .effects_added
             .iter()
@@ -50,12 +54,22 @@ fn main() -> anyhow::Result<()> {
             added.push("nothing".into());
         }
         if case == Case::SoftBearing {
-            let n = r.not_identifiable.iter().filter(|n| n.location == "bearing 4" && n.parameter.as_deref() == Some("kxx")).count();
+            let n = r
+                .not_identifiable
+                .iter()
+                .filter(|n| n.location == "bearing 4" && n.parameter.as_deref() == Some("kxx"))
+                .count();
             added.push(format!("(bearing 4 kxx listed as not identifiable: {})", if n > 0 { "yes" } else { "no" }));
         }
         if case == Case::GainSwitch {
-            added.push(format!("({} unexplained signatures, e.g. {})", r.unexplained.len(),
-                r.unexplained.iter().find(|u| u.statistic == "nis_step").map_or("-".into(), |u| format!("{}: {}", u.channel, u.description))));
+            added.push(format!(
+                "({} unexplained signatures, e.g. {})",
+                r.unexplained.len(),
+                r.unexplained
+                    .iter()
+                    .find(|u| u.statistic == "nis_step")
+                    .map_or("-".into(), |u| format!("{}: {}", u.channel, u.description))
+            ));
         }
         println!(
             "| {} | {} | {:.3} → {:.3} | {:.2} → {:.2} ({:.2}) |",

@@ -125,8 +125,7 @@ fn two_effects_at_once() {
 fn a_softer_bearing_is_not_identifiable() {
     let r = run_with(Case::SoftBearing, 29, &LoopOptions::default());
     assert!(r.effects_added.is_empty(), "{:?}", r.effects_added);
-    let listed =
-        r.not_identifiable.iter().any(|n| n.location == "bearing 4" && n.parameter.as_deref() == Some("kxx"));
+    let listed = r.not_identifiable.iter().any(|n| n.location == "bearing 4" && n.parameter.as_deref() == Some("kxx"));
     assert!(listed, "{:?}", r.not_identifiable);
     // The disk masses and the shaft are visible, so they are not listed.
     let visible = ["mass", "young", "density"];

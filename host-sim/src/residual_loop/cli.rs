@@ -70,7 +70,8 @@ fn rotor(config: &Path, data_path: &Path, dir: &Path, max_effects: usize, quiet:
 pub fn write_report(report: &LoopReport, dir: &Path) -> Result<()> {
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     let path = dir.join("report.json");
-    std::fs::write(&path, serde_json::to_string_pretty(report)?).with_context(|| format!("writing {}", path.display()))?;
+    std::fs::write(&path, serde_json::to_string_pretty(report)?)
+        .with_context(|| format!("writing {}", path.display()))?;
     Ok(())
 }
 

@@ -69,7 +69,10 @@ impl Parameter {
         match self {
             Parameter::DiskMass(i) => format!("disk {}", node(cfg.disks.get(i).map(|d| d.node))),
             Parameter::ShaftYoung | Parameter::ShaftDensity => "shaft".to_string(),
-            Parameter::BearingKxx(i) | Parameter::BearingKyy(i) | Parameter::BearingCxx(i) | Parameter::BearingCyy(i) => {
+            Parameter::BearingKxx(i)
+            | Parameter::BearingKyy(i)
+            | Parameter::BearingCxx(i)
+            | Parameter::BearingCyy(i) => {
                 format!("bearing {}", node(cfg.bearings.get(i).map(|b| b.node)))
             }
         }
@@ -198,7 +201,9 @@ impl Effect {
             }
             Effect::HarmonicForce { .. } => "a line at an integer order of the running speed",
             Effect::UnknownInput { .. } => "non-white innovations with no line or bias to name",
-            Effect::Parameter(_) => "lines at the natural frequencies (the free response rings elsewhere) or a 1x residual",
+            Effect::Parameter(_) => {
+                "lines at the natural frequencies (the free response rings elsewhere) or a 1x residual"
+            }
             Effect::ExtraMode { .. } => "a line at neither an order nor a natural frequency of the model",
             Effect::BearingDefect { .. } => "a line at a bearing defect frequency (BPFO, BPFI, BSF, FTF)",
         }
@@ -250,9 +255,9 @@ impl Effect {
     pub fn location(&self, channels: &[String], cfg: &RotorConfig) -> String {
         let channel = |c: usize| channels.get(c).cloned().unwrap_or_else(|| format!("#{c}"));
         match *self {
-            Effect::SensorBias { channel: c } | Effect::SensorScale { channel: c } | Effect::SensorDelay { channel: c } => {
-                channel(c)
-            }
+            Effect::SensorBias { channel: c }
+            | Effect::SensorScale { channel: c }
+            | Effect::SensorDelay { channel: c } => channel(c),
             Effect::HarmonicForce { node, .. } | Effect::UnknownInput { node } => format!("node {node}"),
             Effect::Parameter(p) => p.component(cfg),
             Effect::ExtraMode { .. } => "all channels".to_string(),
@@ -396,9 +401,13 @@ fn add_force(
                 t.displacement[(2 * q + d, s)] = corr(dof(q, d), 2 * q + d, col);
             }
         }
+        // Probes read the displacement; accelerometer rows are extended in `augment` once
+        // every state is in place.
         for (i, sensor) in model.config().sensors.iter().enumerate() {
-            let d = sensor.direction.dof();
-            t.c[(i, s)] = corr(dof(sensor.node, d), 2 * sensor.node + d, col);
+            if matches!(sensor.kind, SensorKind::Displacement { .. }) {
+                let d = sensor.direction.dof();
+                t.c[(i, s)] = corr(dof(sensor.node, d), 2 * sensor.node + d, col);
+            }
         }
     }
     Ok(())
@@ -407,9 +416,9 @@ fn add_force(
 /// Builds `red` plus `effects`, each with its scalar (ignored by effects without one; a
 /// `Parameter` effect must already be applied to the configuration `red` was reduced from).
 ///
-/// `red`, `model` and `flex` describe the same configuration. Effects that add forces support
-/// displacement probes only: an accelerometer row would also need the new force in its
-/// low-pass input.
+/// `red`, `model` and `flex` describe the same configuration. A new force reaches a probe through
+/// the displacement rows and an accelerometer through its low-pass input (the acceleration of
+/// the measured DOF, modal part and static correction alike).
 pub fn augment(
     red: &ReducedRotor,
     model: &RotorModel,
@@ -432,12 +441,6 @@ pub fn augment(
     let mut p0 = grow(&red.p0, ns);
     let mut c = grow(&red.c, m);
     let mut displacement = grow(&red.displacement, red.displacement.nrows());
-    let probes_only = || {
-        if model.config().sensors.iter().any(|s| !matches!(s.kind, SensorKind::Displacement { .. })) {
-            bail!("force effects support displacement probes only (accelerometer rows are not built yet)");
-        }
-        Ok(())
-    };
     let channel_ok = |ch: usize| if ch < m { Ok(()) } else { Err(anyhow!("no channel #{ch}")) };
     let rotating = |a: &mut DMatrix<f64>, s: usize, w: f64| {
         a[(s, s + 1)] = -w;
@@ -456,7 +459,6 @@ pub fn augment(
             }
             Effect::SensorScale { channel } | Effect::SensorDelay { channel } => channel_ok(channel)?,
             Effect::HarmonicForce { node, order } => {
-                probes_only()?;
                 rotating(&mut a, s, order as f64 * red.speed);
                 let t = Target { a: &mut a, c: &mut c, displacement: &mut displacement };
                 add_force(t, red, model, flex, node, [Some(s), Some(s + 1)])?;
@@ -466,7 +468,6 @@ pub fn augment(
                 }
             }
             Effect::UnknownInput { node } => {
-                probes_only()?;
                 let t = Target { a: &mut a, c: &mut c, displacement: &mut displacement };
                 add_force(t, red, model, flex, node, [Some(s), Some(s + 1)])?;
                 for d in 0..2 {
@@ -475,7 +476,6 @@ pub fn augment(
                 }
             }
             Effect::BearingDefect { bearing, order_milli, .. } => {
-                probes_only()?;
                 let node = model
                     .config()
                     .bearings
@@ -514,6 +514,18 @@ pub fn augment(
         }
         placed.push((e, theta, s));
         next += e.states(m);
+    }
+    // Accelerometers: the new states' share of each measured DOF's acceleration (the
+    // displacement row twice through the dynamics) enters the low-pass input (or the output).
+    let accel: Vec<(usize, Option<usize>, f64, DMatrix<f64>)> =
+        red.accel_inputs.iter().map(|i| (i.channel, i.state, i.gain, displacement.rows(i.row, 1) * &a * &a)).collect();
+    for (channel, state, gain, row) in accel {
+        for j in n0..ns {
+            match state {
+                Some(y) => a[(y, j)] += gain * row[(0, j)],
+                None => c[(channel, j)] += gain * row[(0, j)],
+            }
+        }
     }
     // Output-side effects last, over the complete dynamics.
     for &(e, theta) in effects {
@@ -601,11 +613,52 @@ mod tests {
         assert!((0..r).any(|i| m.a[(r + i, b)] != 0.0));
     }
 
+    /// On the accelerometer rotor, a 1× force added as an effect at disk node 12 must enter the
+    /// model exactly as the reduction's own unbalance phasor there does: same modal input,
+    /// displacement rows, low-pass inputs and sensor rows.
+    #[test]
+    fn a_force_effect_reaches_accelerometers_like_the_unbalance_does() {
+        let cfg = RotorConfig::from_toml_str(include_str!("../../configs/rotor_paper_accel.toml")).unwrap();
+        let model = RotorModel::from_config(&cfg).unwrap();
+        let speed = cfg.operation.speed;
+        let red = reduce(&model, speed, &Tuning::default()).unwrap();
+        assert_eq!(red.accel_inputs.len(), 4);
+        let flex = Flexibility::new(&model, speed);
+        let e = [(Effect::HarmonicForce { node: 12, order: 1 }, 0.0)];
+        let m = augment(&red, &model, &flex, &e, &EffectTuning::default()).unwrap();
+        let r = red.frequencies_hz.len();
+        let j = cfg.unbalances.iter().position(|u| u.node == 12).unwrap();
+        let (base, new) = (2 * r + 2 * j, red.states());
+        let close = |x: f64, y: f64| (x - y).abs() <= 1e-9 * x.abs().max(y.abs()).max(1e-300);
+        for k in 0..2 {
+            // Every row but the force states' own (their rotation is in their own rows).
+            for i in (0..2 * r).chain(red.lowpass_start..red.states()) {
+                assert!(
+                    close(m.a[(i, base + k)], m.a[(i, new + k)]),
+                    "A[{i}, {k}]: {} vs {}",
+                    m.a[(i, base + k)],
+                    m.a[(i, new + k)]
+                );
+            }
+            for i in 0..m.displacement.nrows() {
+                assert!(close(m.displacement[(i, base + k)], m.displacement[(i, new + k)]), "displacement row {i}");
+            }
+            for i in 0..4 {
+                assert!(close(m.c[(i, base + k)], m.c[(i, new + k)]), "C[{i}]");
+            }
+        }
+        // And it does reach the low-pass states.
+        assert!((red.lowpass_start..red.states()).any(|y| m.a[(y, new)] != 0.0));
+    }
+
     #[test]
     fn a_parameter_factor_changes_the_configuration() {
         let model = paper();
         let cfg = model.config();
-        let e = [(Effect::Parameter(Parameter::DiskMass(0)), 1.1f64.ln()), (Effect::Parameter(Parameter::BearingKxx(1)), 0.5f64.ln())];
+        let e = [
+            (Effect::Parameter(Parameter::DiskMass(0)), 1.1f64.ln()),
+            (Effect::Parameter(Parameter::BearingKxx(1)), 0.5f64.ln()),
+        ];
         let out = apply_parameters(cfg, &e).unwrap();
         assert!((out.disks[0].mass / cfg.disks[0].mass - 1.1).abs() < 1e-12);
         assert!((out.bearings[1].kxx / cfg.bearings[1].kxx - 0.5).abs() < 1e-12);

@@ -518,7 +518,12 @@ pub fn close_loop(model: &RotorModel, data: &DataFile, options: &LoopOptions) ->
             let mut results = Vec::new();
             for (i, cand) in cands.into_iter().enumerate() {
                 ctx.progress(|| {
-                    format!("iteration {iteration}: candidate {}/{total}: {} at {}", i + 1, cand.kind(), ctx.location(&cand))
+                    format!(
+                        "iteration {iteration}: candidate {}/{total}: {} at {}",
+                        i + 1,
+                        cand.kind(),
+                        ctx.location(&cand)
+                    )
                 });
                 match ctx.fit(&effects, cand, &cur_run) {
                     Ok(f) => results.push(f),

@@ -238,8 +238,7 @@ pub fn summarise(
     }
     let nis_consistent = bounds.contains(nis_total.mean());
     let whiteness_p = out.iter().map(|c| c.whiteness_p).fold(1.0, f64::min);
-    let consistent =
-        nis_consistent && whiteness_p >= o.alpha / m as f64 && out.iter().all(|c| c.z.abs() < o.bias_z);
+    let consistent = nis_consistent && whiteness_p >= o.alpha / m as f64 && out.iter().all(|c| c.z.abs() < o.bias_z);
     RunSummary {
         innovation_rms: out.iter().map(|c| (c.name.clone(), c.rms)).collect(),
         nis_mean: nis_total.mean() / m as f64,
@@ -315,7 +314,10 @@ pub fn unexplained(s: &RunSummary, o: &SignatureOptions) -> Vec<Signature> {
                 frequency_hz: Some(p.frequency_hz),
                 statistic: "peak_db".into(),
                 value: p.prominence_db,
-                description: format!("spectral line at {:.2} Hz, {:.1} dB ({})", p.frequency_hz, p.prominence_db, p.class),
+                description: format!(
+                    "spectral line at {:.2} Hz, {:.1} dB ({})",
+                    p.frequency_hz, p.prominence_db, p.class
+                ),
             });
         }
     }

@@ -104,8 +104,18 @@ mod tests {
     /// lists 4.7135 = 2·BSF), FTF 0.39828.
     #[test]
     fn skf_6205_lines() {
-        let g = BearingGeometry { balls: 9, ball_diameter: 0.3126 * 25.4e-3, pitch_diameter: 1.537 * 25.4e-3, contact_angle_deg: 0.0 };
-        let expect = [(BearingLine::Bpfo, 3.5848), (BearingLine::Bpfi, 5.4152), (BearingLine::Bsf, 2.3568), (BearingLine::Ftf, 0.39828)];
+        let g = BearingGeometry {
+            balls: 9,
+            ball_diameter: 0.3126 * 25.4e-3,
+            pitch_diameter: 1.537 * 25.4e-3,
+            contact_angle_deg: 0.0,
+        };
+        let expect = [
+            (BearingLine::Bpfo, 3.5848),
+            (BearingLine::Bpfi, 5.4152),
+            (BearingLine::Bsf, 2.3568),
+            (BearingLine::Ftf, 0.39828),
+        ];
         for (line, order) in expect {
             assert!((g.order(line) - order).abs() < 2e-4, "{}: {} vs {order}", line.name(), g.order(line));
         }

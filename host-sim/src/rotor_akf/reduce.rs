@@ -66,6 +66,21 @@ impl Tuning {
     }
 }
 
+/// Where an accelerometer's acceleration enters the reduced model (see
+/// [`ReducedRotor::accel_inputs`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AccelInput {
+    /// Sensor channel.
+    pub channel: usize,
+    /// Row of [`ReducedRotor::displacement`] of the measured DOF.
+    pub row: usize,
+    /// The low-pass state whose derivative reads the acceleration (`None`: the channel's output
+    /// row is the acceleration itself, times `gain`).
+    pub state: Option<usize>,
+    /// Factor on the acceleration (`ω_c` or `ω_c²` of the first section, or the sensitivity).
+    pub gain: f64,
+}
+
 /// The reduced model: state `x = [η (r), η̇ (r), forces (2u)]`, `ẋ = A x + w`, measured
 /// `y = C x + v`, and the virtual outputs.
 #[derive(Debug, Clone)]
@@ -95,6 +110,11 @@ pub struct ReducedRotor {
     pub offsets: Vec<f64>,
     /// Index of the first sensor low-pass state (`= states()` when there is none).
     pub lowpass_start: usize,
+    /// Where each accelerometer's acceleration enters the model: `(channel, displacement row,
+    /// state, gain)`. The state's derivative gets `gain × (displacement row · A · A)`: the
+    /// first low-pass section's input, or (without a low-pass) the channel's output row read
+    /// directly with `state = usize::MAX`. Effects that add forces extend these rows.
+    pub accel_inputs: Vec<AccelInput>,
     /// Speed, rad/s.
     pub speed: f64,
     /// Sample rate, Hz.
@@ -239,6 +259,7 @@ pub fn reduce(model: &RotorModel, speed: f64, tuning: &Tuning) -> Result<Reduced
     let mut r_diag = Vec::new();
     let mut channels = Vec::new();
     let mut offsets = Vec::new();
+    let mut accel_inputs = Vec::new();
     let mut next = lowpass_start;
     for (i, (s, secs)) in cfg.sensors.iter().zip(&sections).enumerate() {
         let d = dof(s.node, s.direction.dof());
@@ -260,6 +281,17 @@ pub fn reduce(model: &RotorModel, speed: f64, tuning: &Tuning) -> Result<Reduced
                 // Without a low-pass (or with `sensor_lowpass` off) the row is read directly; the
                 // modal noise would then be a feed-through correlated with Q, which is left out.
                 let mut input: DMatrix<f64> = accel;
+                let row = 2 * s.node + s.direction.dof();
+                let sens = acc.sensitivity.unwrap_or(1.0);
+                match secs.first() {
+                    Some(Section::First { wc }) => {
+                        accel_inputs.push(AccelInput { channel: i, row, state: Some(next), gain: *wc })
+                    }
+                    Some(Section::Second { wc, .. }) => {
+                        accel_inputs.push(AccelInput { channel: i, row, state: Some(next + 1), gain: wc * wc })
+                    }
+                    None => accel_inputs.push(AccelInput { channel: i, row, state: None, gain: sens }),
+                }
                 for (k, sec) in secs.iter().enumerate() {
                     let y = next;
                     // Only the first section sees the acceleration (and its noise) directly.
@@ -294,7 +326,6 @@ pub fn reduce(model: &RotorModel, speed: f64, tuning: &Tuning) -> Result<Reduced
                     input = DMatrix::<f64>::zeros(1, ns);
                     input[(0, y)] = 1.0;
                 }
-                let sens = acc.sensitivity.unwrap_or(1.0);
                 c.row_mut(i).copy_from(&(input * sens));
                 let sigma = acc.noise_std(sample_rate) * sens.abs();
                 r_diag.push((sigma * sigma).max(1e-18) * tuning.measurement_scale);
@@ -329,6 +360,7 @@ pub fn reduce(model: &RotorModel, speed: f64, tuning: &Tuning) -> Result<Reduced
         channels,
         offsets,
         lowpass_start,
+        accel_inputs,
         speed,
         sample_rate,
     })
