@@ -132,17 +132,33 @@ impl<T: Real, const N: usize, const M: usize> SteadyStateFilter<T, N, M> {
         innovation: &SMatrix<f64, M, M>,
         x0: SVector<T, N>,
     ) -> Result<Self, RiccatiError> {
-        let s_inv = solve(innovation, &SMatrix::<f64, M, M>::identity()).ok_or(RiccatiError::Singular)?;
         let cast = |v: f64| T::of_f64(v);
-        Ok(Self {
-            a: model.a.map(cast),
-            c: model.c.map(cast),
-            gain: gain.map(cast),
-            s_inv: s_inv.map(cast),
-            x: x0,
-            x0,
-            resets: 0,
-        })
+        Self::from_parts(&model.a.map(cast), &model.c.map(cast), &gain.map(cast), innovation, x0)
+    }
+
+    /// Builds the filter from `A`, `C` and `K` already in precision `T`, and `S` in `f64`
+    /// (inverted here, in `f64`, then rounded to `T`). Gives the same bits as
+    /// [`SteadyStateFilter::from_gain`] on `A`, `C`, `K` rounded with [`Real::of_f64`], without
+    /// an `f64` model: a 20-state `f64` `A` and `Q` are 6.4 KB of stack on a chip that only
+    /// needs the `f32` `A` (for example one built straight from exported constants).
+    ///
+    /// ```
+    /// use edgekf::filter::SteadyStateFilter;
+    /// use nalgebra::{Matrix1, Vector1};
+    /// let (a, c, k) = (Matrix1::new(1.0f32), Matrix1::new(1.0f32), Matrix1::new(0.5f32));
+    /// let mut f = SteadyStateFilter::from_parts(&a, &c, &k, &Matrix1::new(4.0), Vector1::zeros()).unwrap();
+    /// let (r, nis) = f.update(&Vector1::new(2.0)).unwrap();
+    /// assert_eq!((r[0], nis, f.state()[0]), (2.0, 1.0, 1.0)); // NIS = 2²/4
+    /// ```
+    pub fn from_parts(
+        a: &SMatrix<T, N, N>,
+        c: &SMatrix<T, M, N>,
+        gain: &SMatrix<T, N, M>,
+        innovation: &SMatrix<f64, M, M>,
+        x0: SVector<T, N>,
+    ) -> Result<Self, RiccatiError> {
+        let s_inv = solve(innovation, &SMatrix::<f64, M, M>::identity()).ok_or(RiccatiError::Singular)?;
+        Ok(Self { a: *a, c: *c, gain: *gain, s_inv: s_inv.map(T::of_f64), x: x0, x0, resets: 0 })
     }
 
     /// Time update `x = A x`.
