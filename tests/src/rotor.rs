@@ -8,8 +8,13 @@ use edgekf_sim::rotor::Recording;
 
 /// Runs the firmware's [`RotorEstimator`] over CSV text exactly as `edgekf-rotor-qemu` does.
 pub fn run_host(csv: &[u8]) -> Result<Vec<RotorReport>> {
+    run_host_with(csv, RotorEstimator::new())
+}
+
+/// Runs `est` over CSV text (for example [`RotorEstimator::with_switch_at`]`(None)`, the
+/// time-varying filter throughout, to compare the node's switch against).
+pub fn run_host_with(csv: &[u8], mut est: RotorEstimator) -> Result<Vec<RotorReport>> {
     let mut reader = ChannelReader::new(csv, CHANNELS).map_err(|e| anyhow!("header: {e:?}"))?;
-    let mut est = RotorEstimator::new();
     let mut out = Vec::new();
     while let Some(line) = reader.next_values() {
         out.push(est.step(line.ok()));
