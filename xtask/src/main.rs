@@ -2,7 +2,8 @@
 //!
 //! * `cargo xtask test [--long]` — everything: provisioning, host tests, firmware cross-builds
 //!   (QEMU and board images) with their footprint, then the hardware-in-the-loop tests in QEMU.
-//! * `cargo xtask fw [--board]` — cross-build an image and print its flash/RAM use.
+//! * `cargo xtask fw [--board | --rotor]` — cross-build an image (`edgekf-qemu`, `edgekf-board`
+//!   or `edgekf-rotor-qemu`) and print its flash/RAM use.
 //! * `cargo xtask run [--data FILE.csv]` — run the QEMU image on a data file (default: the demo
 //!   scenario) and print the decoded defmt log, the stack high-water mark included.
 //! * `cargo xtask bench` — per-step instruction counts of the filters on the Cortex-M4F under
@@ -30,7 +31,13 @@ fn run() -> Result<()> {
         Some("test") => test(flag("--long")),
         Some("fw") => {
             provision::ensure()?;
-            let image = if flag("--board") { firmware::Image::Board } else { firmware::Image::Qemu };
+            let image = if flag("--board") {
+                firmware::Image::Board
+            } else if flag("--rotor") {
+                firmware::Image::RotorQemu
+            } else {
+                firmware::Image::Qemu
+            };
             let elf = firmware::build(image)?;
             firmware::print_footprint(image, &elf)
         }
@@ -46,7 +53,7 @@ fn run() -> Result<()> {
             bench::run(&firmware::workspace_root()).map(|_| ())
         }
         _ => {
-            eprintln!("usage: cargo xtask <test [--long] | fw [--board] | run [--data FILE.csv] | bench | provision>");
+            eprintln!("usage: cargo xtask <test [--long] | fw [--board | --rotor] | run [--data FILE.csv] | bench | provision>");
             std::process::exit(2);
         }
     }

@@ -116,22 +116,49 @@ fn ukf<const N: usize, const M: usize>(rng: &mut Lcg) {
     defmt::info!("bench ukf n={=usize} m={=usize} resets={=u32}", N, M, f.health().covariance_resets);
 }
 
-/// The rotor node's per-sample step: the 20-state time-varying filter of the paper rotor with
-/// its disk and force outputs.
+/// The rotor node's per-sample step with its disk and force outputs, in both phases: the
+/// 20-state time-varying filter of start-up (`rotor_node_step`), the sample that switches to the
+/// steady-state gain (`rotor_node_switch`: builds the steady-state filter, once), and the
+/// steady-state step the node runs from 0.5 s on (`rotor_node_steady`).
 fn rotor() {
-    let mut est = edgekf_firmware::rotor::RotorEstimator::new();
-    for k in 0..3 {
-        est.step(Some([1e-6 * k as f32; 4]));
+    use edgekf_firmware::rotor::{RotorEstimator, STEADY_AFTER};
+    let mut est = RotorEstimator::new();
+    let y = |k: u32| Some([1e-6 * k as f32, -0.5e-6 * k as f32, 2e-6, 0.25e-6 * k as f32]);
+    let mut k = 0;
+    while k < 3 {
+        est.step(y(k));
+        k += 1;
     }
-    bench_start();
-    core::hint::black_box(est.step(core::hint::black_box(Some([2e-6, -1e-6, 3e-6, 0.5e-6]))));
-    bench_end();
-    defmt::info!(
-        "bench rotor_node_step n={=usize} m={=usize} resets={=u32}",
-        20usize,
-        4usize,
-        est.health().covariance_resets
-    );
+    // Measures one step; `steady`: whether the steady-state filter must be in use after it.
+    let measured = |est: &mut RotorEstimator, label: &str, k: u32, steady: bool| {
+        bench_start();
+        core::hint::black_box(est.step(core::hint::black_box(y(k))));
+        bench_end();
+        if est.is_steady() != steady {
+            defmt::error!("bench {=str}: steady-state filter in use: {=bool}", label, est.is_steady());
+            exit(1)
+        }
+        defmt::info!(
+            "bench {=str} n={=usize} m={=usize} resets={=u32}",
+            label,
+            20usize,
+            4usize,
+            est.health().covariance_resets
+        );
+    };
+    measured(&mut est, "rotor_node_step", k, false);
+    k += 1;
+    while k < STEADY_AFTER {
+        est.step(y(k));
+        k += 1;
+    }
+    measured(&mut est, "rotor_node_switch", k, true);
+    k += 1;
+    for _ in 0..3 {
+        est.step(y(k));
+        k += 1;
+    }
+    measured(&mut est, "rotor_node_steady", k, true);
 }
 
 fn harmonic() {
