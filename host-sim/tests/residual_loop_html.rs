@@ -1,6 +1,7 @@
 //! `report.html` of the residual loop, from a real loop: the paper rotor with an undeclared
 //! 20 µm bias on `n5_x`.
 
+use edgekf_sim::residual_loop::cases::Case;
 use edgekf_sim::residual_loop::html::render;
 use edgekf_sim::residual_loop::inject::inject_bias;
 use edgekf_sim::residual_loop::{close_loop, LoopOptions, LoopReport};
@@ -13,6 +14,13 @@ fn biased_report() -> LoopReport {
         model.simulate(&SimOptions { duration: 3.0, seed: 3, ..SimOptions::default() }).unwrap().to_data_file();
     inject_bias(&mut data, "n5_x", 20e-6).unwrap();
     close_loop(&model, &data, &LoopOptions { screen_parameters: false, ..LoopOptions::default() }).unwrap()
+}
+
+/// Writes `html` to `$EDGEKF_HTML_OUT/name` when that is set (to look at the page).
+fn keep(html: &str, name: &str) {
+    if let Ok(dir) = std::env::var("EDGEKF_HTML_OUT") {
+        std::fs::write(std::path::Path::new(&dir).join(name), html).unwrap();
+    }
 }
 
 /// The text of the first `<td>` after `marker`.
@@ -29,9 +37,7 @@ fn first_cell_after<'a>(html: &'a str, marker: &str) -> &'a str {
 fn report_page_shows_the_loop() {
     let report = biased_report();
     let html = render(&report).unwrap();
-    if let Ok(dir) = std::env::var("EDGEKF_HTML_OUT") {
-        std::fs::write(std::path::Path::new(&dir).join("report.html"), &html).unwrap();
-    }
+    keep(&html, "bias.html");
 
     // A self-contained document.
     assert!(html.starts_with("<!DOCTYPE html>") && html.trim_end().ends_with("</html>"));
@@ -70,4 +76,35 @@ fn report_page_shows_the_loop() {
     assert!(html.contains(&escaped.replace('"', "&quot;").replace('\'', "&#39;")));
     assert!(html.contains("<details>\n<summary>"));
     assert_eq!(html.matches("<tr class=\"kept\">").count(), report.trials.iter().filter(|t| t.accepted).count());
+}
+
+/// The `<svg>` element whose accessible name starts with `label`.
+fn svg_named<'a>(html: &'a str, label: &str) -> &'a str {
+    let at = html.find(&format!("<svg role=\"img\" aria-label=\"{label}")).unwrap_or_else(|| panic!("no {label}"));
+    &html[at..at + html[at..].find("</svg>").unwrap()]
+}
+
+#[test]
+fn spectral_lines_are_marked_and_labelled() {
+    let data = Case::TwoX.data(3).unwrap();
+    let options = LoopOptions { screen_parameters: false, ..LoopOptions::default() };
+    let report = close_loop(&Case::declared().unwrap(), &data, &options).unwrap();
+    let html = render(&report).unwrap();
+    keep(&html, "two_x.html");
+
+    let force = report.effects_added.iter().find(|e| e.kind == "harmonic_force").expect("the 2x force is found");
+    let row = format!("<td>harmonic_force</td><td>{}</td><td>2x</td>", force.location);
+    assert!(html.contains(&row), "no effect row {row}");
+    assert!(!force.explains.is_empty());
+    let explained: Vec<String> = force.explains.iter().map(|f| format!("{f:.2}")).collect();
+    assert!(html.contains(&format!("<td>{}</td></tr>", explained.join(", "))));
+
+    // Every line detected before is marked on its channel's spectrum, labelled by its class.
+    let spectra = svg_named(&html, "Spectra");
+    let peaks: Vec<&str> = report.before.channels.iter().flat_map(|c| &c.peaks).map(|p| p.class.as_str()).collect();
+    assert!(peaks.contains(&"2x"), "{peaks:?}");
+    for class in peaks {
+        assert!(spectra.contains(&format!(">\n{class}\n</text>")), "no label {class}");
+    }
+    assert!(spectra.contains("lines before"));
 }

