@@ -54,4 +54,7 @@ fn loop_rotor_writes_the_report() {
     assert!((v["after"]["nis_mean"].as_f64().unwrap() - 1.0).abs() < 0.1);
     assert!(v["before"]["nis_mean"].as_f64().unwrap() > 10.0);
     assert!(v["not_identifiable"].is_array() && v["unexplained"].is_array());
+    let html = std::fs::read_to_string(report.join("report.html")).unwrap();
+    assert!(html.contains("<html") && html.contains("sensor_bias"), "{}", &html[..200.min(html.len())]);
+    assert!(html.matches("<svg").count() >= 3);
 }

@@ -72,6 +72,8 @@ pub fn write_report(report: &LoopReport, dir: &Path) -> Result<()> {
     let path = dir.join("report.json");
     std::fs::write(&path, serde_json::to_string_pretty(report)?)
         .with_context(|| format!("writing {}", path.display()))?;
+    let path = dir.join("report.html");
+    std::fs::write(&path, super::html::render(report)?).with_context(|| format!("writing {}", path.display()))?;
     Ok(())
 }
 

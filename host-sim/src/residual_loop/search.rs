@@ -403,6 +403,19 @@ impl Context<'_> {
         }
     }
 
+    /// `kind at location (Δ log-likelihood, BIC cost, halves)`.
+    fn describe(&self, f: &Fitted) -> String {
+        format!(
+            "{} at {}: Δ log-likelihood {:.1}, BIC cost {:.1}, halves {:.1} / {:.1}",
+            f.effect.kind(),
+            self.location(&f.effect),
+            f.delta,
+            f.penalty,
+            f.halves[0],
+            f.halves[1]
+        )
+    }
+
     fn progress(&self, msg: impl FnOnce() -> String) {
         if self.options.progress {
             eprintln!("loop: {}", msg());
@@ -545,13 +558,8 @@ pub fn close_loop(model: &RotorModel, data: &DataFile, options: &LoopOptions) ->
                         statistic: "delta_log_likelihood_halves".into(),
                         value: f.halves[0].min(f.halves[1]),
                         description: format!(
-                            "{} at {} would gain {:.1} in log-likelihood (BIC cost {:.1}) but {:.1} and {:.1} in the two halves of the run: it helps only part of the run, so it is not a constant property",
-                            f.effect.kind(),
-                            ctx.location(&f.effect),
-                            f.delta,
-                            f.penalty,
-                            f.halves[0],
-                            f.halves[1]
+                            "{}: it helps only part of the run, so it is not a constant property",
+                            ctx.describe(f)
                         ),
                     });
                 }
@@ -590,15 +598,9 @@ pub fn close_loop(model: &RotorModel, data: &DataFile, options: &LoopOptions) ->
         let Some(win) = chosen else {
             let best = evaluated.iter().max_by(|a, b| (a.delta - a.penalty).total_cmp(&(b.delta - b.penalty)));
             stopped = match best {
-                Some(f) => format!(
-                    "no candidate pays for itself in both halves of the run (best: {} at {}, Δ log-likelihood {:.1}, BIC cost {:.1}, halves {:.1} / {:.1})",
-                    f.effect.kind(),
-                    ctx.location(&f.effect),
-                    f.delta,
-                    f.penalty,
-                    f.halves[0],
-                    f.halves[1]
-                ),
+                Some(f) => {
+                    format!("no candidate pays for itself in both halves of the run (best: {})", ctx.describe(f))
+                }
                 None => "no candidate effect matches the remaining signatures".into(),
             };
             break;
