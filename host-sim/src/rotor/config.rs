@@ -31,8 +31,8 @@
 //! assert!(err.to_string().contains("unknown field `lenght`"), "{err}");
 //! ```
 
-use super::RotorError;
 use super::bearing_geometry::BearingGeometry;
+use super::RotorError;
 use serde::Deserialize;
 use std::fmt;
 use std::path::Path;
