@@ -430,7 +430,6 @@ pub fn augment(
     let m = red.c.nrows();
     let extra: usize = effects.iter().map(|(e, _)| e.states(m)).sum();
     let ns = n0 + extra;
-    let r = red.frequencies_hz.len();
     let grow = |mat: &DMatrix<f64>, rows: usize| {
         let mut out = DMatrix::<f64>::zeros(rows, ns);
         out.view_mut((0, 0), (mat.nrows(), mat.ncols())).copy_from(mat);
@@ -542,7 +541,6 @@ pub fn augment(
             _ => {}
         }
     }
-    let _ = r;
     Ok(AugmentedModel { a, qc, c, r: red.r.clone(), p0, displacement, effects: placed })
 }
 
