@@ -1,6 +1,7 @@
 //! `edgekf loop rotor --config C --data data.csv --report DIR`.
 
-use super::search::{close_loop, LoopOptions, LoopReport, RunSummary};
+use super::rotor_system::close_loop;
+use super::search::{LoopOptions, LoopReport, RunSummary};
 use crate::io::data;
 use crate::rotor::{RotorConfig, RotorModel};
 use anyhow::{bail, Context, Result};

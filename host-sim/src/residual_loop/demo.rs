@@ -8,7 +8,8 @@
 //! ```
 
 use super::model::Parameter;
-use super::search::{close_loop, LoopOptions, LoopReport};
+use super::rotor_system::close_loop;
+use super::search::{LoopOptions, LoopReport};
 use crate::io::data::DataFile;
 use crate::rotor::{RotorConfig, RotorModel, SimOptions};
 use anyhow::Result;

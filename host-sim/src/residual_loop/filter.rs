@@ -79,24 +79,77 @@ impl Run {
     }
 }
 
+/// A continuous linear time-invariant model as the filter reads it: `ẋ = A x + w`,
+/// `E[w wᵀ] = Q_c δ(t)`, `y_k = C x_k + v_k`, `E[v vᵀ] = R`, `x_0 ~ (0, P_0)`. Any system of
+/// edgekf whose diagnostic filter is linear runs through [`run_state_space`].
+#[derive(Debug, Clone, Copy)]
+pub struct StateSpace<'a> {
+    /// `A`.
+    pub a: &'a DMatrix<f64>,
+    /// `Q_c`.
+    pub qc: &'a DMatrix<f64>,
+    /// `C`.
+    pub c: &'a DMatrix<f64>,
+    /// `R` per sample.
+    pub r: &'a DMatrix<f64>,
+    /// `P_0`.
+    pub p0: &'a DMatrix<f64>,
+}
+
 /// Runs the filter of `model` over `columns` (`[channel][k]`, offsets removed) at `dt`, and
 /// reports the displacement rows `rows` of the model.
 pub fn run(model: &AugmentedModel, dt: f64, columns: &[&[f64]], rows: &[usize]) -> Result<Run> {
-    let d = discretise(&model.a, &model.qc, dt)?;
     let n = model.a.nrows();
     let m = model.c.nrows();
-    let len = columns.iter().map(|c| c.len()).min().unwrap_or(0);
-    let c = &model.c;
-    let ct = c.transpose();
-    let r = &model.r;
     let out_rows = DMatrix::from_fn(rows.len(), n, |i, j| model.displacement[(rows[i], j)]);
     let effect_idx: Vec<usize> = model.effects.iter().flat_map(|(e, _, s)| *s..*s + e.states(m)).collect();
+    let ss = StateSpace { a: &model.a, qc: &model.qc, c: &model.c, r: &model.r, p0: &model.p0 };
+    run_state_space(&ss, dt, columns, &out_rows, &effect_idx)
+}
+
+/// Runs the filter of `ss` over `columns` at `dt`; [`Run::outputs`] are the rows of
+/// `outputs · x̂` and [`Run::effect_states`] the states `tracked`.
+///
+/// ```
+/// use edgekf_sim::residual_loop::filter::{run_state_space, StateSpace};
+/// use nalgebra::DMatrix;
+/// // A constant observed directly: the filter's estimate settles on the data's mean.
+/// let (a, qc) = (DMatrix::zeros(1, 1), DMatrix::zeros(1, 1));
+/// let (c, r, p0) = (DMatrix::identity(1, 1), DMatrix::from_element(1, 1, 0.01), DMatrix::from_element(1, 1, 100.0));
+/// let y: Vec<f64> = (0..400).map(|k| 2.0 + if k % 2 == 0 { 0.1 } else { -0.1 }).collect();
+/// let ss = StateSpace { a: &a, qc: &qc, c: &c, r: &r, p0: &p0 };
+/// let run = run_state_space(&ss, 1e-3, &[&y], &DMatrix::identity(1, 1), &[0]).unwrap();
+/// assert!((run.outputs[0][399] - 2.0).abs() < 0.01);
+/// assert_eq!(run.effect_states[0], run.outputs[0]);
+/// ```
+pub fn run_state_space(
+    ss: &StateSpace<'_>,
+    dt: f64,
+    columns: &[&[f64]],
+    outputs: &DMatrix<f64>,
+    tracked: &[usize],
+) -> Result<Run> {
+    let d = discretise(ss.a, ss.qc, dt)?;
+    let n = ss.a.nrows();
+    let m = ss.c.nrows();
+    let len = columns.iter().map(|c| c.len()).min().unwrap_or(0);
+    let (c, r) = (ss.c, ss.r);
+    let ct = c.transpose();
+    let out_rows = outputs;
+    let effect_idx = tracked;
+    if out_rows.ncols() != n || effect_idx.iter().any(|&i| i >= n) || columns.len() != m {
+        return Err(anyhow!(
+            "filter: {n} states and {m} channels, given {} columns, output rows of width {} and tracked states {effect_idx:?}",
+            columns.len(),
+            out_rows.ncols()
+        ));
+    }
     let mut x = DVector::<f64>::zeros(n);
-    let mut p = model.p0.clone();
+    let mut p = ss.p0.clone();
     let mut run = Run {
         innovation: vec![Vec::with_capacity(len); m],
         variance: vec![Vec::with_capacity(len); m],
-        outputs: vec![Vec::with_capacity(len); rows.len()],
+        outputs: vec![Vec::with_capacity(len); out_rows.nrows()],
         effect_states: vec![Vec::with_capacity(len); effect_idx.len()],
         ..Run::default()
     };
@@ -159,7 +212,7 @@ pub fn run(model: &AugmentedModel, dt: f64, columns: &[&[f64]], rows: &[usize]) 
             run.nis.push(f64::NAN);
             run.log_det_s.push(f64::NAN);
         }
-        let o = &out_rows * &x;
+        let o = out_rows * &x;
         for (i, out) in run.outputs.iter_mut().enumerate() {
             out.push(o[i]);
         }

@@ -1221,7 +1221,6 @@ mod tests {
 
     use crate::residual_loop::search::Traces;
     use crate::residual_loop::signature::PeakSignature;
-    use crate::residual_loop::Effect;
     use std::collections::BTreeMap;
 
     /// A run of `n` samples on two channels and one row, with gaps (NaN).
@@ -1288,7 +1287,6 @@ mod tests {
                 explains: vec![14.0],
                 delta_log_likelihood: 100.0,
                 bic_penalty: 4.7,
-                effect: (Effect::SensorScale { channel: 0 }, 0.05f64.ln_1p()),
             }],
             before: summary(2e-6, "1x & <friends>"),
             after: summary(1e-6, "natural 0"),

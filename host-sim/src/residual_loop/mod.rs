@@ -13,7 +13,9 @@
 //!   covariance converges, then frozen).
 //! * [`signature`]: the innovations' statistics and what is left unexplained.
 //! * [`optimize`]: the one-dimensional maximum-likelihood fit of an effect's scalar.
-//! * [`search`]: candidates, the loop and its report.
+//! * [`search`]: the engine: the [`LoopSystem`] trait every system implements, the loop and its
+//!   report;
+//! * [`rotor_system`]: the rotor as a [`LoopSystem`] ([`close_loop`]).
 //! * [`inject`]: undeclared effects added to simulated data; [`cases`]: the ones the tests and
 //!   the README use.
 //! * [`cli`]: `edgekf loop rotor`; [`demo`]: the loop's part of `edgekf demo`.
@@ -26,9 +28,13 @@ pub mod html;
 pub mod inject;
 pub mod model;
 pub mod optimize;
+pub mod rotor_system;
 pub mod search;
 pub mod signature;
 
 pub use model::{augment, AugmentedModel, Effect, EffectTuning, Flexibility, Parameter};
-pub use search::{close_loop, AddedEffect, LoopOptions, LoopReport, NotIdentifiable, RunSummary, Traces};
+pub use rotor_system::{close_loop, RotorSystem};
+pub use search::{
+    search, AddedEffect, EffectLabel, LoopOptions, LoopReport, LoopSystem, NotIdentifiable, RunSummary, Traces,
+};
 pub use signature::{Signature, SignatureOptions};

@@ -6,6 +6,7 @@
 //! or delay, a component parameter, a mode's frequency), some both. Each says which residual
 //! signatures point to it ([`Effect::signature`]).
 
+pub use super::optimize::ScalarRange;
 use crate::rotor::bearing_geometry::BearingLine;
 use crate::rotor::linalg::expm;
 use crate::rotor::{dof, RotorConfig, RotorModel, SensorKind};
@@ -150,8 +151,10 @@ pub enum Effect {
         /// Frequency of the spectral peak that proposed it, mHz.
         seed_mhz: u32,
     },
-    /// A defect of a rolling-element bearing: a force along the load direction (`y`) at the
-    /// bearing node oscillating at a defect line's frequency (two states). Value: amplitude, N.
+    /// A defect of a rolling-element bearing: a periodic force along the load direction (`y`)
+    /// at the bearing node, at a defect line's frequency and its first `harmonics` multiples
+    /// (two states each: the impacts of a spall are periodic, not sinusoidal, and a housing
+    /// resonance lifts the upper harmonics). Value: RMS of the force, N.
     BearingDefect {
         /// Bearing index (configuration order).
         bearing: usize,
@@ -159,22 +162,9 @@ pub enum Effect {
         line: BearingLine,
         /// The line's order of the running speed, in thousandths (from the bearing geometry).
         order_milli: u32,
+        /// Harmonics of the line modelled (1 = the line alone).
+        harmonics: u8,
     },
-}
-
-/// The range a scalar effect parameter is fitted over, and how.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ScalarRange {
-    /// Lower end (in the fitting variable).
-    pub low: f64,
-    /// Upper end.
-    pub high: f64,
-    /// Where the model is unchanged (1 for a factor, 0 for a delay).
-    pub neutral: f64,
-    /// Fitted in `ln` (factors), so the report shows `exp(θ)`.
-    pub log: bool,
-    /// Tolerance of the fit.
-    pub tolerance: f64,
 }
 
 impl Effect {
@@ -205,7 +195,9 @@ impl Effect {
                 "lines at the natural frequencies (the free response rings elsewhere) or a 1x residual"
             }
             Effect::ExtraMode { .. } => "a line at neither an order nor a natural frequency of the model",
-            Effect::BearingDefect { .. } => "a line at a bearing defect frequency (BPFO, BPFI, BSF, FTF)",
+            Effect::BearingDefect { .. } => {
+                "lines at a bearing defect frequency (BPFO, BPFI, BSF, FTF) and its harmonics"
+            }
         }
     }
 
@@ -213,7 +205,8 @@ impl Effect {
     pub fn states(&self, channels: usize) -> usize {
         match self {
             Effect::SensorBias { .. } => 1,
-            Effect::HarmonicForce { .. } | Effect::UnknownInput { .. } | Effect::BearingDefect { .. } => 2,
+            Effect::HarmonicForce { .. } | Effect::UnknownInput { .. } => 2,
+            Effect::BearingDefect { harmonics, .. } => 2 * (*harmonics).max(1) as usize,
             Effect::ExtraMode { .. } => 2 * channels,
             Effect::SensorScale { .. } | Effect::SensorDelay { .. } | Effect::Parameter(_) => 0,
         }
@@ -474,19 +467,22 @@ pub fn augment(
                     p0[(s + d, s + d)] = tuning.force_std.powi(2);
                 }
             }
-            Effect::BearingDefect { bearing, order_milli, .. } => {
+            Effect::BearingDefect { bearing, order_milli, harmonics, .. } => {
                 let node = model
                     .config()
                     .bearings
                     .get(bearing)
                     .map(|b| b.node)
                     .ok_or_else(|| anyhow!("no bearing #{bearing}"))?;
-                rotating(&mut a, s, order_milli as f64 * 1e-3 * red.speed);
-                let t = Target { a: &mut a, c: &mut c, displacement: &mut displacement };
-                add_force(t, red, model, flex, node, [None, Some(s)])?;
-                for d in 0..2 {
-                    qc[(s + d, s + d)] = tuning.force_psd;
-                    p0[(s + d, s + d)] = tuning.force_std.powi(2);
+                for h in 0..harmonics.max(1) as usize {
+                    let sh = s + 2 * h;
+                    rotating(&mut a, sh, (h + 1) as f64 * order_milli as f64 * 1e-3 * red.speed);
+                    let t = Target { a: &mut a, c: &mut c, displacement: &mut displacement };
+                    add_force(t, red, model, flex, node, [None, Some(sh)])?;
+                    for d in 0..2 {
+                        qc[(sh + d, sh + d)] = tuning.force_psd;
+                        p0[(sh + d, sh + d)] = tuning.force_std.powi(2);
+                    }
                 }
             }
             Effect::ExtraMode { .. } => {
@@ -587,11 +583,11 @@ mod tests {
             (Effect::HarmonicForce { node: 12, order: 2 }, 0.0),
             (Effect::UnknownInput { node: 20 }, 0.0),
             (Effect::ExtraMode { seed_mhz: 55_000 }, 55.0),
-            (Effect::BearingDefect { bearing: 0, line: BearingLine::Bpfo, order_milli: 3585 }, 0.0),
+            (Effect::BearingDefect { bearing: 0, line: BearingLine::Bpfo, order_milli: 3585, harmonics: 2 }, 0.0),
         ];
         let m = augment(&red, &model, &flex, &kinds, &EffectTuning::default()).unwrap();
         let added: usize = kinds.iter().map(|(e, _)| e.states(4)).sum();
-        assert_eq!(added, 1 + 2 + 2 + 8 + 2);
+        assert_eq!(added, 1 + 2 + 2 + 8 + 4);
         assert_eq!(m.a.nrows(), red.states() + added);
         // The scale multiplies row 2 of the base model's C.
         let base = &red.c;
@@ -607,8 +603,10 @@ mod tests {
         // The bearing defect's force acts along y only: its x state has no modal input.
         let b = red.states() + 1 + 2 + 2 + 8;
         let r = red.frequencies_hz.len();
-        assert!((0..r).all(|i| m.a[(r + i, b + 1)] == 0.0));
+        assert!((0..r).all(|i| m.a[(r + i, b + 1)] == 0.0 && m.a[(r + i, b + 3)] == 0.0));
         assert!((0..r).any(|i| m.a[(r + i, b)] != 0.0));
+        // Its second harmonic rotates at twice the line's frequency.
+        assert!((m.a[(b + 3, b + 2)] - 2.0 * 3.585 * speed).abs() < 1e-9);
     }
 
     /// On the accelerometer rotor, a 1× force added as an effect at disk node 12 must enter the

@@ -2,6 +2,21 @@
 //! coarse grid to find the right basin (a log-likelihood in a stiffness factor can have side
 //! lobes where a natural frequency crosses a line), then Brent's method inside the bracket.
 
+/// The range a scalar effect parameter is fitted over, and how.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ScalarRange {
+    /// Lower end (in the fitting variable).
+    pub low: f64,
+    /// Upper end.
+    pub high: f64,
+    /// Where the model is unchanged (1 for a factor, 0 for a delay).
+    pub neutral: f64,
+    /// Fitted in `ln` (factors), so the report shows `exp(θ)`.
+    pub log: bool,
+    /// Tolerance of the fit.
+    pub tolerance: f64,
+}
+
 /// The best point found and how many evaluations it took.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Maximum {

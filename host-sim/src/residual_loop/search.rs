@@ -1,17 +1,20 @@
-//! The search: candidates from the signatures, each fitted (its states by the filter, its
-//! scalar by maximum likelihood) and kept only if it pays for its parameters (BIC) in both
-//! halves of the run; then what is left is reported.
+//! The search, written against [`LoopSystem`] so every system of edgekf goes through the same
+//! engine: candidates from the signatures, each fitted (its states by the filter, its scalar by
+//! maximum likelihood) and kept only if it pays for its parameters (BIC) in both halves of the
+//! run; then what is left is reported.
+//!
+//! A system supplies the filter runs, the summaries and the candidates; the engine owns the
+//! acceptance rule, the identifiability verdicts and the report, so they read the same for a
+//! rotor, a mechanism or a vehicle.
 
-use super::filter::{self, Run};
-use super::model::{apply_parameters, augment, AugmentedModel, Effect, EffectTuning, Flexibility, Parameter};
-use super::optimize::maximise;
-use super::signature::{summarise, unexplained, Signature, SignatureOptions};
-use crate::io::data::DataFile;
-use crate::rotor::bearing_geometry::BearingLine;
-use crate::rotor::{RotorConfig, RotorModel};
-use crate::rotor_akf::{reduce, ReducedRotor, Tuning};
+use super::filter::Run;
+use super::model::EffectTuning;
+use super::optimize::{maximise, ScalarRange};
+use super::signature::{unexplained, Signature, SignatureOptions};
+use crate::rotor_akf::Tuning;
 use anyhow::{anyhow, Result};
 use serde::Serialize;
+use std::fmt::Debug;
 
 pub use super::signature::{ChannelSignature, PeakSignature, RunSummary};
 
@@ -83,9 +86,6 @@ pub struct AddedEffect {
     pub delta_log_likelihood: f64,
     /// Its cost: `½ p ln n`.
     pub bic_penalty: f64,
-    /// The effect and its fitted scalar.
-    #[serde(skip)]
-    pub effect: (Effect, f64),
 }
 
 /// An effect (or location) the data cannot resolve.
@@ -154,7 +154,7 @@ pub struct Traces {
 /// What the loop found.
 #[derive(Debug, Clone, Serialize)]
 pub struct LoopReport {
-    /// The system (`rotor`).
+    /// The system (`rotor`, …).
     pub system: String,
     /// Effects kept, in order.
     pub effects_added: Vec<AddedEffect>,
@@ -176,101 +176,97 @@ pub struct LoopReport {
     pub traces: Traces,
 }
 
+/// How an effect is written in the report.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EffectLabel {
+    /// Kind (`sensor_bias`, `harmonic_force`, …).
+    pub kind: &'static str,
+    /// Channel name, `node N`, or a component.
+    pub location: String,
+    /// Order of the running speed, if it acts at one.
+    pub order: Option<f64>,
+    /// The parameter's name, for `parameter` effects.
+    pub parameter: Option<String>,
+    /// The bearing line, for `bearing_defect` effects.
+    pub line: Option<String>,
+    /// Unit of the reported value (`1` for a factor).
+    pub unit: &'static str,
+}
+
+/// A system the loop can be closed on: a base model with a filter, a library of effects that
+/// augment it, and the data. The engine ([`search`]) asks it for filter runs with a list of
+/// effects, for summaries of those runs and for candidates; everything else (acceptance,
+/// identifiability, the report) is the engine's.
+///
+/// An effect is `(Self::Effect, θ)`: what and where, plus the scalar the engine fits by
+/// maximum likelihood when [`LoopSystem::scalar`] gives it a range (0 otherwise).
+pub trait LoopSystem {
+    /// One augmentation at one place.
+    type Effect: Copy + PartialEq + Debug;
+    /// What a run was made with (the system reads effect values from it).
+    type Model;
+    /// The system's name in the report (`rotor`).
+    fn name(&self) -> &str;
+    /// Runs the filter with `effects` over the whole recording.
+    fn run(&self, effects: &[(Self::Effect, f64)]) -> Result<(Self::Model, Run)>;
+    /// The innovations' statistics and the virtual-sensing error of a run.
+    fn summarise(&self, run: &Run) -> RunSummary;
+    /// Candidates for the next effect in tiers: a later tier is tried only when no candidate of
+    /// an earlier one is kept (the catch-all goes last). The engine drops effects already in
+    /// the model.
+    fn candidates(&self, summary: &RunSummary) -> Vec<Vec<Self::Effect>>;
+    /// How `effect` reads in the report.
+    fn label(&self, effect: &Self::Effect) -> EffectLabel;
+    /// Free parameters `effect` costs in the BIC.
+    fn parameters(&self, effect: &Self::Effect) -> usize;
+    /// The range of the effect's scalar and the grid points to search it with, if it has one.
+    fn scalar(&self, effect: &Self::Effect) -> Option<(ScalarRange, usize)>;
+    /// The size the report gives `effect` (in the model of `run`).
+    fn value(&self, model: &Self::Model, run: &Run, effect: &Self::Effect, theta: f64) -> f64;
+    /// Effects to screen at the end for identifiability, each with the scalars to try (a
+    /// component parameter halved and doubled): if none of them changes the log-likelihood by
+    /// more than the effect's BIC cost, the data cannot see it. None by default.
+    fn screened(&self) -> Vec<(Self::Effect, Vec<f64>)> {
+        Vec::new()
+    }
+    /// Time, channel names, virtual rows and truth for the report's plots (the engine fills in
+    /// the runs before and after).
+    fn traces(&self) -> Traces;
+}
+
 /// A candidate fitted to the data.
-struct Fitted {
-    effect: Effect,
+struct Fitted<E, M> {
+    effect: E,
     theta: f64,
-    model: AugmentedModel,
+    model: M,
     run: Run,
     delta: f64,
     halves: [f64; 2],
     penalty: f64,
+    label: EffectLabel,
 }
 
-struct Context<'a> {
-    cfg: &'a RotorConfig,
-    model: &'a RotorModel,
-    red: ReducedRotor,
-    flex: Flexibility,
-    columns: Vec<Vec<f64>>,
-    t: Vec<f64>,
-    rows: Vec<usize>,
-    row_names: Vec<String>,
-    /// Nodes where forces are tried (disks and unbalances).
-    force_sites: Vec<usize>,
-    /// Bearing lines as orders: (bearing index, line, order).
-    lines: Vec<(usize, BearingLine, f64)>,
-    options: LoopOptions,
-    data: &'a DataFile,
+/// An effect kept, with the lines it explained.
+struct Kept<E> {
+    effect: E,
+    theta: f64,
+    delta: f64,
+    penalty: f64,
+    label: EffectLabel,
+    explains: Vec<f64>,
+}
+
+/// The engine's view of a system during one search.
+struct Engine<'a, S: LoopSystem> {
+    sys: &'a S,
+    options: &'a LoopOptions,
+    /// Scalar measurements in the run (for the BIC).
     n_meas: f64,
 }
 
-impl Context<'_> {
-    fn channels(&self) -> usize {
-        self.red.channels.len()
-    }
-
-    fn run(&self, effects: &[(Effect, f64)]) -> Result<(AugmentedModel, Run)> {
-        let cols: Vec<&[f64]> = self.columns.iter().map(Vec::as_slice).collect();
-        let dt = 1.0 / self.red.sample_rate;
-        let tuning = &self.options.effect_tuning;
-        let m = if effects.iter().any(|(e, _)| matches!(e, Effect::Parameter(_))) {
-            let cfg = apply_parameters(self.cfg, effects)?;
-            let model = RotorModel::from_config(&cfg)?;
-            let red = reduce(&model, self.red.speed, &self.options.tuning)?;
-            let flex = Flexibility::new(&model, self.red.speed);
-            augment(&red, &model, &flex, effects, tuning)?
-        } else {
-            augment(&self.red, self.model, &self.flex, effects, tuning)?
-        };
-        let run = filter::run(&m, dt, &cols, &self.rows)?;
-        Ok((m, run))
-    }
-
-    fn summarise(&self, run: &Run) -> RunSummary {
-        let truth: Vec<Option<&[f64]>> =
-            self.row_names.iter().map(|n| self.data.column(&format!("truth_{n}"))).collect();
-        summarise(
-            run,
-            &self.t,
-            &self.red.channels,
-            &self.row_names,
-            &truth,
-            self.red.speed,
-            &self.red.frequencies_hz,
-            &self.lines,
-            self.red.sample_rate,
-            &self.options.signatures,
-        )
-    }
-
-    fn penalty(&self, e: &Effect) -> f64 {
-        0.5 * e.parameters(self.channels()) as f64 * self.n_meas.ln()
-    }
-
-    fn location(&self, e: &Effect) -> String {
-        e.location(&self.red.channels, self.cfg)
-    }
-
-    /// The value the report gives an effect: its fitted scalar, or its states' size over the
-    /// second half of the run.
-    fn value(&self, model: &AugmentedModel, run: &Run, effect: Effect, theta: f64) -> f64 {
-        let Some(pos) = model.effects.iter().position(|(e, _, _)| *e == effect) else { return f64::NAN };
-        let m = self.channels();
-        let offset: usize = model.effects[..pos].iter().map(|(e, _, _)| e.states(m)).sum();
-        let n = self.t.len();
-        let half = n / 2;
-        let avg = |f: &dyn Fn(usize) -> f64| (half..n).map(f).sum::<f64>() / (n - half).max(1) as f64;
-        let s = &run.effect_states;
-        match effect {
-            Effect::SensorBias { .. } => avg(&|k| s[offset][k]),
-            Effect::HarmonicForce { .. } | Effect::BearingDefect { .. } => {
-                avg(&|k| s[offset][k].hypot(s[offset + 1][k]))
-            }
-            Effect::UnknownInput { .. } => avg(&|k| s[offset][k].powi(2) + s[offset + 1][k].powi(2)).sqrt(),
-            Effect::SensorScale { .. } | Effect::Parameter(_) => theta.exp(),
-            Effect::SensorDelay { .. } | Effect::ExtraMode { .. } => theta,
-        }
+impl<S: LoopSystem> Engine<'_, S> {
+    fn penalty(&self, e: &S::Effect) -> f64 {
+        0.5 * self.sys.parameters(e) as f64 * self.n_meas.ln()
     }
 
     /// Gain in log-likelihood of `run` over `base`, in the first and the second half.
@@ -288,114 +284,41 @@ impl Context<'_> {
 
     /// Fits `cand` on top of `effects`: its scalar by maximum likelihood, its states by the
     /// filter.
-    fn fit(&self, effects: &[(Effect, f64)], cand: Effect, base: &Run) -> Result<Fitted> {
+    fn fit(&self, effects: &[(S::Effect, f64)], cand: S::Effect, base: &Run) -> Result<Fitted<S::Effect, S::Model>> {
         let with = |theta: f64| {
             let mut e = effects.to_vec();
             e.push((cand, theta));
             e
         };
-        let theta = match cand.scalar(self.red.sample_rate) {
-            Some(range) => {
-                let grid = match cand {
-                    Effect::Parameter(_) => 7,
-                    _ => 4,
-                };
-                let best = maximise(
-                    |th| self.run(&with(th)).ok().map(|(_, r)| r.log_likelihood()),
+        let theta = match self.sys.scalar(&cand) {
+            Some((range, grid)) => {
+                maximise(
+                    |th| self.sys.run(&with(th)).ok().map(|(_, r)| r.log_likelihood()),
                     range.low,
                     range.high,
                     grid,
                     range.tolerance,
                 )
-                .ok_or_else(|| anyhow!("no value of the scalar gives a usable model"))?;
-                best.x
+                .ok_or_else(|| anyhow!("no value of the scalar gives a usable model"))?
+                .x
             }
             None => 0.0,
         };
-        let (model, run) = self.run(&with(theta))?;
+        let (model, run) = self.sys.run(&with(theta))?;
         let delta = run.log_likelihood() - base.log_likelihood();
         let halves = self.halves(&run, base);
-        Ok(Fitted { effect: cand, theta, model, run, delta, halves, penalty: self.penalty(&cand) })
+        let label = self.sys.label(&cand);
+        Ok(Fitted { effect: cand, theta, model, run, delta, halves, penalty: self.penalty(&cand), label })
     }
 
-    /// Candidates named directly by a signature (a bias, a line at an order, a bearing line or
-    /// elsewhere), then the structural ones (scales, delays, parameters, 1× forces off the
-    /// unbalance nodes) when the innovations carry lines or colour, then the catch-all.
-    fn candidates(&self, s: &RunSummary, effects: &[(Effect, f64)]) -> [Vec<Effect>; 2] {
-        let mut named = Vec::new();
-        let mut biased: Vec<(f64, usize)> = s
-            .channels
-            .iter()
-            .enumerate()
-            .filter(|(_, c)| c.z.abs() >= self.options.signatures.bias_z)
-            .map(|(i, c)| (c.z.abs(), i))
-            .collect();
-        biased.sort_by(|a, b| b.0.total_cmp(&a.0));
-        named.extend(biased.into_iter().map(|(_, channel)| Effect::SensorBias { channel }));
-        let mut structural = false;
-        let mut modes: Vec<u32> = Vec::new();
-        let mut orders: Vec<(f64, u32)> = Vec::new();
-        for c in &s.channels {
-            if c.whiteness_p < self.options.signatures.alpha || !c.peaks.is_empty() {
-                structural = true;
-            }
-            for p in &c.peaks {
-                if let Some((bearing, line)) = p.line {
-                    if let Some(&(_, _, order)) = self.lines.iter().find(|(b, l, _)| *b == bearing && *l == line) {
-                        named.push(Effect::BearingDefect { bearing, line, order_milli: (order * 1e3).round() as u32 });
-                    }
-                } else if let Some(k) = p.order {
-                    match orders.iter_mut().find(|(_, o)| *o == k) {
-                        Some(e) => e.0 = e.0.max(p.prominence_db),
-                        None => orders.push((p.prominence_db, k)),
-                    }
-                } else if p.class == "unexplained" {
-                    let mhz = (p.frequency_hz * 1e3).round() as u32;
-                    let near = |m: &u32| (*m as f64 - mhz as f64).abs() * 1e-3 < 2.0 * s.bin_width_hz;
-                    if !modes.iter().any(near) {
-                        modes.push(mhz);
-                    }
-                }
-            }
-        }
-        orders.sort_by(|a, b| b.0.total_cmp(&a.0));
-        for (_, order) in orders {
-            for &node in &self.force_sites {
-                if order == 1 && self.red.force_nodes.contains(&node) {
-                    continue;
-                }
-                named.push(Effect::HarmonicForce { node, order });
-            }
-        }
-        named.extend(modes.into_iter().map(|seed_mhz| Effect::ExtraMode { seed_mhz }));
-        if structural || !s.nis_consistent {
-            for channel in 0..self.channels() {
-                named.push(Effect::SensorScale { channel });
-                named.push(Effect::SensorDelay { channel });
-            }
-            named.extend(Parameter::all(self.cfg).into_iter().map(Effect::Parameter));
-        }
-        let catch_all: Vec<Effect> = self.force_sites.iter().map(|&node| Effect::UnknownInput { node }).collect();
-        let fresh = |v: Vec<Effect>| -> Vec<Effect> {
-            let mut out: Vec<Effect> = Vec::new();
-            for e in v {
-                if !effects.iter().any(|(x, _)| *x == e) && !out.contains(&e) {
-                    out.push(e);
-                }
-            }
-            out
-        };
-        [fresh(named), fresh(catch_all)]
-    }
-
-    fn trial(&self, iteration: usize, f: &Fitted, accepted: bool) -> Trial {
+    fn trial(&self, iteration: usize, f: &Fitted<S::Effect, S::Model>, accepted: bool) -> Trial {
         Trial {
             iteration,
-            kind: f.effect.kind().to_string(),
-            location: self.location(&f.effect),
-            order: f.effect.order(),
-            parameter: parameter_name(&f.effect),
-            value: f.effect.scalar(self.red.sample_rate).map(|_| self.value(&f.model, &f.run, f.effect, f.theta)),
+            kind: f.label.kind.to_string(),
+            location: f.label.location.clone(),
+            order: f.label.order,
+            parameter: f.label.parameter.clone(),
+            value: self.sys.scalar(&f.effect).map(|_| self.sys.value(&f.model, &f.run, &f.effect, f.theta)),
             delta_log_likelihood: f.delta,
             delta_halves: f.halves,
             bic_penalty: f.penalty,
@@ -403,16 +326,11 @@ impl Context<'_> {
         }
     }
 
-    /// `kind at location (Δ log-likelihood, BIC cost, halves)`.
-    fn describe(&self, f: &Fitted) -> String {
+    /// `kind at location: Δ log-likelihood, BIC cost, halves`.
+    fn describe(&self, f: &Fitted<S::Effect, S::Model>) -> String {
         format!(
             "{} at {}: Δ log-likelihood {:.1}, BIC cost {:.1}, halves {:.1} / {:.1}",
-            f.effect.kind(),
-            self.location(&f.effect),
-            f.delta,
-            f.penalty,
-            f.halves[0],
-            f.halves[1]
+            f.label.kind, f.label.location, f.delta, f.penalty, f.halves[0], f.halves[1]
         )
     }
 
@@ -421,18 +339,126 @@ impl Context<'_> {
             eprintln!("loop: {}", msg());
         }
     }
-}
 
-fn parameter_name(e: &Effect) -> Option<String> {
-    match e {
-        Effect::Parameter(p) => Some(p.name().to_string()),
-        _ => None,
+    /// Fits every candidate of `cands` on top of `effects`.
+    fn fit_all(
+        &self,
+        iteration: usize,
+        effects: &[(S::Effect, f64)],
+        cands: Vec<S::Effect>,
+        base: &Run,
+    ) -> Vec<Fitted<S::Effect, S::Model>> {
+        let total = cands.len();
+        let mut results = Vec::new();
+        for (i, cand) in cands.into_iter().enumerate() {
+            let label = self.sys.label(&cand);
+            self.progress(|| {
+                format!("iteration {iteration}: candidate {}/{total}: {} at {}", i + 1, label.kind, label.location)
+            });
+            match self.fit(effects, cand, base) {
+                Ok(f) => results.push(f),
+                Err(e) => self.progress(|| format!("  {} at {}: {e:#}", label.kind, label.location)),
+            }
+        }
+        results
+    }
+
+    /// Pays for itself: the whole run gains more than the BIC cost, and each half at least
+    /// `half_gain` of it.
+    fn pays(&self, f: &Fitted<S::Effect, S::Model>) -> bool {
+        f.delta > f.penalty && self.pays_in_halves(f)
+    }
+
+    fn pays_in_halves(&self, f: &Fitted<S::Effect, S::Model>) -> bool {
+        f.halves[0].min(f.halves[1]) >= self.options.half_gain * f.penalty
+    }
+
+    /// Rivals of `winner` among `results`: same family, another location, a log-likelihood
+    /// within the identifiability margin.
+    fn rivals(
+        &self,
+        winner: &Fitted<S::Effect, S::Model>,
+        results: &[Fitted<S::Effect, S::Model>],
+    ) -> Vec<NotIdentifiable> {
+        results
+            .iter()
+            .filter(|f| {
+                family(&f.label) == family(&winner.label)
+                    && f.label.location != winner.label.location
+                    && (winner.delta - f.delta).abs() < self.options.identifiable_margin
+            })
+            .map(|r| NotIdentifiable {
+                kind: winner.label.kind.into(),
+                location: r.label.location.clone(),
+                parameter: r.label.parameter.clone(),
+                statistic: "delta_log_likelihood_gap".into(),
+                value: winner.delta - r.delta,
+                reason: format!(
+                    "fits the data as well as {} (log-likelihoods {:.2} apart): the sensors cannot tell the two apart",
+                    winner.label.location,
+                    winner.delta - r.delta
+                ),
+            })
+            .collect()
+    }
+
+    /// An effect that pays over the whole run but not in both halves: helping only part of the
+    /// run, it is not a constant property of the system.
+    fn partial(&self, f: &Fitted<S::Effect, S::Model>) -> Signature {
+        Signature {
+            channel: f.label.location.clone(),
+            frequency_hz: None,
+            statistic: "delta_log_likelihood_halves".into(),
+            value: f.halves[0].min(f.halves[1]),
+            description: format!(
+                "{}: it helps only part of the run, so it is not a constant property",
+                self.describe(f)
+            ),
+        }
+    }
+
+    /// Effects of [`LoopSystem::screened`] the data cannot see from the final model.
+    fn screen(&self, effects: &[(S::Effect, f64)], run: &Run) -> Result<Vec<NotIdentifiable>> {
+        let base = run.log_likelihood();
+        let mut out = Vec::new();
+        for (e, thetas) in self.sys.screened() {
+            if effects.iter().any(|(x, _)| *x == e) {
+                continue;
+            }
+            let penalty = self.penalty(&e);
+            let label = self.sys.label(&e);
+            let mut worst: f64 = 0.0;
+            for theta in thetas {
+                let mut trial = effects.to_vec();
+                trial.push((e, theta));
+                let (_, r) = self.sys.run(&trial)?;
+                worst = worst.max((r.log_likelihood() - base).abs());
+                if worst > penalty {
+                    break;
+                }
+            }
+            let what = label.parameter.clone().unwrap_or_else(|| label.kind.to_string());
+            self.progress(|| format!("screen: {what} of {}: |Δ log-likelihood| ≤ {worst:.2}", label.location));
+            if worst <= penalty {
+                out.push(NotIdentifiable {
+                    kind: label.kind.into(),
+                    location: label.location,
+                    parameter: label.parameter,
+                    statistic: "max_delta_log_likelihood".into(),
+                    value: worst,
+                    reason: format!(
+                        "halving or doubling it changes the log-likelihood by at most {worst:.2}, less than its BIC cost {penalty:.1}: these sensors cannot see it"
+                    ),
+                });
+            }
+        }
+        Ok(out)
     }
 }
 
 /// The family of an effect for identifiability: same kind and order, different location.
-fn family(e: &Effect) -> (&'static str, Option<u64>, Option<&'static str>) {
-    (e.kind(), e.order().map(f64::to_bits), parameter_name(e).map(|_| "parameter"))
+fn family(l: &EffectLabel) -> (&'static str, Option<u64>, Option<&str>) {
+    (l.kind, l.order.map(f64::to_bits), l.parameter.as_deref().map(|_| "parameter"))
 }
 
 /// Frequencies (Hz) of the lines in `before` that `after` no longer has (per channel, within
@@ -452,59 +478,20 @@ fn explained(before: &RunSummary, after: &RunSummary) -> Vec<f64> {
     out
 }
 
-/// Closes the loop on `data` with the rotor `model` (its configured sensors, unbalance nodes,
-/// bearings and operating speed): runs the base filter, then adds effects while the
-/// innovations are not consistent and an effect pays for its parameters (BIC) in both halves of
-/// the run.
-pub fn close_loop(model: &RotorModel, data: &DataFile, options: &LoopOptions) -> Result<LoopReport> {
-    let cfg = model.config();
-    let speed = cfg.operation.speed;
-    let red = reduce(model, speed, &options.tuning)?;
-    let columns: Vec<Vec<f64>> = red
-        .channels
-        .iter()
-        .zip(&red.offsets)
-        .map(|(name, off)| {
-            data.column(name)
-                .map(|c| c.iter().map(|v| v - off).collect())
-                .ok_or_else(|| anyhow!("the data file has no channel {name}"))
-        })
-        .collect::<Result<_>>()?;
-    let mut force_sites: Vec<usize> = cfg.disks.iter().map(|d| d.node).chain(red.force_nodes.iter().copied()).collect();
-    force_sites.sort_unstable();
-    force_sites.dedup();
-    let rows: Vec<usize> = force_sites.iter().flat_map(|&n| [2 * n, 2 * n + 1]).collect();
-    let row_names: Vec<String> = force_sites.iter().flat_map(|&n| [format!("n{n}_x"), format!("n{n}_y")]).collect();
-    let lines = cfg
-        .bearings
-        .iter()
-        .enumerate()
-        .filter_map(|(i, b)| b.geometry.map(|g| (i, g)))
-        .flat_map(|(i, g)| BearingLine::ALL.map(|l| (i, l, g.order(l))))
-        .collect();
-    let mut ctx = Context {
-        cfg,
-        flex: Flexibility::new(model, speed),
-        red,
-        model,
-        columns,
-        t: data.t.clone(),
-        rows,
-        row_names,
-        force_sites,
-        lines,
-        options: *options,
-        data,
-        n_meas: 2.0,
-    };
-    let mut effects: Vec<(Effect, f64)> = Vec::new();
-    ctx.progress(|| "running the base model".into());
-    let (mut cur_model, mut cur_run) = ctx.run(&effects)?;
-    ctx.n_meas = cur_run.measurements().max(2) as f64;
+/// Closes the loop on `sys`: runs its base model, then adds effects while the innovations are
+/// not consistent and an effect pays for its parameters (BIC) in both halves of the run; then
+/// screens what the data cannot see and reports what is left.
+pub fn search<S: LoopSystem>(sys: &S, options: &LoopOptions) -> Result<LoopReport> {
+    let mut engine = Engine { sys, options, n_meas: 2.0 };
+    let mut effects: Vec<(S::Effect, f64)> = Vec::new();
+    engine.progress(|| "running the base model".into());
+    let (mut cur_model, mut cur_run) = sys.run(&effects)?;
+    engine.n_meas = cur_run.measurements().max(2) as f64;
+    let engine = engine;
     let base_run = cur_run.clone();
-    let before = ctx.summarise(&cur_run);
+    let before = sys.summarise(&cur_run);
     let mut current = before.clone();
-    let mut added: Vec<(Effect, f64, f64, f64, Vec<f64>)> = Vec::new();
+    let mut added: Vec<Kept<S::Effect>> = Vec::new();
     let mut trials = Vec::new();
     let mut not_identifiable = Vec::new();
     let mut partial: Vec<Signature> = Vec::new();
@@ -520,128 +507,85 @@ pub fn close_loop(model: &RotorModel, data: &DataFile, options: &LoopOptions) ->
             break;
         }
         iteration += 1;
-        let tiers = ctx.candidates(&current, &effects);
-        let mut chosen: Option<Fitted> = None;
-        let mut evaluated: Vec<Fitted> = Vec::new();
-        for cands in tiers {
-            if chosen.is_some() || cands.is_empty() {
-                continue;
-            }
-            let total = cands.len();
-            let mut results = Vec::new();
-            for (i, cand) in cands.into_iter().enumerate() {
-                ctx.progress(|| {
-                    format!(
-                        "iteration {iteration}: candidate {}/{total}: {} at {}",
-                        i + 1,
-                        cand.kind(),
-                        ctx.location(&cand)
-                    )
-                });
-                match ctx.fit(&effects, cand, &cur_run) {
-                    Ok(f) => results.push(f),
-                    Err(e) => ctx.progress(|| format!("  {} at {}: {e:#}", cand.kind(), ctx.location(&cand))),
+        let mut chosen = None;
+        let mut evaluated = Vec::new();
+        for tier in sys.candidates(&current) {
+            let mut fresh: Vec<S::Effect> = Vec::new();
+            for e in tier {
+                if !effects.iter().any(|(x, _)| *x == e) && !fresh.contains(&e) {
+                    fresh.push(e);
                 }
             }
-            let min_half = |f: &Fitted| f.halves[0].min(f.halves[1]) >= options.half_gain * f.penalty;
+            if chosen.is_some() || fresh.is_empty() {
+                continue;
+            }
+            let mut results = engine.fit_all(iteration, &effects, fresh, &cur_run);
+            partial.extend(
+                results.iter().filter(|f| f.delta > f.penalty && !engine.pays_in_halves(f)).map(|f| engine.partial(f)),
+            );
             let best = results
                 .iter()
                 .enumerate()
-                .filter(|(_, f)| f.delta > f.penalty && min_half(f))
+                .filter(|(_, f)| engine.pays(f))
                 .max_by(|a, b| (a.1.delta - a.1.penalty).total_cmp(&(b.1.delta - b.1.penalty)))
                 .map(|(i, _)| i);
-            for f in &results {
-                if f.delta > f.penalty && !min_half(f) {
-                    partial.push(Signature {
-                        channel: ctx.location(&f.effect),
-                        frequency_hz: None,
-                        statistic: "delta_log_likelihood_halves".into(),
-                        value: f.halves[0].min(f.halves[1]),
-                        description: format!(
-                            "{}: it helps only part of the run, so it is not a constant property",
-                            ctx.describe(f)
-                        ),
-                    });
-                }
-            }
             if let Some(i) = best {
                 let winner = results.swap_remove(i);
-                let rivals: Vec<&Fitted> = results
-                    .iter()
-                    .filter(|f| {
-                        family(&f.effect) == family(&winner.effect)
-                            && ctx.location(&f.effect) != ctx.location(&winner.effect)
-                            && (winner.delta - f.delta).abs() < options.identifiable_margin
-                    })
-                    .collect();
-                for r in rivals {
-                    not_identifiable.push(NotIdentifiable {
-                        kind: winner.effect.kind().into(),
-                        location: ctx.location(&r.effect),
-                        parameter: parameter_name(&r.effect),
-                        statistic: "delta_log_likelihood_gap".into(),
-                        value: winner.delta - r.delta,
-                        reason: format!(
-                            "fits the data as well as {} (log-likelihoods {:.2} apart): the sensors cannot tell the two apart",
-                            ctx.location(&winner.effect),
-                            winner.delta - r.delta
-                        ),
-                    });
-                }
+                not_identifiable.extend(engine.rivals(&winner, &results));
                 chosen = Some(winner);
             }
             evaluated.extend(results);
         }
         for f in &evaluated {
-            trials.push(ctx.trial(iteration, f, false));
+            trials.push(engine.trial(iteration, f, false));
         }
         let Some(win) = chosen else {
             let best = evaluated.iter().max_by(|a, b| (a.delta - a.penalty).total_cmp(&(b.delta - b.penalty)));
             stopped = match best {
                 Some(f) => {
-                    format!("no candidate pays for itself in both halves of the run (best: {})", ctx.describe(f))
+                    format!("no candidate pays for itself in both halves of the run (best: {})", engine.describe(f))
                 }
                 None => "no candidate effect matches the remaining signatures".into(),
             };
             break;
         };
-        trials.push(ctx.trial(iteration, &win, true));
-        ctx.progress(|| {
+        trials.push(engine.trial(iteration, &win, true));
+        engine.progress(|| {
             format!(
                 "iteration {iteration}: kept {} at {} (Δ log-likelihood {:.1}, BIC cost {:.1})",
-                win.effect.kind(),
-                ctx.location(&win.effect),
-                win.delta,
-                win.penalty
+                win.label.kind, win.label.location, win.delta, win.penalty
             )
         });
-        let next = ctx.summarise(&win.run);
-        added.push((win.effect, win.theta, win.delta, win.penalty, explained(&current, &next)));
+        let next = sys.summarise(&win.run);
+        let explains = explained(&current, &next);
         effects.push((win.effect, win.theta));
-        cur_model = win.model;
-        cur_run = win.run;
+        added.push(Kept {
+            effect: win.effect,
+            theta: win.theta,
+            delta: win.delta,
+            penalty: win.penalty,
+            label: win.label,
+            explains,
+        });
+        (cur_model, cur_run) = (win.model, win.run);
         current = next;
     }
     if options.screen_parameters {
-        not_identifiable.extend(screen_parameters(&ctx, &effects, &cur_run)?);
+        not_identifiable.extend(engine.screen(&effects, &cur_run)?);
     }
     let effects_added = added
         .into_iter()
-        .map(|(e, theta, d, penalty, explains)| AddedEffect {
-            kind: e.kind().to_string(),
-            location: ctx.location(&e),
-            value: ctx.value(&cur_model, &cur_run, e, theta),
-            unit: e.unit().to_string(),
-            order: e.order(),
-            parameter: parameter_name(&e),
-            line: match e {
-                Effect::BearingDefect { line, .. } => Some(line.name().to_string()),
-                _ => None,
-            },
-            explains,
-            delta_log_likelihood: d,
-            bic_penalty: penalty,
-            effect: (e, theta),
+        .map(|f| AddedEffect {
+            kind: f.label.kind.to_string(),
+            location: f.label.location,
+            value: sys.value(&cur_model, &cur_run, &f.effect, f.theta),
+            unit: f.label.unit.to_string(),
+            order: f.label.order,
+            parameter: f.label.parameter,
+            line: f.label.line,
+            explains: f.explains,
+            delta_log_likelihood: f.delta,
+            bic_penalty: f.penalty,
         })
         .collect();
     let unexplained = if current.consistent {
@@ -651,17 +595,9 @@ pub fn close_loop(model: &RotorModel, data: &DataFile, options: &LoopOptions) ->
         u.extend(partial);
         u
     };
-    let truth = ctx.row_names.iter().map(|n| data.column(&format!("truth_{n}")).map(<[f64]>::to_vec)).collect();
-    let traces = Traces {
-        t: ctx.t.clone(),
-        channels: ctx.red.channels.clone(),
-        rows: ctx.row_names.clone(),
-        truth,
-        before: base_run,
-        after: cur_run,
-    };
+    let traces = Traces { before: base_run, after: cur_run, ..sys.traces() };
     Ok(LoopReport {
-        system: "rotor".to_string(),
+        system: sys.name().to_string(),
         effects_added,
         before,
         after: current,
@@ -671,42 +607,4 @@ pub fn close_loop(model: &RotorModel, data: &DataFile, options: &LoopOptions) ->
         stopped,
         traces,
     })
-}
-
-/// Component parameters the data cannot see: neither halving nor doubling one changes the
-/// final model's log-likelihood by more than its BIC cost.
-fn screen_parameters(ctx: &Context<'_>, effects: &[(Effect, f64)], run: &Run) -> Result<Vec<NotIdentifiable>> {
-    let base = run.log_likelihood();
-    let mut out = Vec::new();
-    for p in Parameter::all(ctx.cfg) {
-        let e = Effect::Parameter(p);
-        if effects.iter().any(|(x, _)| *x == e) {
-            continue;
-        }
-        let penalty = ctx.penalty(&e);
-        let mut worst: f64 = 0.0;
-        for factor in [0.5f64, 2.0] {
-            let mut trial = effects.to_vec();
-            trial.push((e, factor.ln()));
-            let (_, r) = ctx.run(&trial)?;
-            worst = worst.max((r.log_likelihood() - base).abs());
-            if worst > penalty {
-                break;
-            }
-        }
-        ctx.progress(|| format!("screen: {} of {}: |Δ log-likelihood| ≤ {worst:.2}", p.name(), p.component(ctx.cfg)));
-        if worst <= penalty {
-            out.push(NotIdentifiable {
-                kind: "parameter".into(),
-                location: p.component(ctx.cfg),
-                parameter: Some(p.name().into()),
-                statistic: "max_delta_log_likelihood".into(),
-                value: worst,
-                reason: format!(
-                    "halving or doubling it changes the log-likelihood by at most {worst:.2}, less than its BIC cost {penalty:.1}: these sensors cannot see it"
-                ),
-            });
-        }
-    }
-    Ok(out)
 }

@@ -46,9 +46,10 @@ pub struct PeakSignature {
     pub class: String,
     /// The integer order of the running speed it sits at, if any.
     pub order: Option<u32>,
-    /// The bearing line it sits at (bearing index, line), if any.
+    /// The bearing line it sits at (bearing index, line, harmonic: 1 for the line itself), if
+    /// any.
     #[serde(skip)]
-    pub line: Option<(usize, BearingLine)>,
+    pub line: Option<(usize, BearingLine, u8)>,
 }
 
 /// Innovation statistics of one channel.
@@ -120,6 +121,37 @@ pub struct Signature {
     pub description: String,
 }
 
+/// Harmonics of a bearing line that name a spectral line.
+pub const LINE_HARMONICS: u8 = 8;
+
+/// The bearing line (bearing, line, harmonic) a peak at `f` Hz sits at, within `tol_hz`. The
+/// line itself is matched first and always; its harmonics (up to [`LINE_HARMONICS`]) only when
+/// the peak is at no order of the running speed or natural frequency (`located`), because with
+/// four lines per bearing some harmonic falls near almost anything.
+///
+/// ```
+/// use edgekf_sim::residual_loop::signature::bearing_line;
+/// use edgekf_sim::rotor::bearing_geometry::BearingLine;
+/// let speed = std::f64::consts::TAU * 30.0; // 30 Hz
+/// let lines = [(0, BearingLine::Bpfo, 3.585)];
+/// assert_eq!(bearing_line(107.55, speed, &lines, 1.0, false), Some((0, BearingLine::Bpfo, 1)));
+/// assert_eq!(bearing_line(322.6, speed, &lines, 1.0, false), Some((0, BearingLine::Bpfo, 3)));
+/// assert_eq!(bearing_line(322.6, speed, &lines, 1.0, true), None);
+/// ```
+pub fn bearing_line(
+    f: f64,
+    speed: f64,
+    lines: &[(usize, BearingLine, f64)],
+    tol_hz: f64,
+    located: bool,
+) -> Option<(usize, BearingLine, u8)> {
+    let run_hz = speed / std::f64::consts::TAU;
+    let at = |h: u8| {
+        lines.iter().find(|(_, _, order)| (f - h as f64 * order * run_hz).abs() <= tol_hz).map(|(b, l, _)| (*b, *l, h))
+    };
+    at(1).or_else(|| if located { None } else { (2..=LINE_HARMONICS).find_map(at) })
+}
+
 /// Summarises `run`: per-channel signatures over the samples after `settle`, the NIS, and the
 /// virtual-sensing error of `rows` against `truth` (where given).
 #[allow(clippy::too_many_arguments)]
@@ -170,13 +202,13 @@ pub fn summarise(
                 let tol = PeakTolerance::new(1.2 * bin_width_hz);
                 for p in w.peaks::<8>(o.peak_db).iter() {
                     let f = p.frequency_hz as f64;
-                    let line = lines
-                        .iter()
-                        .find(|(_, _, order)| (f - order * speed / std::f64::consts::TAU).abs() <= tol.abs_hz);
-                    let (class, order) = if let Some((b, l, _)) = line {
-                        (format!("{} at bearing #{b}", l.name()), None)
+                    let located = locate_peak(f, speed, naturals, &tol).class;
+                    let line = bearing_line(f, speed, lines, tol.abs_hz, !matches!(located, PeakClass::Unexplained));
+                    let (class, order) = if let Some((b, l, h)) = line {
+                        let times = if h == 1 { String::new() } else { format!("{h}×") };
+                        (format!("{times}{} at bearing #{b}", l.name()), None)
                     } else {
-                        match locate_peak(f, speed, naturals, &tol).class {
+                        match located {
                             PeakClass::Order(o) => {
                                 (format!("{}/{}x", o.numerator, o.denominator), o.is_integer().then_some(o.numerator))
                             }
@@ -193,7 +225,7 @@ pub fn summarise(
                         prominence_db: p.prominence_db as f64,
                         class: class.replace("/1x", "x"),
                         order,
-                        line: line.map(|(b, l, _)| (*b, *l)),
+                        line,
                     });
                 }
             }

@@ -1,0 +1,278 @@
+//! The rotor as a [`LoopSystem`]: the reduced virtual-sensing filter of
+//! [`rotor_akf`](crate::rotor_akf) with the effect library of [`super::model`], on a data file
+//! with the configured sensors' channels.
+
+use super::filter::{self, Run};
+use super::model::{apply_parameters, augment, AugmentedModel, Effect, Flexibility, Parameter};
+use super::optimize::ScalarRange;
+use super::search::{search, EffectLabel, LoopOptions, LoopReport, LoopSystem, RunSummary, Traces};
+use super::signature::summarise;
+use crate::io::data::DataFile;
+use crate::rotor::bearing_geometry::BearingLine;
+use crate::rotor::{RotorConfig, RotorModel};
+use crate::rotor_akf::{reduce, ReducedRotor};
+use anyhow::{anyhow, Result};
+
+/// A rotor, its data and the loop's options: what [`close_loop`] searches.
+pub struct RotorSystem<'a> {
+    cfg: &'a RotorConfig,
+    model: &'a RotorModel,
+    red: ReducedRotor,
+    flex: Flexibility,
+    /// Sensor channels with their offsets removed.
+    columns: Vec<Vec<f64>>,
+    data: &'a DataFile,
+    /// Displacement rows estimated (both directions at every force site).
+    rows: Vec<usize>,
+    row_names: Vec<String>,
+    /// Nodes where forces are tried (disks and unbalances).
+    force_sites: Vec<usize>,
+    /// Bearing lines as orders: (bearing index, line, order).
+    lines: Vec<(usize, BearingLine, f64)>,
+    options: LoopOptions,
+}
+
+impl<'a> RotorSystem<'a> {
+    /// The rotor `model` (its configured sensors, unbalance nodes, bearings and operating
+    /// speed) on `data`, which must have every sensor's channel.
+    pub fn new(model: &'a RotorModel, data: &'a DataFile, options: &LoopOptions) -> Result<Self> {
+        let cfg = model.config();
+        let speed = cfg.operation.speed;
+        let red = reduce(model, speed, &options.tuning)?;
+        let columns: Vec<Vec<f64>> = red
+            .channels
+            .iter()
+            .zip(&red.offsets)
+            .map(|(name, off)| {
+                data.column(name)
+                    .map(|c| c.iter().map(|v| v - off).collect())
+                    .ok_or_else(|| anyhow!("the data file has no channel {name}"))
+            })
+            .collect::<Result<_>>()?;
+        let mut force_sites: Vec<usize> =
+            cfg.disks.iter().map(|d| d.node).chain(red.force_nodes.iter().copied()).collect();
+        force_sites.sort_unstable();
+        force_sites.dedup();
+        let rows = force_sites.iter().flat_map(|&n| [2 * n, 2 * n + 1]).collect();
+        let row_names = force_sites.iter().flat_map(|&n| [format!("n{n}_x"), format!("n{n}_y")]).collect();
+        let lines = cfg
+            .bearings
+            .iter()
+            .enumerate()
+            .filter_map(|(i, b)| b.geometry.map(|g| (i, g)))
+            .flat_map(|(i, g)| BearingLine::ALL.map(|l| (i, l, g.order(l))))
+            .collect();
+        Ok(Self {
+            cfg,
+            model,
+            flex: Flexibility::new(model, speed),
+            red,
+            columns,
+            data,
+            rows,
+            row_names,
+            force_sites,
+            lines,
+            options: *options,
+        })
+    }
+
+    fn channels(&self) -> usize {
+        self.red.channels.len()
+    }
+}
+
+impl LoopSystem for RotorSystem<'_> {
+    type Effect = Effect;
+    type Model = AugmentedModel;
+
+    fn name(&self) -> &str {
+        "rotor"
+    }
+
+    /// Composes the augmented model (re-reducing the rotor when a component parameter is
+    /// changed) and runs the filter over the data.
+    fn run(&self, effects: &[(Effect, f64)]) -> Result<(AugmentedModel, Run)> {
+        let cols: Vec<&[f64]> = self.columns.iter().map(Vec::as_slice).collect();
+        let dt = 1.0 / self.red.sample_rate;
+        let tuning = &self.options.effect_tuning;
+        let m = if effects.iter().any(|(e, _)| matches!(e, Effect::Parameter(_))) {
+            let cfg = apply_parameters(self.cfg, effects)?;
+            let model = RotorModel::from_config(&cfg)?;
+            let red = reduce(&model, self.red.speed, &self.options.tuning)?;
+            let flex = Flexibility::new(&model, self.red.speed);
+            augment(&red, &model, &flex, effects, tuning)?
+        } else {
+            augment(&self.red, self.model, &self.flex, effects, tuning)?
+        };
+        let run = filter::run(&m, dt, &cols, &self.rows)?;
+        Ok((m, run))
+    }
+
+    fn summarise(&self, run: &Run) -> RunSummary {
+        let truth: Vec<Option<&[f64]>> =
+            self.row_names.iter().map(|n| self.data.column(&format!("truth_{n}"))).collect();
+        summarise(
+            run,
+            &self.data.t,
+            &self.red.channels,
+            &self.row_names,
+            &truth,
+            self.red.speed,
+            &self.red.frequencies_hz,
+            &self.lines,
+            self.red.sample_rate,
+            &self.options.signatures,
+        )
+    }
+
+    /// Candidates named directly by a signature (a bias, a line at an order, a bearing line or
+    /// elsewhere), then the structural ones (scales, delays, parameters, 1× forces off the
+    /// unbalance nodes) when the innovations carry lines or colour; the catch-all
+    /// (`unknown_input` at each force site) in a tier of its own.
+    fn candidates(&self, s: &RunSummary) -> Vec<Vec<Effect>> {
+        let mut named = Vec::new();
+        let mut biased: Vec<(f64, usize)> = s
+            .channels
+            .iter()
+            .enumerate()
+            .filter(|(_, c)| c.z.abs() >= self.options.signatures.bias_z)
+            .map(|(i, c)| (c.z.abs(), i))
+            .collect();
+        biased.sort_by(|a, b| b.0.total_cmp(&a.0));
+        named.extend(biased.into_iter().map(|(_, channel)| Effect::SensorBias { channel }));
+        let mut structural = false;
+        let mut modes: Vec<u32> = Vec::new();
+        let mut orders: Vec<(f64, u32)> = Vec::new();
+        // Bearing lines seen, with the highest harmonic seen.
+        let mut defects: Vec<(usize, BearingLine, u8)> = Vec::new();
+        for c in &s.channels {
+            if c.whiteness_p < self.options.signatures.alpha || !c.peaks.is_empty() {
+                structural = true;
+            }
+            for p in &c.peaks {
+                if let Some((bearing, line, h)) = p.line {
+                    match defects.iter_mut().find(|(b, l, _)| *b == bearing && *l == line) {
+                        Some(d) => d.2 = d.2.max(h),
+                        None => defects.push((bearing, line, h)),
+                    }
+                } else if let Some(k) = p.order {
+                    match orders.iter_mut().find(|(_, o)| *o == k) {
+                        Some(e) => e.0 = e.0.max(p.prominence_db),
+                        None => orders.push((p.prominence_db, k)),
+                    }
+                } else if p.class == "unexplained" {
+                    let mhz = (p.frequency_hz * 1e3).round() as u32;
+                    let near = |m: &u32| (*m as f64 - mhz as f64).abs() * 1e-3 < 2.0 * s.bin_width_hz;
+                    if !modes.iter().any(near) {
+                        modes.push(mhz);
+                    }
+                }
+            }
+        }
+        for (bearing, line, harmonics) in defects {
+            if let Some(&(_, _, order)) = self.lines.iter().find(|(b, l, _)| *b == bearing && *l == line) {
+                let order_milli = (order * 1e3).round() as u32;
+                named.push(Effect::BearingDefect { bearing, line, order_milli, harmonics });
+            }
+        }
+        orders.sort_by(|a, b| b.0.total_cmp(&a.0));
+        for (_, order) in orders {
+            for &node in &self.force_sites {
+                if order == 1 && self.red.force_nodes.contains(&node) {
+                    continue;
+                }
+                named.push(Effect::HarmonicForce { node, order });
+            }
+        }
+        named.extend(modes.into_iter().map(|seed_mhz| Effect::ExtraMode { seed_mhz }));
+        if structural || !s.nis_consistent {
+            for channel in 0..self.channels() {
+                named.push(Effect::SensorScale { channel });
+                named.push(Effect::SensorDelay { channel });
+            }
+            named.extend(Parameter::all(self.cfg).into_iter().map(Effect::Parameter));
+        }
+        let catch_all = self.force_sites.iter().map(|&node| Effect::UnknownInput { node }).collect();
+        vec![named, catch_all]
+    }
+
+    fn label(&self, e: &Effect) -> EffectLabel {
+        EffectLabel {
+            kind: e.kind(),
+            location: e.location(&self.red.channels, self.cfg),
+            order: e.order(),
+            parameter: match e {
+                Effect::Parameter(p) => Some(p.name().to_string()),
+                _ => None,
+            },
+            line: match e {
+                Effect::BearingDefect { line, .. } => Some(line.name().to_string()),
+                _ => None,
+            },
+            unit: e.unit(),
+        }
+    }
+
+    fn parameters(&self, e: &Effect) -> usize {
+        e.parameters(self.channels())
+    }
+
+    /// Parameters get a finer grid: a stiffness factor's log-likelihood has side lobes where a
+    /// natural frequency crosses a line.
+    fn scalar(&self, e: &Effect) -> Option<(ScalarRange, usize)> {
+        let grid = if matches!(e, Effect::Parameter(_)) { 7 } else { 4 };
+        e.scalar(self.red.sample_rate).map(|r| (r, grid))
+    }
+
+    /// The fitted scalar (a factor as `exp θ`), or the effect states' size over the second
+    /// half of the run.
+    fn value(&self, model: &AugmentedModel, run: &Run, effect: &Effect, theta: f64) -> f64 {
+        let Some(pos) = model.effects.iter().position(|(e, _, _)| e == effect) else { return f64::NAN };
+        let m = self.channels();
+        let offset: usize = model.effects[..pos].iter().map(|(e, _, _)| e.states(m)).sum();
+        let n = self.data.t.len();
+        let half = n / 2;
+        let avg = |f: &dyn Fn(usize) -> f64| (half..n).map(f).sum::<f64>() / (n - half).max(1) as f64;
+        let s = &run.effect_states;
+        match effect {
+            Effect::SensorBias { .. } => avg(&|k| s[offset][k]),
+            Effect::HarmonicForce { .. } => avg(&|k| s[offset][k].hypot(s[offset + 1][k])),
+            Effect::BearingDefect { harmonics, .. } => {
+                let power =
+                    |k: usize| (0..2 * (*harmonics).max(1) as usize).map(|j| s[offset + j][k].powi(2)).sum::<f64>();
+                (avg(&power) / 2.0).sqrt()
+            }
+            Effect::UnknownInput { .. } => avg(&|k| s[offset][k].powi(2) + s[offset + 1][k].powi(2)).sqrt(),
+            Effect::SensorScale { .. } | Effect::Parameter(_) => theta.exp(),
+            Effect::SensorDelay { .. } | Effect::ExtraMode { .. } => theta,
+        }
+    }
+
+    /// Every component parameter, halved and doubled.
+    fn screened(&self) -> Vec<(Effect, Vec<f64>)> {
+        Parameter::all(self.cfg).into_iter().map(|p| (Effect::Parameter(p), vec![0.5f64.ln(), 2f64.ln()])).collect()
+    }
+
+    fn traces(&self) -> Traces {
+        Traces {
+            t: self.data.t.clone(),
+            channels: self.red.channels.clone(),
+            rows: self.row_names.clone(),
+            truth: self
+                .row_names
+                .iter()
+                .map(|n| self.data.column(&format!("truth_{n}")).map(<[f64]>::to_vec))
+                .collect(),
+            ..Traces::default()
+        }
+    }
+}
+
+/// Closes the loop on `data` with the rotor `model` (its configured sensors, unbalance nodes,
+/// bearings and operating speed): runs the base filter, then adds effects while the
+/// innovations are not consistent and an effect pays for its parameters (BIC) in both halves of
+/// the run.
+pub fn close_loop(model: &RotorModel, data: &DataFile, options: &LoopOptions) -> Result<LoopReport> {
+    search(&RotorSystem::new(model, data, options)?, options)
+}
