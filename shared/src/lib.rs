@@ -12,6 +12,8 @@
 //! * [`models`]: reduced physical models: a single-mode oscillator driven by an unknown harmonic
 //!   force at a known frequency (the "unbalance" pattern of rotating machines), augmented Kalman
 //!   filter models for unknown inputs on structures, synthetic benchmark systems;
+//! * [`clearance`]: joint clearance of a slider-crank from its crank acceleration: streaming
+//!   window features and a learned discriminant/regression, the host's fast estimator on the chip;
 //! * [`export`]: models and steady-state gains written as Rust constants for the firmware;
 //! * [`residual`]: innovation diagnostics cheap enough for the chip: running mean and variance,
 //!   NIS with exact χ² bounds, Ljung–Box whiteness over a window, a Welch innovation spectrum
@@ -32,6 +34,7 @@
 #![deny(missing_docs)]
 #![forbid(unsafe_code)]
 
+pub mod clearance;
 pub mod export;
 pub mod filter;
 pub mod linalg;

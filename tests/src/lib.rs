@@ -3,11 +3,14 @@
 //! * [`qemu`] runs the firmware image under `qemu-system-arm` on a data file and decodes its
 //!   defmt stream;
 //! * [`report`] turns the decoded lines into numbers (block estimates, health counters, stack);
+//! * [`crank`] runs the node's slider-crank clearance estimator on the host and parses the
+//!   QEMU image's output;
 //! * [`host`] runs the very same driver + main loop on the host over the same data, which is what
 //!   a firmware run is compared with.
 #![deny(missing_docs)]
 
 pub mod checks;
+pub mod crank;
 pub mod host;
 pub mod qemu;
 pub mod report;

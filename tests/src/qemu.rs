@@ -47,6 +47,11 @@ pub fn rotor_elf() -> Result<PathBuf> {
     elf_from("EDGEKF_ROTOR_ELF")
 }
 
+/// The slider-crank clearance image: `$EDGEKF_CRANK_ELF` (set by `cargo xtask test`).
+pub fn crank_elf() -> Result<PathBuf> {
+    elf_from("EDGEKF_CRANK_ELF")
+}
+
 fn elf_from(var: &str) -> Result<PathBuf> {
     let path = std::env::var_os(var).with_context(|| {
         format!("{var} is not set: run the HIL tests through `cargo xtask test` (it builds the image)")

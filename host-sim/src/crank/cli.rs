@@ -46,6 +46,9 @@ pub enum CrankCommand {
     /// built-in model is host-sim/src/crank/estimate/fast_model.toml, written by this command
     /// with its defaults).
     Train(TrainArgs),
+    /// Write the fast estimator's model as Rust constants for the firmware
+    /// (firmware/src/generated/clearance.rs).
+    Export(super::estimate::chip::ExportArgs),
 }
 
 /// Arguments of `edgekf crank train`.
@@ -215,6 +218,7 @@ pub fn run(command: CrankCommand) -> anyhow::Result<()> {
         CrankCommand::Feature(args) => feature(args),
         CrankCommand::Estimate(args) => estimate(args),
         CrankCommand::Train(args) => train(args),
+        CrankCommand::Export(args) => super::estimate::chip::export(args),
     }
 }
 

@@ -30,6 +30,7 @@
 //! ([`write_estimates`]: columns `t, clearance_A, clearance_B, clearance_C` in m, 0 for a
 //! joint judged tight), the last row being the estimate for the whole recording.
 
+pub mod chip;
 pub mod fast;
 pub mod model;
 pub mod train;

@@ -15,22 +15,7 @@ use super::{EstimateRow, Recording};
 use crate::crank::Joint;
 use serde::{Deserialize, Serialize};
 
-/// Number of features.
-pub const FEATURES: usize = 10;
-
-/// Names of the features, in order (all natural logarithms of window means).
-pub const FEATURE_NAMES: [&str; FEATURES] = [
-    "ln_rms",
-    "ln_diff_rms",
-    "ln_diff2_rms",
-    "ln_highpass_rms",
-    "ln_diff_kurtosis",
-    "ln_kurtosis",
-    "ln_impact_rate",
-    "ln_impact_peak",
-    "ln_impact_width",
-    "ln_diff_median",
-];
+pub use edgekf::clearance::{FEATURES, FEATURE_NAMES};
 
 /// Arithmetic operations per sample counted for [`feature_vector`], before the median: about
 /// 4 for the differences, 3 for the 8-sample box filter, 3 + 3 + 3 + 3 for the four sums of
@@ -51,84 +36,19 @@ pub struct FeatureVector {
 
 /// Features of `x` sampled at `rate` Hz, from windows of `window_s` (a trailing partial window
 /// is dropped). `windows == 0` if `x` is shorter than one window.
+///
+/// The computation is the chip's ([`edgekf::clearance::CrankFeatures`], streaming, one sample
+/// at a time) in `f64`: one implementation for the host, the training and the firmware.
 pub fn feature_vector(x: &[f64], rate: f64, window_s: f64) -> FeatureVector {
-    let n = ((window_s * rate).round() as usize).max(16);
-    let mut acc = [0.0; FEATURES];
-    let mut windows = 0usize;
-    let mut ops = 0u64;
-    let mut mags: Vec<f64> = Vec::with_capacity(n);
-    for w in x.chunks_exact(n) {
-        let m = n as f64;
-        let mean = w.iter().sum::<f64>() / m;
-        let (mut s2, mut s4) = (0.0, 0.0);
-        for v in w {
-            let e = v - mean;
-            s2 += e * e;
-            s4 += e * e * e * e;
-        }
-        let (mut d2, mut d4, mut dd2, mut hp2) = (0.0, 0.0, 0.0, 0.0);
-        mags.clear();
-        for k in 1..n {
-            let d = w[k] - w[k - 1];
-            d2 += d * d;
-            d4 += d * d * d * d;
-            mags.push(d.abs());
-            if k >= 2 {
-                let dd = w[k] - 2.0 * w[k - 1] + w[k - 2];
-                dd2 += dd * dd;
-            }
-        }
-        // High-pass: α minus its centred 8-sample mean.
-        let mut box_sum: f64 = w[..8].iter().sum();
-        for k in 4..n - 4 {
-            let e = w[k] - box_sum / 8.0;
-            hp2 += e * e;
-            box_sum += w[k + 4] - w[k - 4];
-        }
-        let md = mags.len() as f64;
-        let mid = mags.len() / 2;
-        let median = *mags.select_nth_unstable_by(mid, f64::total_cmp).1;
-        // Impacts: upward crossings of |Δα| over 6 × its median; peak and width per impact.
-        let thr = 6.0 * median;
-        let (mut count, mut above_n, mut peak_sum, mut peak) = (0usize, 0usize, 0.0, 0.0_f64);
-        let mut above = false;
-        for k in 1..n {
-            let a = (w[k] - w[k - 1]).abs();
-            if a > thr {
-                if !above {
-                    count += 1;
-                    peak = 0.0;
-                }
-                above_n += 1;
-                peak = peak.max(a);
-            } else if above {
-                peak_sum += peak;
-            }
-            above = a > thr;
-        }
-        if above {
-            peak_sum += peak;
-        }
-        let vals = [
-            (s2 / m).sqrt(),
-            (d2 / md).sqrt(),
-            (dd2 / (m - 2.0)).sqrt(),
-            (hp2 / (m - 8.0)).sqrt(),
-            (d4 / md) / (d2 / md).powi(2).max(1e-300),
-            (s4 / m) / (s2 / m).powi(2).max(1e-300),
-            count as f64 * rate / m,
-            if count > 0 { peak_sum / count as f64 / median.max(1e-12) } else { 6.0 },
-            if count > 0 { above_n as f64 / count as f64 } else { 1.0 },
-            median,
-        ];
-        for (a, v) in acc.iter_mut().zip(vals) {
-            *a += v;
-        }
-        windows += 1;
-        ops += OPS_PER_SAMPLE * n as u64 + 3 * n as u64;
+    let n = edgekf::clearance::window_samples(window_s, rate);
+    let Ok(mut f) = edgekf::clearance::CrankFeatures::new(vec![0.0; n.saturating_sub(1)], n, rate) else {
+        return FeatureVector { values: [1e-12f64.ln(); FEATURES], windows: 0, operations: 0 };
+    };
+    for &v in x {
+        f.push(v);
     }
-    let k = windows.max(1) as f64;
-    FeatureVector { values: acc.map(|v| (v / k).max(1e-12).ln()), windows, operations: ops }
+    let windows = f.windows() as usize;
+    FeatureVector { values: f.features(), windows, operations: (OPS_PER_SAMPLE + 3) * (windows * n) as u64 }
 }
 
 /// Regressor `c` of standardised features `z`: 1, then `z₁ … z_F`, then `z₁² … z_F²`.
@@ -271,23 +191,17 @@ impl FastModel {
         z
     }
 
-    fn linear(w: &[f64], z: &[f64; FEATURES]) -> f64 {
-        (0..w.len()).map(|c| w[c] * regressor(z, c)).sum()
-    }
-
-    /// Joint and clearance from a feature vector.
+    /// Joint and clearance from a feature vector (the shared crate's
+    /// [`edgekf::clearance::ClearanceModel::estimate`], the chip's code, in `f64`).
     pub fn estimate_features(&self, f: FeatureVector) -> ModelEstimate {
-        let z = self.standardise(&f.values);
-        let scores = [0, 1, 2].map(|j| Self::linear(&self.discriminant[j], &z));
-        let per_joint = [0, 1, 2].map(|j| Self::linear(&self.regression[j], &z).exp().clamp(1e-5, 1e-3));
-        let j = (0..3).max_by(|&a, &b| scores[a].total_cmp(&scores[b])).unwrap_or(0);
+        let e = self.to_shared().estimate(&f.values);
         let mut clearance = [0.0; 3];
-        clearance[j] = per_joint[j];
+        clearance[e.joint] = e.clearance;
         ModelEstimate {
-            joint: Joint::ALL[j],
+            joint: Joint::ALL[e.joint],
             clearance,
-            scores,
-            per_joint,
+            scores: e.scores,
+            per_joint: e.per_joint,
             features: f,
             operations: f.operations + 12 * (FEATURES as u64 + 1) + 3 * 20,
         }

@@ -1,0 +1,164 @@
+//! Slider-crank joint clearance on the node: the firmware's estimator run on the host over the
+//! same CSV text the QEMU image reads, the parsing of the image's output, and the original
+//! two-pass host features as an oracle for the streaming ones.
+
+use anyhow::{anyhow, bail, Result};
+use edgekf::clearance::{ClearanceEstimate, FEATURES};
+use edgekf_firmware::crank::{CrankNode, Storage, WindowReport, CHANNELS, WINDOW};
+use edgekf_firmware::line_feed::ChannelReader;
+
+/// What a run of the node's estimator reports: every window's estimate, then the whole
+/// recording's.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CrankRun {
+    /// One report per completed window.
+    pub windows: Vec<WindowReport>,
+    /// The recording's features (`ln` of the window means).
+    pub features: [f32; FEATURES],
+    /// The estimate for the whole recording.
+    pub estimate: ClearanceEstimate<f32>,
+    /// Input lines read.
+    pub samples: u32,
+    /// Samples skipped (lines that did not parse or held a non-finite value).
+    pub skipped: u32,
+}
+
+/// Runs the firmware's [`CrankNode`] over CSV text exactly as `edgekf-crank-qemu` does.
+pub fn run_host(csv: &[u8]) -> Result<CrankRun> {
+    let mut reader = ChannelReader::new(csv, CHANNELS).map_err(|e| anyhow!("header: {e:?}"))?;
+    let mut storage: Storage = [0.0; WINDOW - 1];
+    let mut node = CrankNode::new(&mut storage).map_err(|e| anyhow!("start: {e:?}"))?;
+    let mut windows = Vec::new();
+    while let Some(line) = reader.next_values() {
+        windows.extend(node.step(line.ok().map(|[a]| a)));
+    }
+    Ok(CrankRun {
+        windows,
+        features: node.features(),
+        estimate: node.estimate(),
+        samples: node.samples(),
+        skipped: node.skipped(),
+    })
+}
+
+/// The `win`, `feat` and `crank` lines of a decoded `edgekf-crank-qemu` log.
+pub fn parse(lines: &[String]) -> Result<CrankRun> {
+    let fields = |line: &str, n: usize| -> Result<Vec<String>> {
+        let v: Vec<String> = line.split_whitespace().skip(1).map(String::from).collect();
+        if v.len() != n {
+            bail!("malformed line {line:?}");
+        }
+        Ok(v)
+    };
+    let f32_of = |s: &str| s.parse::<f32>().map_err(|_| anyhow!("bad value {s:?}"));
+    let u32_of = |s: &str| s.parse::<u32>().map_err(|_| anyhow!("bad value {s:?}"));
+    let joint_of = |s: &str| -> Result<usize> {
+        let j = s.parse::<usize>().map_err(|_| anyhow!("bad joint {s:?}"))?;
+        if j > 2 {
+            bail!("joint {j} out of range");
+        }
+        Ok(j)
+    };
+    let (mut windows, mut features, mut end) = (Vec::new(), None, None);
+    for line in lines {
+        if line.starts_with("win ") {
+            let v = fields(line, 7)?;
+            let (joint, clearance) = (joint_of(&v[2])?, f32_of(&v[3])?);
+            let scores = [f32_of(&v[4])?, f32_of(&v[5])?, f32_of(&v[6])?];
+            // The per-joint clearances are not sent; the named joint's is.
+            let mut per_joint = [f32::NAN; 3];
+            per_joint[joint] = clearance;
+            windows.push(WindowReport {
+                window: u32_of(&v[0])?,
+                samples: u32_of(&v[1])?,
+                estimate: ClearanceEstimate { joint, clearance, scores, per_joint },
+            });
+        } else if line.starts_with("feat ") {
+            let v = fields(line, FEATURES)?;
+            let mut f = [0.0f32; FEATURES];
+            for (a, s) in f.iter_mut().zip(&v) {
+                *a = f32_of(s)?;
+            }
+            features = Some(f);
+        } else if line.starts_with("crank ") {
+            end = Some(fields(line, 6)?);
+        }
+    }
+    let end = end.ok_or_else(|| anyhow!("no `crank` line: the run did not finish"))?;
+    let features = features.ok_or_else(|| anyhow!("no `feat` line"))?;
+    let joint = joint_of(&end[0])?;
+    let clearance = f32_of(&end[1])?;
+    let mut per_joint = [f32::NAN; 3];
+    per_joint[joint] = clearance;
+    let windows_done = u32_of(&end[2])?;
+    if windows_done as usize != windows.len() {
+        bail!("{} window lines but the end line says {windows_done}", windows.len());
+    }
+    Ok(CrankRun {
+        windows,
+        features,
+        // Scores of the final estimate are those of the last window (nothing changes after it).
+        estimate: ClearanceEstimate { joint, clearance, scores: [f32::NAN; 3], per_joint },
+        samples: u32_of(&end[3])?,
+        skipped: u32_of(&end[4])?,
+    })
+}
+
+/// The HIL input: `t, crank_alpha` in shortest round-trip form.
+pub fn csv(t: &[f64], alpha: &[f64]) -> String {
+    let mut s = String::from("t,crank_alpha\n");
+    for (t, a) in t.iter().zip(alpha) {
+        s.push_str(&format!("{t:?},{a:?}\n"));
+    }
+    s
+}
+
+/// The host's original feature computation (two passes over each stored window, `f64`, as
+/// `edgekf-sim` had it before it moved to the streaming [`edgekf::clearance::CrankFeatures`]):
+/// kept only as the oracle the streaming version is checked against.
+pub fn reference_features(x: &[f64], rate: f64, window_s: f64) -> ([f64; FEATURES], usize) {
+    let n = ((window_s * rate).round() as usize).max(16);
+    let mut acc = [0.0; FEATURES];
+    let mut windows = 0usize;
+    for w in x.chunks_exact(n) {
+        let m = n as f64;
+        let mean = w.iter().sum::<f64>() / m;
+        let s2: f64 = w.iter().map(|v| (v - mean).powi(2)).sum();
+        let s4: f64 = w.iter().map(|v| (v - mean).powi(4)).sum();
+        let d: Vec<f64> = w.windows(2).map(|p| p[1] - p[0]).collect();
+        let dd: Vec<f64> = w.windows(3).map(|p| p[2] - 2.0 * p[1] + p[0]).collect();
+        let hp: Vec<f64> = (4..n - 4).map(|k| w[k] - w[k - 4..k + 4].iter().sum::<f64>() / 8.0).collect();
+        let sq = |v: &[f64]| v.iter().map(|e| e * e).sum::<f64>();
+        let (d2, d4, dd2, hp2) = (sq(&d), d.iter().map(|e| e.powi(4)).sum::<f64>(), sq(&dd), sq(&hp));
+        let mut sorted: Vec<f64> = d.iter().map(|v| v.abs()).collect();
+        sorted.sort_by(f64::total_cmp);
+        let median = sorted[sorted.len() / 2];
+        let thr = 6.0 * median;
+        // Runs of |Δα| above the threshold: count, samples above, sum of run peaks.
+        let (mut count, mut above_n, mut peak_sum) = (0usize, 0usize, 0.0);
+        for run in d.iter().map(|v| v.abs()).collect::<Vec<_>>().split(|&a| a <= thr).filter(|r| !r.is_empty()) {
+            count += 1;
+            above_n += run.len();
+            peak_sum += run.iter().copied().fold(0.0, f64::max);
+        }
+        let md = d.len() as f64;
+        let vals = [
+            (s2 / m).sqrt(),
+            (d2 / md).sqrt(),
+            (dd2 / (m - 2.0)).sqrt(),
+            (hp2 / (m - 8.0)).sqrt(),
+            (d4 / md) / (d2 / md).powi(2).max(1e-300),
+            (s4 / m) / (s2 / m).powi(2).max(1e-300),
+            count as f64 * rate / m,
+            if count > 0 { peak_sum / count as f64 / median.max(1e-12) } else { 6.0 },
+            if count > 0 { above_n as f64 / count as f64 } else { 1.0 },
+            median,
+        ];
+        for (a, v) in acc.iter_mut().zip(vals) {
+            *a += v;
+        }
+        windows += 1;
+    }
+    let k = windows.max(1) as f64;
+    (acc.map(|v| (v / k).max(1e-12).ln()), windows)
+}
