@@ -52,26 +52,20 @@ pub fn parse(lines: &[String]) -> Result<CrankRun> {
     };
     let f32_of = |s: &str| s.parse::<f32>().map_err(|_| anyhow!("bad value {s:?}"));
     let u32_of = |s: &str| s.parse::<u32>().map_err(|_| anyhow!("bad value {s:?}"));
-    let joint_of = |s: &str| -> Result<usize> {
-        let j = s.parse::<usize>().map_err(|_| anyhow!("bad joint {s:?}"))?;
-        if j > 2 {
-            bail!("joint {j} out of range");
-        }
-        Ok(j)
+    // joint, clearance, three scores, three per-joint clearances.
+    let estimate_of = |v: &[String]| -> Result<ClearanceEstimate<f32>> {
+        let joint = v[0].parse::<usize>().ok().filter(|&j| j < 3).ok_or_else(|| anyhow!("bad joint {:?}", v[0]))?;
+        let f: Vec<f32> = v[1..8].iter().map(|s| f32_of(s)).collect::<Result<_>>()?;
+        Ok(ClearanceEstimate { joint, clearance: f[0], scores: [f[1], f[2], f[3]], per_joint: [f[4], f[5], f[6]] })
     };
     let (mut windows, mut features, mut end) = (Vec::new(), None, None);
     for line in lines {
         if line.starts_with("win ") {
-            let v = fields(line, 7)?;
-            let (joint, clearance) = (joint_of(&v[2])?, f32_of(&v[3])?);
-            let scores = [f32_of(&v[4])?, f32_of(&v[5])?, f32_of(&v[6])?];
-            // The per-joint clearances are not sent; the named joint's is.
-            let mut per_joint = [f32::NAN; 3];
-            per_joint[joint] = clearance;
+            let v = fields(line, 10)?;
             windows.push(WindowReport {
                 window: u32_of(&v[0])?,
                 samples: u32_of(&v[1])?,
-                estimate: ClearanceEstimate { joint, clearance, scores, per_joint },
+                estimate: estimate_of(&v[2..])?,
             });
         } else if line.starts_with("feat ") {
             let v = fields(line, FEATURES)?;
@@ -81,26 +75,21 @@ pub fn parse(lines: &[String]) -> Result<CrankRun> {
             }
             features = Some(f);
         } else if line.starts_with("crank ") {
-            end = Some(fields(line, 6)?);
+            end = Some(fields(line, 12)?);
         }
     }
     let end = end.ok_or_else(|| anyhow!("no `crank` line: the run did not finish"))?;
     let features = features.ok_or_else(|| anyhow!("no `feat` line"))?;
-    let joint = joint_of(&end[0])?;
-    let clearance = f32_of(&end[1])?;
-    let mut per_joint = [f32::NAN; 3];
-    per_joint[joint] = clearance;
-    let windows_done = u32_of(&end[2])?;
+    let windows_done = u32_of(&end[8])?;
     if windows_done as usize != windows.len() {
         bail!("{} window lines but the end line says {windows_done}", windows.len());
     }
     Ok(CrankRun {
         windows,
         features,
-        // Scores of the final estimate are those of the last window (nothing changes after it).
-        estimate: ClearanceEstimate { joint, clearance, scores: [f32::NAN; 3], per_joint },
-        samples: u32_of(&end[3])?,
-        skipped: u32_of(&end[4])?,
+        estimate: estimate_of(&end[..8])?,
+        samples: u32_of(&end[9])?,
+        skipped: u32_of(&end[10])?,
     })
 }
 

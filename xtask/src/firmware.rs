@@ -17,6 +17,8 @@ pub enum Image {
     Bench,
     /// `edgekf-rotor-qemu`: rotor virtual sensing fed from a host CSV.
     RotorQemu,
+    /// `edgekf-crank-qemu`: slider-crank joint clearance fed from a host CSV.
+    CrankQemu,
 }
 
 impl Image {
@@ -26,11 +28,12 @@ impl Image {
             Image::Board => "edgekf-board",
             Image::Bench => "edgekf-bench",
             Image::RotorQemu => "edgekf-rotor-qemu",
+            Image::CrankQemu => "edgekf-crank-qemu",
         }
     }
     fn feature(self) -> &'static str {
         match self {
-            Image::Qemu | Image::Bench | Image::RotorQemu => "qemu",
+            Image::Qemu | Image::Bench | Image::RotorQemu | Image::CrankQemu => "qemu",
             Image::Board => "board",
         }
     }

@@ -2,8 +2,8 @@
 //!
 //! * `cargo xtask test [--long]` — everything: provisioning, host tests, firmware cross-builds
 //!   (QEMU and board images) with their footprint, then the hardware-in-the-loop tests in QEMU.
-//! * `cargo xtask fw [--board | --rotor]` — cross-build an image (`edgekf-qemu`, `edgekf-board`
-//!   or `edgekf-rotor-qemu`) and print its flash/RAM use.
+//! * `cargo xtask fw [--board | --rotor | --crank]` — cross-build an image (`edgekf-qemu`,
+//!   `edgekf-board`, `edgekf-rotor-qemu` or `edgekf-crank-qemu`) and print its flash/RAM use.
 //! * `cargo xtask run [--data FILE.csv]` — run the QEMU image on a data file (default: the demo
 //!   scenario) and print the decoded defmt log, the stack high-water mark included.
 //! * `cargo xtask bench` — per-step instruction counts of the filters on the Cortex-M4F under
@@ -35,6 +35,8 @@ fn run() -> Result<()> {
                 firmware::Image::Board
             } else if flag("--rotor") {
                 firmware::Image::RotorQemu
+            } else if flag("--crank") {
+                firmware::Image::CrankQemu
             } else {
                 firmware::Image::Qemu
             };
@@ -53,7 +55,7 @@ fn run() -> Result<()> {
             bench::run(&firmware::workspace_root()).map(|_| ())
         }
         _ => {
-            eprintln!("usage: cargo xtask <test [--long] | fw [--board | --rotor] | run [--data FILE.csv] | bench | provision>");
+            eprintln!("usage: cargo xtask <test [--long] | fw [--board | --rotor | --crank] | run [--data FILE.csv] | bench | provision>");
             std::process::exit(2);
         }
     }
@@ -79,6 +81,9 @@ fn test(long: bool) -> Result<()> {
     step("firmware: cross-build the rotor virtual-sensing QEMU image");
     let rotor = firmware::build(firmware::Image::RotorQemu)?;
     firmware::print_footprint(firmware::Image::RotorQemu, &rotor)?;
+    step("firmware: cross-build the slider-crank clearance QEMU image");
+    let crank = firmware::build(firmware::Image::CrankQemu)?;
+    firmware::print_footprint(firmware::Image::CrankQemu, &crank)?;
 
     step("chip benchmarks: instruction counts per filter step in QEMU (deterministic, checked against budgets)");
     bench::run(&firmware::workspace_root())?;
@@ -93,13 +98,16 @@ fn test(long: bool) -> Result<()> {
         "hil",
         "--test",
         "hil",
+        "--test",
+        "crank_node",
         "--",
         "--nocapture",
         "--test-threads",
         "1",
     ])
     .env("EDGEKF_FW_ELF", &qemu)
-    .env("EDGEKF_ROTOR_ELF", &rotor);
+    .env("EDGEKF_ROTOR_ELF", &rotor)
+    .env("EDGEKF_CRANK_ELF", &crank);
     status(hil, "HIL tests")?;
     step("all tests passed");
     Ok(())

@@ -1,6 +1,7 @@
 //! The ten window features of the crank angular acceleration, computed sample by sample.
 
-use super::select::{select_nth, RadixKey};
+use super::select::select_nth;
+use super::ClearanceFloat;
 use super::FEATURES;
 
 /// Shortest window accepted, samples: the high-pass term needs 8 samples of context and the
@@ -65,7 +66,7 @@ pub enum FeatureError {
 /// assert!(ln.iter().all(|v| v.is_finite()) && ln.len() == FEATURES);
 /// ```
 #[derive(Debug, Clone)]
-pub struct CrankFeatures<T: RadixKey, S: AsRef<[T]> + AsMut<[T]>> {
+pub struct CrankFeatures<T: ClearanceFloat, S: AsRef<[T]> + AsMut<[T]>> {
     storage: S,
     window: usize,
     rate: T,
@@ -94,19 +95,19 @@ struct WindowSums<T> {
     highpass: T,
 }
 
-impl<T: RadixKey> WindowSums<T> {
+impl<T: ClearanceFloat> WindowSums<T> {
     fn zero() -> Self {
         let z = T::zero();
         Self { power: [z; 4], diff: [z; 2], second: z, highpass: z }
     }
 }
 
-fn count<T: RadixKey>(n: usize) -> T {
+fn count<T: ClearanceFloat>(n: usize) -> T {
     T::from_usize(n).unwrap_or_else(T::zero)
 }
 
 /// `num / den`, or 0 where the denominator vanishes (a constant signal: the numerator is 0 too).
-fn ratio<T: RadixKey>(num: T, den: T) -> T {
+fn ratio<T: ClearanceFloat>(num: T, den: T) -> T {
     if den > T::zero() {
         num / den
     } else {
@@ -114,7 +115,7 @@ fn ratio<T: RadixKey>(num: T, den: T) -> T {
     }
 }
 
-impl<T: RadixKey, S: AsRef<[T]> + AsMut<[T]>> CrankFeatures<T, S> {
+impl<T: ClearanceFloat, S: AsRef<[T]> + AsMut<[T]>> CrankFeatures<T, S> {
     /// Windows of `window` samples at `rate` Hz; `storage` must hold at least `window − 1`
     /// values (its contents are overwritten).
     pub fn new(storage: S, window: usize, rate: T) -> Result<Self, FeatureError> {
@@ -239,7 +240,7 @@ impl<T: RadixKey, S: AsRef<[T]> + AsMut<[T]>> CrankFeatures<T, S> {
     /// windows, floored at 1e-12 (`ln 1e-12` everywhere before the first window).
     pub fn features(&self) -> [T; FEATURES] {
         let k = count::<T>(self.windows.max(1) as usize);
-        self.sums.map(|s| (s / k).max(T::of_f64(1e-12)).ln())
+        self.sums.map(|s| (s / k).max(T::of_f64(1e-12)).ln_m())
     }
 
     /// The statistics of the last completed window (not logarithms; zeros before the first).

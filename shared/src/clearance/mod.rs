@@ -15,12 +15,14 @@
 //! chip (`f32`) and the host run one implementation.
 
 mod features;
+mod float;
 mod model;
 mod select;
 
 pub use features::{CrankFeatures, FeatureError, MIN_WINDOW};
+pub use float::ClearanceFloat;
 pub use model::{window_samples, ClearanceEstimate, ClearanceEstimator, ClearanceModel, CLEARANCE_RANGE, REGRESSORS};
-pub use select::{select_nth, RadixKey};
+pub use select::select_nth;
 
 /// Number of features.
 pub const FEATURES: usize = 10;

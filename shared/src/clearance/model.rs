@@ -2,7 +2,7 @@
 //! estimator that combines it with [`CrankFeatures`].
 
 use super::features::{CrankFeatures, FeatureError};
-use super::select::RadixKey;
+use super::ClearanceFloat;
 use super::{FEATURES, FEATURE_NAMES};
 use core::fmt::{self, Write};
 
@@ -46,7 +46,7 @@ pub struct ClearanceEstimate<T> {
 /// Clearances the estimate is clamped to, m.
 pub const CLEARANCE_RANGE: (f64, f64) = (1e-5, 1e-3);
 
-impl<T: RadixKey> ClearanceModel<T> {
+impl<T: ClearanceFloat> ClearanceModel<T> {
     /// Joint and clearance from the recording's features ([`CrankFeatures::features`]).
     ///
     /// ```
@@ -82,7 +82,7 @@ impl<T: RadixKey> ClearanceModel<T> {
         };
         let scores = [0, 1, 2].map(|j| linear(&self.discriminant[j]));
         let (lo, hi) = (T::of_f64(CLEARANCE_RANGE.0), T::of_f64(CLEARANCE_RANGE.1));
-        let per_joint = [0, 1, 2].map(|j| linear(&self.regression[j]).exp().max(lo).min(hi));
+        let per_joint = [0, 1, 2].map(|j| linear(&self.regression[j]).exp_m().max(lo).min(hi));
         // The largest score; the later joint on a tie (as `Iterator::max_by`).
         let mut joint = 0;
         for j in 1..3 {
@@ -162,7 +162,11 @@ impl ClearanceModel<f64> {
             }
             write!(out, "]")
         };
-        writeln!(out, "/// The fast clearance model; features: {}.", FEATURE_NAMES.join(", "))?;
+        write!(out, "/// The fast clearance model; features: ")?;
+        for (i, name) in FEATURE_NAMES.iter().enumerate() {
+            write!(out, "{}{name}", if i > 0 { ", " } else { "" })?;
+        }
+        writeln!(out, ".")?;
         writeln!(out, "pub const {name}: ClearanceModel<f64> = ClearanceModel {{")?;
         writeln!(out, "    window: {:?},", self.window)?;
         write!(out, "    mean: ")?;
@@ -204,7 +208,7 @@ impl ClearanceModel<f64> {
 /// assert_eq!(reports, 4);
 /// ```
 #[derive(Debug, Clone)]
-pub struct ClearanceEstimator<'m, T: RadixKey, S: AsRef<[T]> + AsMut<[T]>> {
+pub struct ClearanceEstimator<'m, T: ClearanceFloat, S: AsRef<[T]> + AsMut<[T]>> {
     model: &'m ClearanceModel<T>,
     features: CrankFeatures<T, S>,
 }
@@ -220,7 +224,7 @@ pub fn window_samples(window_s: f64, rate: f64) -> usize {
     }
 }
 
-impl<'m, T: RadixKey, S: AsRef<[T]> + AsMut<[T]>> ClearanceEstimator<'m, T, S> {
+impl<'m, T: ClearanceFloat, S: AsRef<[T]> + AsMut<[T]>> ClearanceEstimator<'m, T, S> {
     /// Runs `model` on samples at `rate` Hz, windows of `model.window` seconds
     /// ([`window_samples`]); `storage` must hold one value less than a window.
     pub fn new(model: &'m ClearanceModel<T>, storage: S, rate: f64) -> Result<Self, FeatureError> {

@@ -7,48 +7,7 @@
 //! bit pattern, one digit per pass, finds the same element in place with a 256-entry histogram
 //! on the stack: 4 passes in `f32`, 8 in `f64`.
 
-use crate::Real;
-
-/// A float whose non-negative values order like their bit patterns (IEEE 754: sign bit clear,
-/// then exponent, then mantissa), so that [`select_nth`] can count digits of the pattern.
-///
-/// ```
-/// use edgekf::clearance::RadixKey;
-/// assert!(1.5f32.key() < 2.0f32.key());
-/// assert_eq!(f64::of_key(0.25f64.key()), 0.25);
-/// ```
-pub trait RadixKey: Real {
-    /// Bytes in the pattern (4 for `f32`, 8 for `f64`).
-    const KEY_BYTES: u32;
-    /// The bit pattern, widened.
-    fn key(self) -> u64;
-    /// The value of a pattern [`RadixKey::key`] returned.
-    fn of_key(key: u64) -> Self;
-}
-
-impl RadixKey for f32 {
-    const KEY_BYTES: u32 = 4;
-    #[inline]
-    fn key(self) -> u64 {
-        u64::from(self.to_bits())
-    }
-    #[inline]
-    fn of_key(key: u64) -> Self {
-        f32::from_bits(key as u32)
-    }
-}
-
-impl RadixKey for f64 {
-    const KEY_BYTES: u32 = 8;
-    #[inline]
-    fn key(self) -> u64 {
-        self.to_bits()
-    }
-    #[inline]
-    fn of_key(key: u64) -> Self {
-        f64::from_bits(key)
-    }
-}
+use super::ClearanceFloat;
 
 /// The `rank`-th smallest (from 0) of `values`, which must be non-negative and not NaN (the
 /// absolute differences of finite samples are); `values` is not reordered. `None` if `rank` is
@@ -62,7 +21,7 @@ impl RadixKey for f64 {
 /// assert_eq!(v, [3.0, 0.5, 7.0, 0.5, 2.0]); // untouched
 /// assert_eq!(select_nth(&v, 5), None);
 /// ```
-pub fn select_nth<T: RadixKey>(values: &[T], rank: usize) -> Option<T> {
+pub fn select_nth<T: ClearanceFloat>(values: &[T], rank: usize) -> Option<T> {
     if rank >= values.len() {
         return None;
     }
