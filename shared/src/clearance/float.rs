@@ -1,6 +1,7 @@
 //! The scalar of the clearance estimator.
 
 use crate::Real;
+use core::ops::{BitAnd, BitOr, Shl, Shr};
 
 /// `f32` (the chip) or `f64` (the host) as the clearance estimator needs it: the bit pattern
 /// of non-negative values, which orders like the values (IEEE 754: sign bit clear, then
@@ -19,12 +20,21 @@ use crate::Real;
 /// assert_eq!(ClearanceFloat::ln_m(1.0f32), 0.0);
 /// ```
 pub trait ClearanceFloat: Real {
+    /// The bit pattern's integer (`u32` for `f32`: the chip does no 64-bit arithmetic here).
+    type Key: Copy
+        + Eq
+        + BitAnd<Output = Self::Key>
+        + BitOr<Output = Self::Key>
+        + Shl<u32, Output = Self::Key>
+        + Shr<u32, Output = Self::Key>
+        + From<u8>
+        + Into<u64>;
     /// Bytes in the pattern (4 for `f32`, 8 for `f64`).
     const KEY_BYTES: u32;
-    /// The bit pattern, widened.
-    fn key(self) -> u64;
+    /// The bit pattern.
+    fn key(self) -> Self::Key;
     /// The value of a pattern [`ClearanceFloat::key`] returned.
-    fn of_key(key: u64) -> Self;
+    fn of_key(key: Self::Key) -> Self;
     /// Natural logarithm (`libm`).
     fn ln_m(self) -> Self;
     /// Exponential (`libm`).
@@ -32,14 +42,15 @@ pub trait ClearanceFloat: Real {
 }
 
 impl ClearanceFloat for f32 {
+    type Key = u32;
     const KEY_BYTES: u32 = 4;
     #[inline]
-    fn key(self) -> u64 {
-        u64::from(self.to_bits())
+    fn key(self) -> u32 {
+        self.to_bits()
     }
     #[inline]
-    fn of_key(key: u64) -> Self {
-        f32::from_bits(key as u32)
+    fn of_key(key: u32) -> Self {
+        f32::from_bits(key)
     }
     #[inline]
     fn ln_m(self) -> Self {
@@ -52,6 +63,7 @@ impl ClearanceFloat for f32 {
 }
 
 impl ClearanceFloat for f64 {
+    type Key = u64;
     const KEY_BYTES: u32 = 8;
     #[inline]
     fn key(self) -> u64 {

@@ -238,7 +238,9 @@ impl<'m, T: ClearanceFloat, S: AsRef<[T]> + AsMut<[T]>> ClearanceEstimator<'m, T
         self.features.push(x).then(|| self.estimate())
     }
 
-    /// The estimate for the completed windows so far.
+    /// The estimate for the completed windows so far. Out of line, like the window's end,
+    /// so that the per-sample path does not carry this once-a-window frame.
+    #[inline(never)]
     pub fn estimate(&self) -> ClearanceEstimate<T> {
         self.model.estimate(&self.features.features())
     }

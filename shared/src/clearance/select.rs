@@ -26,29 +26,30 @@ pub fn select_nth<T: ClearanceFloat>(values: &[T], rank: usize) -> Option<T> {
         return None;
     }
     let mut rank = rank;
-    let (mut prefix, mut mask) = (0u64, 0u64);
+    let zero = T::Key::from(0u8);
+    let byte_mask = T::Key::from(0xffu8);
+    let (mut prefix, mut mask) = (zero, zero);
     for byte in (0..T::KEY_BYTES).rev() {
         let shift = 8 * byte;
-        let mut hist = [0u32; 256];
+        let mut hist = [0usize; 256];
         for v in values {
             let key = v.key();
             if key & mask == prefix {
-                let d = ((key >> shift) & 0xff) as usize;
-                hist[d] = hist[d].saturating_add(1);
+                let d = ((key >> shift) & byte_mask).into() as usize & 0xff;
+                hist[d] = hist[d].wrapping_add(1);
             }
         }
         // The digit whose bucket holds the rank-th of the candidates left.
-        let mut digit = 0u64;
+        let mut digit = 0u8;
         for &count in &hist {
-            let count = count as usize;
             if rank < count {
                 break;
             }
             rank -= count;
-            digit += 1;
+            digit = digit.wrapping_add(1);
         }
-        prefix |= (digit & 0xff) << shift;
-        mask |= 0xff << shift;
+        prefix = prefix | (T::Key::from(digit) << shift);
+        mask = mask | (byte_mask << shift);
     }
     Some(T::of_key(prefix))
 }

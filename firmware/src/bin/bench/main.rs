@@ -161,6 +161,63 @@ fn rotor() {
     measured(&mut est, "rotor_node_steady", k, true);
 }
 
+/// The slider-crank clearance estimator (`edgekf_firmware::crank`, 0.25 s windows at 10 kHz):
+/// an ordinary sample (`crank_sample`: sums, differences, high-pass), the sample that closes a
+/// window (`crank_window_end`: the exact median of 2 499 `|Δα|` by four radix passes, the
+/// impact pass, ten window statistics, the model on the running features), and a whole window
+/// (`crank_window`, 2 500 samples, including about 10 instructions per sample to synthesise the
+/// input), whose count / 2 500 is the average per sample.
+fn crank() {
+    use edgekf_firmware::crank::{CrankNode, Storage, WINDOW};
+    // Noise-like values from a multiplicative hash, and an impact every 97 samples.
+    let alpha = |k: u32| {
+        let noise = (k.wrapping_mul(2_654_435_761) >> 20) as f32 - 2048.0;
+        if k % 97 == 0 {
+            noise + 30_000.0
+        } else {
+            noise
+        }
+    };
+    let mut storage: Storage = [0.0; WINDOW - 1];
+    let Ok(mut node) = CrankNode::new(&mut storage) else {
+        defmt::error!("bench crank: no estimator");
+        exit(1)
+    };
+    let mut k = 0u32;
+    let window = WINDOW as u32;
+    // One whole window, then into the second one for an ordinary sample, then its last sample.
+    bench_start();
+    while k < window {
+        core::hint::black_box(node.step(core::hint::black_box(Some(alpha(k)))));
+        k += 1;
+    }
+    bench_end();
+    defmt::info!("bench crank_window n={=usize} m={=usize} windows={=u32}", WINDOW, 1usize, node.windows());
+    while k < window + 1000 {
+        node.step(Some(alpha(k)));
+        k += 1;
+    }
+    let x = alpha(k);
+    bench_start();
+    core::hint::black_box(node.step(core::hint::black_box(Some(x))));
+    bench_end();
+    defmt::info!("bench crank_sample n={=usize} m={=usize} windows={=u32}", WINDOW, 1usize, node.windows());
+    k += 1;
+    while k < 2 * window - 1 {
+        node.step(Some(alpha(k)));
+        k += 1;
+    }
+    let x = alpha(k);
+    bench_start();
+    let report = core::hint::black_box(node.step(core::hint::black_box(Some(x))));
+    bench_end();
+    if report.is_none() || node.windows() != 2 {
+        defmt::error!("bench crank: the measured sample did not close the second window");
+        exit(1)
+    }
+    defmt::info!("bench crank_window_end n={=usize} m={=usize} windows={=u32}", WINDOW, 1usize, node.windows());
+}
+
 fn harmonic() {
     let Ok(mut est) = HarmonicForceEstimator::<f32>::new(&HarmonicForceParams::default()) else {
         defmt::error!("bench harmonic: no estimator");
@@ -195,6 +252,7 @@ fn main() -> ! {
     kalman::<24, 4>("kalman_sequential", true, &mut rng);
     ukf::<14, 4>(&mut rng);
     rotor();
+    crank();
     defmt::info!("done");
     exit(0)
 }
