@@ -4,6 +4,7 @@
 //! Run with `--nocapture` for the figures; `EDGEKF_LONG=1` adds the 10 s UKF reproduction and
 //! the fast estimator's full test grid (run those in release).
 
+use edgekf_sim::crank::config::Method;
 use edgekf_sim::crank::estimate::fast::FeatureMap;
 use edgekf_sim::crank::estimate::ukf::{self, UkfOptions};
 use edgekf_sim::crank::estimate::{write_estimates, Recording};
@@ -27,47 +28,61 @@ fn recording(c: f64, angle: f64, radius: f64, seed: u64, duration: f64) -> Recor
 
 fn ukf_from_three_starts(duration: f64, bound: f64) {
     let cfg = CrankConfig::default();
-    let rec = recording(0.25e-3, 30.0, 1.0, 7, duration);
+    // The recording comes from another simulator than the filter's sigma points: the adaptive
+    // integrator at a tighter tolerance (1e-9 against 1e-8), so no sigma point can replay its
+    // impact sequence.
+    let mut rc = cfg;
+    rc.integrator.method = Method::Adaptive;
+    rc.integrator.tolerance = 1e-9;
+    let m = Mechanism::new(&rc, [Some(0.25e-3), None, None]).unwrap();
+    let rec = Recording::from_simulation(
+        &m.simulate(&SimOptions { seed: 7, ..SimOptions::from_config(&rc, duration) }).unwrap(),
+        rc.sensor.sample_rate,
+    );
     for initial in [0.01e-3, 0.1e-3, 0.2e-3] {
         let started = Instant::now();
-        let run = ukf::run(&cfg, &rec, &UkfOptions { initial, ..UkfOptions::default() }, &mut |_, _| {}).unwrap();
+        let opts = UkfOptions { initial, ..UkfOptions::default() };
+        let run = ukf::run(&cfg, &rec, &opts, &mut |_, _| {}).unwrap();
         let err = run.estimate / 0.25e-3 - 1.0;
-        // First window after which the estimate stays within ±bound.
-        let settled = run.steps.iter().rposition(|s| (s.clearance / 0.25e-3 - 1.0).abs() > bound).map_or(0, |k| k + 1);
+        let before = run.steps.last().unwrap();
         eprintln!(
-            "UKF {duration} s from {:.2} mm: estimate {:.4} mm ({:+.1} %), last window {:.4} mm, within ±{:.0} % from window {settled} of {}, R std {:.1}, {} integration steps, {:.2} s",
+            "UKF {duration} s from {:.2} mm: windows after the release {:.4} ± {:.4} mm, with the release window {:.4} ± {:.4} mm ({:+.1} %, {} iterations), R std {:.1}, {} simulations, {} integration steps, {:.2} s",
             initial * 1e3,
+            before.clearance * 1e3,
+            before.std * 1e3,
             run.estimate * 1e3,
+            run.estimate_std * 1e3,
             err * 100.0,
-            run.steps.last().unwrap().clearance * 1e3,
-            bound * 100.0,
-            run.steps.len(),
+            run.release_iterations,
             run.measurement_std,
+            run.simulations,
             run.integration_steps,
             started.elapsed().as_secs_f64()
         );
-        assert_eq!(run.integration_steps, run.steps.len() as u64 * 3 * 25_000);
+        let windows = run.steps.len() as u64;
+        assert_eq!(run.simulations, (windows + run.release_iterations as u64) * 3 * opts.members as u64);
         assert!(err.abs() < bound, "from {initial}: {:?}", run.estimate);
         assert_eq!(run.rows().len(), run.steps.len() + 1);
+        assert_eq!(run.rows().last().unwrap().clearance[0], run.estimate);
     }
 }
 
 /// The paper's experiment, shortened to 4 s (16 windows) for CI: from 0.01, 0.1 and 0.2 mm the
-/// estimate reaches 0.25 mm within ±25 % (the feature's window-to-window scatter, std ≈ 40
-/// rad/s² against a slope of ≈ 300 rad/s² per mm, allows no better from 16 windows).
+/// estimate reaches 0.25 mm within ±5 % (measured: −3.0, +3.1, +1.4 %). The information is
+/// in the release window (see `ukf`'s documentation); the later windows only choose its branch.
 #[test]
 fn ukf_approaches_the_clearance_from_three_starts() {
-    ukf_from_three_starts(4.0, 0.25);
+    ukf_from_three_starts(4.0, 0.05);
 }
 
-/// 10 s (40 windows), EDGEKF_LONG=1.
+/// 10 s (40 windows), EDGEKF_LONG=1 (measured: −0.1, +3.5, +5.3 %).
 #[test]
 fn ukf_long_reproduction() {
     if !long() {
         eprintln!("skipped: set EDGEKF_LONG=1");
         return;
     }
-    ukf_from_three_starts(10.0, 0.35);
+    ukf_from_three_starts(10.0, 0.06);
 }
 
 fn fast_grid(clearances: &[f64], variants: &[(f64, f64, u64)], duration: f64) -> f64 {

@@ -11,6 +11,7 @@
 //!   (`edgekf crank train --out host-sim/src/crank/estimate/fast_model.toml`: 264 runs of 10 s,
 //!   about 3 minutes on two cores in release).
 
+use super::release::{release_features, ReleaseFeatures, ReleaseModel, RELEASE_SPAN, RELEASE_TERMS};
 use super::{EstimateRow, Recording};
 use crate::crank::Joint;
 use serde::{Deserialize, Serialize};
@@ -30,8 +31,11 @@ pub struct FeatureVector {
     /// Windows averaged.
     pub windows: usize,
     /// Arithmetic operations spent (per sample [`OPS_PER_SAMPLE`] plus the median of `|Δα|`
-    /// by quickselect, ~3 comparisons per sample).
+    /// by quickselect, ~3 comparisons per sample; plus ~8 per sample of the first 0.1 s for the
+    /// release features).
     pub operations: u64,
+    /// The release transient's features ([`super::release`]), if two impacts were seen.
+    pub release: Option<ReleaseFeatures>,
 }
 
 /// Features of `x` sampled at `rate` Hz, from windows of `window_s` (a trailing partial window
@@ -42,13 +46,20 @@ pub struct FeatureVector {
 pub fn feature_vector(x: &[f64], rate: f64, window_s: f64) -> FeatureVector {
     let n = edgekf::clearance::window_samples(window_s, rate);
     let Ok(mut f) = edgekf::clearance::CrankFeatures::new(vec![0.0; n.saturating_sub(1)], n, rate) else {
-        return FeatureVector { values: [1e-12f64.ln(); FEATURES], windows: 0, operations: 0 };
+        return FeatureVector { values: [1e-12f64.ln(); FEATURES], windows: 0, operations: 0, release: None };
     };
     for &v in x {
         f.push(v);
     }
     let windows = f.windows() as usize;
-    FeatureVector { values: f.features(), windows, operations: (OPS_PER_SAMPLE + 3) * (windows * n) as u64 }
+    let release = release_features(x, rate);
+    let release_ops = 8 * (RELEASE_SPAN * rate).round().min(x.len() as f64) as u64;
+    FeatureVector {
+        values: f.features(),
+        windows,
+        operations: (OPS_PER_SAMPLE + 3) * (windows * n) as u64 + release_ops,
+        release,
+    }
 }
 
 /// Regressor `c` of standardised features `z`: 1, then `z₁ … z_F`, then `z₁² … z_F²`.
@@ -80,6 +91,9 @@ pub struct FastModel {
     /// Per joint A, B, C: `[bias, w₁ … w_F]` of `ln(clearance / m)` on standardised features,
     /// optionally followed by `F` weights on their squares ([`regressor`]).
     pub regression: Vec<Vec<f64>>,
+    /// Second stage from the release transient ([`super::release`]); absent in older files.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub release: Option<ReleaseModel>,
 }
 
 /// Result of [`FastModel::estimate`].
@@ -95,6 +109,8 @@ pub struct ModelEstimate {
     pub per_joint: [f64; 3],
     /// The features.
     pub features: FeatureVector,
+    /// Whether the second stage (release transient) gave the clearance.
+    pub refined: bool,
     /// Arithmetic operations: features plus the model (at most `12 (F + 1)` and 3 exp of ~20).
     pub operations: u64,
 }
@@ -145,7 +161,7 @@ impl FastModel {
             list(&self.scale),
             rows(&self.discriminant),
             rows(&self.regression)
-        )
+        ) + &self.release.as_ref().map_or(String::new(), ReleaseModel::to_toml)
     }
 
     fn validate(&self) -> Result<(), String> {
@@ -179,6 +195,9 @@ impl FastModel {
         if !(self.window.is_finite() && self.window > 0.0) {
             return Err(format!("window {} s must be positive", self.window));
         }
+        if let Some(r) = &self.release {
+            r.validate()?;
+        }
         Ok(())
     }
 
@@ -197,13 +216,22 @@ impl FastModel {
         let e = self.to_shared().estimate(&f.values);
         let mut clearance = [0.0; 3];
         clearance[e.joint] = e.clearance;
+        let joint = Joint::ALL[e.joint];
+        let second = match (&self.release, &f.release) {
+            (Some(m), Some(r)) => m.refine(joint, e.clearance, r),
+            _ => None,
+        };
+        if let Some(c) = second {
+            clearance[e.joint] = c.clamp(1e-5, 1e-3);
+        }
         ModelEstimate {
+            refined: second.is_some(),
             joint: Joint::ALL[e.joint],
             clearance,
             scores: e.scores,
             per_joint: e.per_joint,
             features: f,
-            operations: f.operations + 12 * (FEATURES as u64 + 1) + 3 * 20,
+            operations: f.operations + 12 * (FEATURES as u64 + 1) + 3 * 20 + 2 * RELEASE_TERMS as u64 + 20,
         }
     }
 

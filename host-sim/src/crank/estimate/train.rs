@@ -182,6 +182,7 @@ pub fn fit(
         scale,
         discriminant,
         regression,
+        release: None,
     }
 }
 
@@ -204,11 +205,13 @@ pub fn score(model: &FastModel, runs: &[Run], feats: &[FeatureVector]) -> (f64, 
 /// Writes runs and their features as CSV (`joint,clearance,release_deg,radius,seed,duration,`
 /// then the features), to refit without simulating ([`read_features`]).
 pub fn write_features(path: &std::path::Path, runs: &[Run], feats: &[FeatureVector]) -> std::io::Result<()> {
-    let mut text =
-        format!("joint,clearance,release_deg,radius,seed,duration,windows,operations,{}\n", FEATURE_NAMES.join(","));
+    let mut text = format!(
+        "joint,clearance,release_deg,radius,seed,duration,windows,operations,{},first_impact,second_gap,release_alpha\n",
+        FEATURE_NAMES.join(",")
+    );
     for (r, f) in runs.iter().zip(feats) {
         text += &format!(
-            "{},{:?},{:?},{:?},{},{:?},{},{},{}\n",
+            "{},{:?},{:?},{:?},{},{:?},{},{},{},{}\n",
             r.joint,
             r.clearance,
             r.release_deg,
@@ -217,7 +220,11 @@ pub fn write_features(path: &std::path::Path, runs: &[Run], feats: &[FeatureVect
             r.duration,
             f.windows,
             f.operations,
-            f.values.iter().map(|v| format!("{v:?}")).collect::<Vec<_>>().join(",")
+            f.values.iter().map(|v| format!("{v:?}")).collect::<Vec<_>>().join(","),
+            f.release.map_or("NaN,NaN,NaN".to_string(), |r| format!(
+                "{:?},{:?},{:?}",
+                r.first_impact, r.second_gap, r.release_alpha
+            ))
         );
     }
     std::fs::write(path, text)
@@ -230,7 +237,7 @@ pub fn read_features(path: &std::path::Path) -> anyhow::Result<(Vec<Run>, Vec<Fe
     for (k, line) in text.lines().enumerate().skip(1) {
         let bad = || anyhow::anyhow!("{}: line {}: not a feature row", path.display(), k + 1);
         let cells: Vec<&str> = line.split(',').collect();
-        if cells.len() != 8 + FEATURES {
+        if cells.len() != 8 + FEATURES && cells.len() != 11 + FEATURES {
             return Err(bad());
         }
         let num = |i: usize| cells[i].trim().parse::<f64>().map_err(|_| bad());
@@ -247,7 +254,17 @@ pub fn read_features(path: &std::path::Path) -> anyhow::Result<(Vec<Run>, Vec<Fe
         for (i, v) in values.iter_mut().enumerate() {
             *v = num(8 + i)?;
         }
-        feats.push(FeatureVector { values, windows: int(6)? as usize, operations: int(7)? });
+        let release = if cells.len() == 11 + FEATURES {
+            let (a, b, c) = (num(8 + FEATURES)?, num(9 + FEATURES)?, num(10 + FEATURES)?);
+            a.is_finite().then_some(super::release::ReleaseFeatures {
+                first_impact: a,
+                second_gap: b,
+                release_alpha: c,
+            })
+        } else {
+            None
+        };
+        feats.push(FeatureVector { values, windows: int(6)? as usize, operations: int(7)?, release });
     }
     Ok((runs, feats))
 }
