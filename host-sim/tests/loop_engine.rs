@@ -108,7 +108,7 @@ impl LoopSystem for Oscillator {
         summarise(run, &self.t, &names, &names, &[Some(&self.truth)], 0.0, &[FREQ_HZ], &[], RATE, &Default::default())
     }
 
-    fn candidates(&self, s: &RunSummary) -> Vec<Vec<Effect>> {
+    fn candidates(&self, s: &RunSummary, _: &[(Effect, f64)]) -> Vec<Vec<Effect>> {
         let mut named = Vec::new();
         if s.channels[0].z.abs() > 5.0 {
             named.push(Effect::Bias);

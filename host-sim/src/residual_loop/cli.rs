@@ -32,19 +32,25 @@ pub enum LoopCommand {
         /// Do not print each candidate as it is tried.
         #[arg(long)]
         quiet: bool,
+        /// Read the running speed from the data, within this fraction of the configured
+        /// (nominal) speed (default 0.1 when given without a value): for a motor that slips.
+        #[arg(long, value_name = "FRACTION", num_args = 0..=1, default_missing_value = "0.1")]
+        estimate_speed: Option<f64>,
     },
 }
 
 /// Runs a `loop` command.
 pub fn run(command: LoopCommand) -> Result<()> {
     match command {
-        LoopCommand::Rotor { config, data, report, max_effects, quiet } => {
-            rotor(&config, &data, &report, max_effects, quiet)
+        LoopCommand::Rotor { config, data, report, max_effects, quiet, estimate_speed } => {
+            let options =
+                LoopOptions { max_effects, progress: !quiet, speed_band: estimate_speed, ..LoopOptions::default() };
+            rotor(&config, &data, &report, &options)
         }
     }
 }
 
-fn rotor(config: &Path, data_path: &Path, dir: &Path, max_effects: usize, quiet: bool) -> Result<()> {
+fn rotor(config: &Path, data_path: &Path, dir: &Path, options: &LoopOptions) -> Result<()> {
     let cfg = RotorConfig::load(config).with_context(|| format!("{}: cannot load the rotor", config.display()))?;
     let model = RotorModel::from_config(&cfg)?;
     let channels: Vec<String> = cfg.sensors.iter().map(|s| s.channel_name()).collect();
@@ -59,8 +65,7 @@ fn rotor(config: &Path, data_path: &Path, dir: &Path, max_effects: usize, quiet:
             notes.timing.sample_rate
         );
     }
-    let options = LoopOptions { max_effects, progress: !quiet, ..LoopOptions::default() };
-    let report = close_loop(&model, &file, &options)?;
+    let report = close_loop(&model, &file, options)?;
     print!("{}", summary_table(&report));
     write_report(&report, dir)?;
     println!("wrote {0}/report.json and {0}/report.html", dir.display());
@@ -82,6 +87,9 @@ pub fn write_report(report: &LoopReport, dir: &Path) -> Result<()> {
 pub fn summary_table(r: &LoopReport) -> String {
     let mut s = String::new();
     s.push_str(&format!("{}: {} effect(s) added; {}\n", r.system, r.effects_added.len(), r.stopped));
+    if let Some(sp) = &r.running_speed {
+        s.push_str(&format!("  running speed {}\n", super::html::speed_text(sp)));
+    }
     for e in &r.effects_added {
         let order = e.order.map(|o| format!(" at {o}x")).unwrap_or_default();
         let what = e.parameter.as_ref().or(e.line.as_ref()).map(|p| format!(" {p}")).unwrap_or_default();
@@ -104,7 +112,15 @@ pub fn summary_table(r: &LoopReport) -> String {
     s.push_str(&row("NIS mean / channel", &|x| format!("{:.3}", x.nis_mean)));
     s.push_str(&row("whiteness p (min)", &|x| format!("{:.2e}", x.whiteness_p)));
     for k in r.before.innovation_rms.keys() {
-        s.push_str(&row(&format!("innovation RMS {k} µm"), &|x| format!("{:.3}", x.innovation_rms[k] * 1e6)));
+        let (scale, unit) = super::html::channel_unit(k);
+        s.push_str(&row(&format!("innovation RMS {k} {unit}"), &|x| {
+            let v = x.innovation_rms[k] * scale;
+            if unit == "µm" {
+                format!("{v:.3}")
+            } else {
+                format!("{v:.3e}")
+            }
+        }));
     }
     for k in r.before.error_rms.keys() {
         s.push_str(&row(&format!("error RMS {k} µm"), &|x| {

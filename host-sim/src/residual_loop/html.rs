@@ -177,7 +177,7 @@ fn kind_unit(kind: &str) -> &'static str {
 
 /// How a channel's values are shown: the factor from SI and the unit (displacement probes
 /// in µm, accelerometers in m/s², raw accelerometer outputs in V).
-fn channel_unit(name: &str) -> (f64, &'static str) {
+pub fn channel_unit(name: &str) -> (f64, &'static str) {
     if name.ends_with("_volts") {
         (1.0, "V")
     } else if name.ends_with("_ax") || name.ends_with("_ay") {
@@ -281,7 +281,25 @@ fn verdict(out: &mut String, r: &LoopReport) {
         if r.effects_added.len() == 1 { "" } else { "s" },
         consistency(&r.after),
     ));
+    if let Some(sp) = &r.running_speed {
+        out.push_str(&format!("<p><strong>Running speed:</strong> {}.</p>\n", esc(&speed_text(sp))));
+    }
     out.push_str(&format!("<p><strong>Why the loop stopped:</strong> {}.</p>\n", esc(&r.stopped)));
+}
+
+/// `30.000 Hz (1800.0 rpm), from the configuration` or `29.412 Hz (…), estimated from the data
+/// (−1.96 % from the configured 30.000 Hz)`.
+pub fn speed_text(s: &crate::residual_loop::speed::RunningSpeed) -> String {
+    let base = format!("{:.3} Hz ({:.1} rpm)", s.hz, s.hz * 60.0);
+    if s.source == "config" {
+        format!("{base}, from the configuration")
+    } else {
+        format!(
+            "{base}, estimated from the data ({:+.2} % from the configured {:.3} Hz)",
+            (s.hz / s.declared_hz - 1.0) * 100.0,
+            s.declared_hz
+        )
+    }
 }
 
 /// Parameter, bearing line and order of an effect, where present.
@@ -1300,6 +1318,7 @@ mod tests {
             }],
             trials: Vec::new(),
             stopped: "the innovations are white".into(),
+            running_speed: None,
             traces: Traces {
                 t: (0..n).map(|k| k as f64 * 1e-3).collect(),
                 channels: vec!["n5_x".into(), "n5_y".into()],

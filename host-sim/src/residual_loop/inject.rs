@@ -128,3 +128,78 @@ pub fn inject_scale(data: &mut DataFile, channel: &str, factor: f64, from: Optio
     }
     Ok(())
 }
+
+/// A localised rolling-element bearing defect as a housing accelerometer sees it, the standard
+/// model (McFadden & Smith 1984; Randall & Antoni 2011): an impact each time a rolling element
+/// passes the defect, at the defect line's frequency, with a small random slip of each interval
+/// (the rolling elements slide a little), each impact ringing a housing resonance
+/// `h(t) = e^{−ζ ω_r t} (cos ω_d t − (ζ ω_r/ω_d) sin ω_d t)` (the derivative of a decaying sine:
+/// zero mean, since a housing's vibration carries no steady acceleration). A defect on a rotating part (the inner race, a ball) is
+/// carried through the load zone once per revolution of that part, which modulates the impacts
+/// by `q(θ) = (1 − (1 − cos θ)/(2ε))^{3/2}` (zero outside the zone).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DefectSignal {
+    /// Impact rate: the defect line's frequency, Hz.
+    pub frequency_hz: f64,
+    /// Peak acceleration of one impact's ringing (full load), m/s².
+    pub peak: f64,
+    /// Housing resonance the impacts ring, Hz.
+    pub resonance_hz: f64,
+    /// Its damping ratio.
+    pub damping: f64,
+    /// Standard deviation of each impact interval, as a fraction of the mean interval (0.01–0.02).
+    pub slip: f64,
+    /// Frequency at which the defect passes through the load zone, Hz (the shaft speed for an
+    /// inner-race defect, the cage speed for a ball); `None` for a defect on the fixed outer
+    /// race in the load zone (every impact at full load).
+    pub modulation_hz: Option<f64>,
+    /// Load-distribution factor `ε` (0.5: half the bearing loaded).
+    pub load_zone: f64,
+}
+
+/// Adds the defect's vibration (see [`DefectSignal`]) to channel `channel` and to its
+/// `truth_` column if the file has one (the housing really moves); impact times are drawn with
+/// seed `seed`.
+pub fn inject_bearing_defect(data: &mut DataFile, channel: &str, d: &DefectSignal, seed: u64) -> Result<()> {
+    use rand::{Rng, SeedableRng};
+    use rand_distr::{Distribution, Normal};
+    let valid = d.frequency_hz > 0.0 && d.resonance_hz > 0.0 && (0.0..1.0).contains(&d.damping);
+    if !(valid && d.peak.is_finite() && d.slip >= 0.0 && d.slip < 0.2 && d.load_zone > 0.0) {
+        bail!("bearing defect: frequency, resonance > 0, damping in [0, 1), slip in [0, 0.2), load zone > 0: {d:?}");
+    }
+    let t = data.t.clone();
+    let (Some(&t0), Some(&t_end)) = (t.first(), t.last()) else { return Ok(()) };
+    let dt = if t.len() > 1 { (t_end - t0) / (t.len() - 1) as f64 } else { 1.0 };
+    let wr = std::f64::consts::TAU * d.resonance_hz;
+    let wd = wr * (1.0 - d.damping * d.damping).sqrt();
+    let decay = d.damping * wr;
+    // The ringing has died to e^-12 of its start after this long.
+    let ring = 12.0 / decay.max(1e-9);
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let slip = Normal::new(0.0, d.slip).map_err(|e| anyhow!("{e}"))?;
+    let period = 1.0 / d.frequency_hz;
+    let mut signal = vec![0.0; t.len()];
+    let mut tk = t0 + rng.gen::<f64>() * period;
+    while tk <= t_end {
+        let load = match d.modulation_hz {
+            None => 1.0,
+            Some(f) => {
+                let theta = std::f64::consts::TAU * f * (tk - t0);
+                (1.0 - (1.0 - theta.cos()) / (2.0 * d.load_zone)).max(0.0).powf(1.5)
+            }
+        };
+        let first = ((tk - t0) / dt).ceil().max(0.0) as usize;
+        let last = (((tk + ring - t0) / dt).floor() as usize).min(t.len() - 1);
+        for (k, s) in signal.iter_mut().enumerate().take(last + 1).skip(first) {
+            let tau = t[k] - tk;
+            *s += d.peak * load * (-decay * tau).exp() * ((wd * tau).cos() - decay / wd * (wd * tau).sin());
+        }
+        tk += period * (1.0 + slip.sample(&mut rng));
+    }
+    let add = |col: &mut Vec<f64>| col.iter_mut().zip(&signal).for_each(|(v, s)| *v += s);
+    add(column_mut(data, channel).ok_or_else(|| anyhow!("the data file has no channel {channel}"))?);
+    if let Some(col) = column_mut(data, &format!("{TRUTH_PREFIX}{channel}")) {
+        add(col);
+    }
+    Ok(())
+}

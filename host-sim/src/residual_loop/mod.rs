@@ -15,7 +15,8 @@
 //! * [`optimize`]: the one-dimensional maximum-likelihood fit of an effect's scalar.
 //! * [`search`]: the engine: the [`LoopSystem`] trait every system implements, the loop and its
 //!   report;
-//! * [`rotor_system`]: the rotor as a [`LoopSystem`] ([`close_loop`]).
+//! * [`rotor_system`]: the rotor as a [`LoopSystem`] ([`close_loop`]); [`speed`]: its running
+//!   speed read from the data.
 //! * [`inject`]: undeclared effects added to simulated data; [`cases`]: the ones the tests and
 //!   the README use.
 //! * [`cli`]: `edgekf loop rotor`; [`demo`]: the loop's part of `edgekf demo`.
@@ -31,6 +32,7 @@ pub mod optimize;
 pub mod rotor_system;
 pub mod search;
 pub mod signature;
+pub mod speed;
 
 pub use model::{augment, AugmentedModel, Effect, EffectTuning, Flexibility, Parameter};
 pub use rotor_system::{close_loop, RotorSystem};

@@ -6,12 +6,14 @@ use super::filter::{self, Run};
 use super::model::{apply_parameters, augment, AugmentedModel, Effect, Flexibility, Parameter};
 use super::optimize::ScalarRange;
 use super::search::{search, EffectLabel, LoopOptions, LoopReport, LoopSystem, RunSummary, Traces};
-use super::signature::summarise;
+use super::signature::{summarise, LINE_HARMONICS};
+use super::speed::{estimate_speed, RunningSpeed};
 use crate::io::data::DataFile;
 use crate::rotor::bearing_geometry::BearingLine;
 use crate::rotor::{RotorConfig, RotorModel};
 use crate::rotor_akf::{reduce, ReducedRotor};
 use anyhow::{anyhow, Result};
+use std::f64::consts::TAU;
 
 /// A rotor, its data and the loop's options: what [`close_loop`] searches.
 pub struct RotorSystem<'a> {
@@ -36,8 +38,16 @@ impl<'a> RotorSystem<'a> {
     /// The rotor `model` (its configured sensors, unbalance nodes, bearings and operating
     /// speed) on `data`, which must have every sensor's channel.
     pub fn new(model: &'a RotorModel, data: &'a DataFile, options: &LoopOptions) -> Result<Self> {
+        Self::at_speed(model, data, options, model.config().operation.speed)
+    }
+
+    /// As [`RotorSystem::new`], running at `speed` (rad/s) instead of the configured speed.
+    ///
+    /// The base filter's noise levels are those of `options.tuning` with the configuration's
+    /// `[filter]` section put in place.
+    pub fn at_speed(model: &'a RotorModel, data: &'a DataFile, options: &LoopOptions, speed: f64) -> Result<Self> {
         let cfg = model.config();
-        let speed = cfg.operation.speed;
+        let options = &LoopOptions { tuning: options.tuning.with_filter(&cfg.filter), ..*options };
         let red = reduce(model, speed, &options.tuning)?;
         let columns: Vec<Vec<f64>> = red
             .channels
@@ -79,6 +89,29 @@ impl<'a> RotorSystem<'a> {
 
     fn channels(&self) -> usize {
         self.red.channels.len()
+    }
+
+    /// The sensor channels as the filter reads them (offsets removed), `[channel][k]`.
+    pub fn columns(&self) -> &[Vec<f64>] {
+        &self.columns
+    }
+
+    /// The highest harmonic (up to [`LINE_HARMONICS`]) of a line at `order` that some channel's
+    /// spectrum has a peak at, whatever else that peak was named (a harmonic of a defect line
+    /// can sit on an order or a natural frequency too).
+    fn line_harmonics(&self, s: &RunSummary, order: f64) -> u8 {
+        let f = order * self.red.speed / TAU;
+        let tol = 1.2 * s.bin_width_hz;
+        let peaks = || s.channels.iter().flat_map(|c| c.peaks.iter());
+        (1..=LINE_HARMONICS)
+            .filter(|&h| peaks().any(|p| (p.frequency_hz - h as f64 * f).abs() <= tol))
+            .max()
+            .unwrap_or(1)
+    }
+
+    /// The base model's log-likelihood on the data (no effects).
+    pub fn base_log_likelihood(&self) -> Result<f64> {
+        Ok(self.run(&[])?.1.log_likelihood())
     }
 }
 
@@ -130,7 +163,7 @@ impl LoopSystem for RotorSystem<'_> {
     /// elsewhere), then the structural ones (scales, delays, parameters, 1× forces off the
     /// unbalance nodes) when the innovations carry lines or colour; the catch-all
     /// (`unknown_input` at each force site) in a tier of its own.
-    fn candidates(&self, s: &RunSummary) -> Vec<Vec<Effect>> {
+    fn candidates(&self, s: &RunSummary, effects: &[(Effect, f64)]) -> Vec<Vec<Effect>> {
         let mut named = Vec::new();
         let mut biased: Vec<(f64, usize)> = s
             .channels
@@ -170,8 +203,15 @@ impl LoopSystem for RotorSystem<'_> {
                 }
             }
         }
-        for (bearing, line, harmonics) in defects {
+        // A line already modelled is not proposed again with another number of harmonics.
+        let modelled = |b: usize, l: BearingLine| {
+            effects
+                .iter()
+                .any(|(e, _)| matches!(e, Effect::BearingDefect { bearing, line, .. } if *bearing == b && *line == l))
+        };
+        for (bearing, line, seen) in defects.into_iter().filter(|&(b, l, _)| !modelled(b, l)) {
             if let Some(&(_, _, order)) = self.lines.iter().find(|(b, l, _)| *b == bearing && *l == line) {
+                let harmonics = self.line_harmonics(s, order).max(seen);
                 let order_milli = (order * 1e3).round() as u32;
                 named.push(Effect::BearingDefect { bearing, line, order_milli, harmonics });
             }
@@ -210,7 +250,15 @@ impl LoopSystem for RotorSystem<'_> {
                 Effect::BearingDefect { line, .. } => Some(line.name().to_string()),
                 _ => None,
             },
-            unit: e.unit(),
+            unit: match e {
+                // A bias is in its channel's unit.
+                Effect::SensorBias { channel } => match self.red.channels.get(*channel) {
+                    Some(n) if n.ends_with("_volts") => "V",
+                    Some(n) if n.ends_with("_ax") || n.ends_with("_ay") => "m/s^2",
+                    _ => e.unit(),
+                },
+                _ => e.unit(),
+            },
         }
     }
 
@@ -273,6 +321,30 @@ impl LoopSystem for RotorSystem<'_> {
 /// bearings and operating speed): runs the base filter, then adds effects while the
 /// innovations are not consistent and an effect pays for its parameters (BIC) in both halves of
 /// the run.
+///
+/// With [`LoopOptions::speed_band`] the running speed is first estimated from the data
+/// ([`estimate_speed`]); the report says which speed was used and where it came from.
 pub fn close_loop(model: &RotorModel, data: &DataFile, options: &LoopOptions) -> Result<LoopReport> {
-    search(&RotorSystem::new(model, data, options)?, options)
+    let declared_hz = model.config().operation.speed / TAU;
+    let speed = match options.speed_band {
+        Some(band) => {
+            if options.progress {
+                eprintln!("loop: estimating the running speed within ±{:.0} % of {declared_hz:.3} Hz", band * 100.0);
+            }
+            let s = estimate_speed(model, data, options, band)?;
+            if options.progress {
+                eprintln!(
+                    "loop: running speed {:.4} Hz ({:+.2} % from the configured speed; spectral line at {:.4} Hz)",
+                    s.hz,
+                    (s.hz / declared_hz - 1.0) * 100.0,
+                    s.spectral_hz.unwrap_or(f64::NAN)
+                );
+            }
+            s
+        }
+        None => RunningSpeed { hz: declared_hz, declared_hz, source: "config", spectral_hz: None },
+    };
+    let mut report = search(&RotorSystem::at_speed(model, data, options, speed.hz * TAU)?, options)?;
+    report.running_speed = Some(speed);
+    Ok(report)
 }

@@ -11,6 +11,7 @@ use super::filter::Run;
 use super::model::EffectTuning;
 use super::optimize::{maximise, ScalarRange};
 use super::signature::{unexplained, Signature, SignatureOptions};
+use super::speed::RunningSpeed;
 use crate::rotor_akf::Tuning;
 use anyhow::{anyhow, Result};
 use serde::Serialize;
@@ -40,6 +41,9 @@ pub struct LoopOptions {
     pub screen_parameters: bool,
     /// Print progress to standard error.
     pub progress: bool,
+    /// Rotating systems: estimate the running speed from the data within this fraction of the
+    /// configured (nominal) speed, instead of taking the configured speed as exact.
+    pub speed_band: Option<f64>,
 }
 
 impl Default for LoopOptions {
@@ -53,6 +57,7 @@ impl Default for LoopOptions {
             identifiable_margin: 2.0,
             screen_parameters: true,
             progress: false,
+            speed_band: None,
         }
     }
 }
@@ -171,6 +176,9 @@ pub struct LoopReport {
     pub trials: Vec<Trial>,
     /// Why the loop stopped.
     pub stopped: String,
+    /// The running speed the loop used and where it came from (rotating systems).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub running_speed: Option<RunningSpeed>,
     /// The series behind the plots.
     #[serde(skip)]
     pub traces: Traces,
@@ -211,10 +219,10 @@ pub trait LoopSystem {
     fn run(&self, effects: &[(Self::Effect, f64)]) -> Result<(Self::Model, Run)>;
     /// The innovations' statistics and the virtual-sensing error of a run.
     fn summarise(&self, run: &Run) -> RunSummary;
-    /// Candidates for the next effect in tiers: a later tier is tried only when no candidate of
-    /// an earlier one is kept (the catch-all goes last). The engine drops effects already in
-    /// the model.
-    fn candidates(&self, summary: &RunSummary) -> Vec<Vec<Self::Effect>>;
+    /// Candidates for the next effect, given the current model's `effects` and the summary of
+    /// its run, in tiers: a later tier is tried only when no candidate of an earlier one is kept
+    /// (the catch-all goes last). The engine drops effects already in the model.
+    fn candidates(&self, summary: &RunSummary, effects: &[(Self::Effect, f64)]) -> Vec<Vec<Self::Effect>>;
     /// How `effect` reads in the report.
     fn label(&self, effect: &Self::Effect) -> EffectLabel;
     /// Free parameters `effect` costs in the BIC.
@@ -292,7 +300,7 @@ impl<S: LoopSystem> Engine<'_, S> {
         };
         let theta = match self.sys.scalar(&cand) {
             Some((range, grid)) => {
-                maximise(
+                let x = maximise(
                     |th| self.sys.run(&with(th)).ok().map(|(_, r)| r.log_likelihood()),
                     range.low,
                     range.high,
@@ -300,7 +308,18 @@ impl<S: LoopSystem> Engine<'_, S> {
                     range.tolerance,
                 )
                 .ok_or_else(|| anyhow!("no value of the scalar gives a usable model"))?
-                .x
+                .x;
+                // A likelihood still rising at the edge of the range has no maximum there: the
+                // effect is standing in for something else, and its value would be the range's.
+                // (An edge where the effect is neutral is a legitimate answer.)
+                let edge = (10.0 * range.tolerance).max(0.01 * (range.high - range.low));
+                let at = |bound: f64| (x - bound).abs() <= edge && bound != range.neutral;
+                if at(range.low) || at(range.high) {
+                    return Err(anyhow!(
+                        "the likelihood peaks at the edge of the scalar's range ({x:.4}): not an estimate"
+                    ));
+                }
+                x
             }
             None => 0.0,
         };
@@ -509,7 +528,7 @@ pub fn search<S: LoopSystem>(sys: &S, options: &LoopOptions) -> Result<LoopRepor
         iteration += 1;
         let mut chosen = None;
         let mut evaluated = Vec::new();
-        for tier in sys.candidates(&current) {
+        for tier in sys.candidates(&current, &effects) {
             let mut fresh: Vec<S::Effect> = Vec::new();
             for e in tier {
                 if !effects.iter().any(|(x, _)| *x == e) && !fresh.contains(&e) {
@@ -605,6 +624,7 @@ pub fn search<S: LoopSystem>(sys: &S, options: &LoopOptions) -> Result<LoopRepor
         unexplained,
         trials,
         stopped,
+        running_speed: None,
         traces,
     })
 }

@@ -124,8 +124,8 @@ pub struct Signature {
 /// Harmonics of a bearing line that name a spectral line.
 pub const LINE_HARMONICS: u8 = 8;
 
-/// The bearing line (bearing, line, harmonic) a peak at `f` Hz sits at, within `tol_hz`. The
-/// line itself is matched first and always; its harmonics (up to [`LINE_HARMONICS`]) only when
+/// The bearing line (bearing, line, harmonic) a peak at `f` Hz sits at, within `tol_hz` (the
+/// closest, if several are). The line itself is matched first and always; its harmonics (up to [`LINE_HARMONICS`]) only when
 /// the peak is at no order of the running speed or natural frequency (`located`), because with
 /// four lines per bearing some harmonic falls near almost anything.
 ///
@@ -146,10 +146,13 @@ pub fn bearing_line(
     located: bool,
 ) -> Option<(usize, BearingLine, u8)> {
     let run_hz = speed / std::f64::consts::TAU;
-    let at = |h: u8| {
-        lines.iter().find(|(_, _, order)| (f - h as f64 * order * run_hz).abs() <= tol_hz).map(|(b, l, _)| (*b, *l, h))
+    let closest = |hs: std::ops::RangeInclusive<u8>| {
+        hs.flat_map(|h| lines.iter().map(move |(b, l, order)| ((f - h as f64 * order * run_hz).abs(), (*b, *l, h))))
+            .filter(|(d, _)| *d <= tol_hz)
+            .min_by(|a, b| a.0.total_cmp(&b.0))
+            .map(|(_, m)| m)
     };
-    at(1).or_else(|| if located { None } else { (2..=LINE_HARMONICS).find_map(at) })
+    closest(1..=1).or_else(|| if located { None } else { closest(2..=LINE_HARMONICS) })
 }
 
 /// Summarises `run`: per-channel signatures over the samples after `settle`, the NIS, and the

@@ -65,6 +65,22 @@ pub struct RotorConfig {
     /// Operating point (`[operation]`); default: standstill, 1 kHz.
     #[serde(default)]
     pub operation: OperationConfig,
+    /// Noise levels of the virtual-sensing filter for this machine (`[filter]`); default: the
+    /// built-in tuning's.
+    #[serde(default)]
+    pub filter: FilterConfig,
+}
+
+/// The virtual-sensing filter's noise levels for a machine (`[filter]`), e.g. from `edgekf
+/// rotor tune` on a healthy recording. They are declared, not fitted by the residual loop: a
+/// filter whose noise is fitted to the data it diagnoses absorbs what it should reveal.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct FilterConfig {
+    /// Spectral density of unmodelled modal acceleration, (m/s²)² kg / s (modal units).
+    pub modal_psd: Option<f64>,
+    /// Spectral density of the force states' random walk, N²/s.
+    pub force_psd: Option<f64>,
 }
 
 /// The shaft: one material, one or more uniform sections laid end to end from z = 0.
@@ -632,6 +648,11 @@ impl RotorConfig {
             node(&at, u.node)?;
             non_negative(format!("{at}.magnitude"), u.magnitude)?;
             finite(format!("{at}.phase_deg"), u.phase_deg)?;
+        }
+        for (name, v) in [("filter.modal_psd", self.filter.modal_psd), ("filter.force_psd", self.filter.force_psd)] {
+            if let Some(v) = v {
+                positive(name, v)?;
+            }
         }
         let op = &self.operation;
         finite("operation.speed", op.speed)?;

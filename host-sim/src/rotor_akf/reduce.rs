@@ -64,6 +64,22 @@ impl Tuning {
     pub fn robust() -> Self {
         Self { force_psd: 1e-2, modal_psd: 1e-5, ..Self::default() }
     }
+
+    /// This tuning with the noise levels a configuration's `[filter]` declares put in place.
+    ///
+    /// ```
+    /// use edgekf_sim::rotor::config::FilterConfig;
+    /// use edgekf_sim::rotor_akf::Tuning;
+    /// let t = Tuning::default().with_filter(&FilterConfig { modal_psd: Some(1e-11), force_psd: None });
+    /// assert_eq!((t.modal_psd, t.force_psd), (1e-11, Tuning::default().force_psd));
+    /// ```
+    pub fn with_filter(self, f: &crate::rotor::config::FilterConfig) -> Self {
+        Self {
+            modal_psd: f.modal_psd.unwrap_or(self.modal_psd),
+            force_psd: f.force_psd.unwrap_or(self.force_psd),
+            ..self
+        }
+    }
 }
 
 /// Where an accelerometer's acceleration enters the reduced model (see
