@@ -20,6 +20,7 @@ fn seed(case: Case) -> u64 {
         Case::Two => 23,
         Case::SoftBearing => 29,
         Case::GainSwitch => 31,
+        Case::Delay => 37,
     }
 }
 

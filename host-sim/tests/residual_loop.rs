@@ -147,3 +147,12 @@ fn a_gain_that_switches_during_the_run_is_unexplained() {
     // Even the catch-all unknown input was tried and refused.
     assert!(r.trials.iter().any(|t| t.kind == "unknown_input" && !t.accepted));
 }
+
+#[test]
+fn a_delayed_probe_is_found() {
+    let r = found(Case::Delay, 37);
+    let e = only(&r);
+    assert_eq!((e.kind.as_str(), e.location.as_str(), e.unit.as_str()), ("sensor_delay", "n32_x", "s"));
+    assert!((e.value - 2e-3).abs() < 0.2 * 2e-3, "delay {:.3e}", e.value);
+    assert!(r.after.consistent, "{}", r.stopped);
+}

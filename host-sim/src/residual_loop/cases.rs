@@ -4,11 +4,11 @@
 //!
 //! ```
 //! use edgekf_sim::residual_loop::cases::Case;
-//! assert_eq!(Case::ALL.len(), 10);
+//! assert_eq!(Case::ALL.len(), 11);
 //! assert!(Case::Scale.describe().contains("5 %"));
 //! ```
 
-use super::inject::{inject_bias, inject_harmonic_force, inject_scale};
+use super::inject::{inject_bias, inject_delay, inject_harmonic_force, inject_scale};
 use super::model::Parameter;
 use crate::io::data::DataFile;
 use crate::rotor::{RotorConfig, RotorModel, SimOptions};
@@ -40,11 +40,13 @@ pub enum Case {
     SoftBearing,
     /// Probe `n5_x`'s gain switches from 1 to 1.15 at 1.5 s (no effect of the library fits).
     GainSwitch,
+    /// Probe `n32_x` lags the others by 2 ms (two samples).
+    Delay,
 }
 
 impl Case {
     /// Every case.
-    pub const ALL: [Case; 10] = [
+    pub const ALL: [Case; 11] = [
         Case::Clean,
         Case::Bias,
         Case::TwoX,
@@ -55,6 +57,7 @@ impl Case {
         Case::Two,
         Case::SoftBearing,
         Case::GainSwitch,
+        Case::Delay,
     ];
 
     /// What was done to the data.
@@ -70,6 +73,7 @@ impl Case {
             Case::Two => "−25 µm bias on n32_x and 2 N at 2×, node 23",
             Case::SoftBearing => "bearing 4 kxx halved",
             Case::GainSwitch => "n5_x gain 1 → 1.15 at 1.5 s",
+            Case::Delay => "n32_x lags by 2 ms",
         }
     }
 
@@ -108,6 +112,7 @@ impl Case {
                 inject_harmonic_force(&mut d, &declared, speed, 23, 2.0, 2.0, 1.0)?;
             }
             Case::GainSwitch => inject_scale(&mut d, "n5_x", 1.15, Some(1.5))?,
+            Case::Delay => inject_delay(&mut d, "n32_x", 2e-3)?,
             _ => {}
         }
         Ok(d)

@@ -203,3 +203,26 @@ pub fn inject_bearing_defect(data: &mut DataFile, channel: &str, d: &DefectSigna
     }
     Ok(())
 }
+
+/// Delays channel `channel` by `tau` seconds (linear interpolation between samples; the first
+/// samples repeat the first value): a sensor whose signal chain lags the others.
+pub fn inject_delay(data: &mut DataFile, channel: &str, tau: f64) -> Result<()> {
+    if !(tau.is_finite() && tau >= 0.0) {
+        bail!("a delay must be zero or positive, not {tau}");
+    }
+    let t = data.t.clone();
+    let dt = if t.len() > 1 { (t[t.len() - 1] - t[0]) / (t.len() - 1) as f64 } else { 1.0 };
+    let col = column_mut(data, channel).ok_or_else(|| anyhow!("the data file has no channel {channel}"))?;
+    let old = col.clone();
+    let last = old.len().saturating_sub(1);
+    for (k, v) in col.iter_mut().enumerate() {
+        let p = k as f64 - tau / dt;
+        *v = if p <= 0.0 {
+            old[0]
+        } else {
+            let (i, f) = (p.floor() as usize, p.fract());
+            (1.0 - f) * old[i.min(last)] + f * old[(i + 1).min(last)]
+        };
+    }
+    Ok(())
+}
