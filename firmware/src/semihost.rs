@@ -48,3 +48,29 @@ pub fn exit(code: u32) -> ! {
         cortex_m::asm::wfi();
     }
 }
+
+/// Defines a QEMU image's panic and HardFault handlers: each prints the image's `name` and the
+/// cause over semihosting and ends QEMU with exit code 101 (panic) or 102 (HardFault), so a
+/// HIL test fails with a readable message instead of hanging. The image must depend on
+/// `cortex-m`, `cortex-m-rt` and `cortex-m-semihosting` (the `qemu` feature brings them).
+///
+/// ```ignore
+/// edgekf_firmware::semihost_fault_handlers!("edgekf-rotor-qemu");
+/// ```
+#[macro_export]
+macro_rules! semihost_fault_handlers {
+    ($name:literal) => {
+        #[panic_handler]
+        fn panic(info: &core::panic::PanicInfo) -> ! {
+            ::cortex_m::interrupt::disable();
+            ::cortex_m_semihosting::heprintln!(concat!($name, " panicked: {}"), info);
+            $crate::semihost::exit(101)
+        }
+
+        #[::cortex_m_rt::exception]
+        unsafe fn HardFault(frame: &::cortex_m_rt::ExceptionFrame) -> ! {
+            ::cortex_m_semihosting::heprintln!(concat!($name, " HardFault: {:?}"), frame);
+            $crate::semihost::exit(102)
+        }
+    };
+}

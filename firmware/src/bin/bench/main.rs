@@ -13,8 +13,7 @@
 #![no_std]
 #![no_main]
 
-use cortex_m_rt::{entry, exception, ExceptionFrame};
-use cortex_m_semihosting::heprintln;
+use cortex_m_rt::entry;
 use defmt_semihosting as _;
 use edgekf::filter::{KalmanFilter, MerweSigmaPoints, SteadyState, SteadyStateFilter, UnscentedKalmanFilter};
 use edgekf::models::harmonic::{HarmonicForceEstimator, HarmonicForceParams};
@@ -257,14 +256,4 @@ fn main() -> ! {
     exit(0)
 }
 
-#[panic_handler]
-fn panic(info: &core::panic::PanicInfo) -> ! {
-    heprintln!("edgekf-bench panicked: {}", info);
-    exit(101)
-}
-
-#[exception]
-unsafe fn HardFault(frame: &ExceptionFrame) -> ! {
-    heprintln!("edgekf-bench HardFault: {:?}", frame);
-    exit(102)
-}
+edgekf_firmware::semihost_fault_handlers!("edgekf-bench");

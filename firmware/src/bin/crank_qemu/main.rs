@@ -14,7 +14,7 @@
 #![no_std]
 #![no_main]
 
-use cortex_m_rt::{entry, exception, ExceptionFrame};
+use cortex_m_rt::entry;
 use cortex_m_semihosting::heprintln;
 use defmt_semihosting as _;
 use edgekf_firmware::crank::{CrankNode, Storage, CHANNELS, WINDOW};
@@ -102,15 +102,4 @@ fn main() -> ! {
     exit(0)
 }
 
-#[panic_handler]
-fn panic(info: &core::panic::PanicInfo) -> ! {
-    cortex_m::interrupt::disable();
-    heprintln!("edgekf-crank-qemu panicked: {}", info);
-    exit(101)
-}
-
-#[exception]
-unsafe fn HardFault(frame: &ExceptionFrame) -> ! {
-    heprintln!("edgekf-crank-qemu HardFault: {:?}", frame);
-    exit(102)
-}
+edgekf_firmware::semihost_fault_handlers!("edgekf-crank-qemu");

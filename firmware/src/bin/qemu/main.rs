@@ -7,7 +7,7 @@
 #![no_std]
 #![no_main]
 
-use cortex_m_rt::{entry, exception, ExceptionFrame};
+use cortex_m_rt::entry;
 use cortex_m_semihosting::heprintln;
 use defmt_semihosting as _;
 use edgekf_firmware::line_feed::LineFeed;
@@ -104,15 +104,4 @@ fn main() -> ! {
     exit(0)
 }
 
-#[panic_handler]
-fn panic(info: &core::panic::PanicInfo) -> ! {
-    cortex_m::interrupt::disable();
-    heprintln!("edgekf-qemu panicked: {}", info);
-    exit(101)
-}
-
-#[exception]
-unsafe fn HardFault(frame: &ExceptionFrame) -> ! {
-    heprintln!("edgekf-qemu HardFault: {:?}", frame);
-    exit(102)
-}
+edgekf_firmware::semihost_fault_handlers!("edgekf-qemu");

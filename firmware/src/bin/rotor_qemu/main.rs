@@ -6,7 +6,7 @@
 #![no_std]
 #![no_main]
 
-use cortex_m_rt::{entry, exception, ExceptionFrame};
+use cortex_m_rt::entry;
 use cortex_m_semihosting::heprintln;
 use defmt_semihosting as _;
 use edgekf_firmware::line_feed::ChannelReader;
@@ -58,15 +58,4 @@ fn main() -> ! {
     exit(0)
 }
 
-#[panic_handler]
-fn panic(info: &core::panic::PanicInfo) -> ! {
-    cortex_m::interrupt::disable();
-    heprintln!("edgekf-rotor-qemu panicked: {}", info);
-    exit(101)
-}
-
-#[exception]
-unsafe fn HardFault(frame: &ExceptionFrame) -> ! {
-    heprintln!("edgekf-rotor-qemu HardFault: {:?}", frame);
-    exit(102)
-}
+edgekf_firmware::semihost_fault_handlers!("edgekf-rotor-qemu");
