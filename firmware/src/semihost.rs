@@ -1,7 +1,7 @@
 //! Host file access and exit codes through ARM semihosting (handled by QEMU). Test equipment
 //! only: semihosting calls stop the core while the host serves them.
 
-use crate::line_feed::ByteSource;
+use crate::line_feed::{ByteSource, ChannelReader};
 use cortex_m_semihosting::{nr, syscall, syscall1};
 
 /// An open host file.
@@ -46,6 +46,28 @@ pub fn exit(code: u32) -> ! {
     }
     loop {
         cortex_m::asm::wfi();
+    }
+}
+
+/// Opens the HIL input `hil_input.csv` in QEMU's working directory and locates `channels` in
+/// its header, or ends QEMU with exit code 2 (no file) or 3 (no usable header), naming `image`
+/// and the channels it needs.
+pub fn open_channels<const M: usize>(image: &str, channels: [&'static str; M]) -> ChannelReader<HostFile, M> {
+    let Some(file) = HostFile::open("hil_input.csv\0") else {
+        cortex_m_semihosting::heprintln!("{}: cannot open hil_input.csv in QEMU's working directory", image);
+        exit(2)
+    };
+    match ChannelReader::new(file, channels) {
+        Ok(r) => r,
+        Err(e) => {
+            cortex_m_semihosting::heprint!("{}: hil_input.csv has no usable header (need", image);
+            for c in channels {
+                cortex_m_semihosting::heprint!(" {}", c);
+            }
+            cortex_m_semihosting::heprintln!(")");
+            defmt::error!("bad header: {}", e);
+            exit(3)
+        }
     }
 }
 

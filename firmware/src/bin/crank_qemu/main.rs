@@ -18,25 +18,13 @@ use cortex_m_rt::entry;
 use cortex_m_semihosting::heprintln;
 use defmt_semihosting as _;
 use edgekf_firmware::crank::{CrankNode, Storage, CHANNELS, WINDOW};
-use edgekf_firmware::line_feed::ChannelReader;
-use edgekf_firmware::semihost::{exit, HostFile};
+use edgekf_firmware::semihost::{exit, open_channels};
 use edgekf_firmware::stack;
 
 #[entry]
 fn main() -> ! {
     stack::paint();
-    let Some(file) = HostFile::open("hil_input.csv\0") else {
-        heprintln!("edgekf-crank-qemu: cannot open hil_input.csv in QEMU's working directory");
-        exit(2)
-    };
-    let mut reader = match ChannelReader::new(file, CHANNELS) {
-        Ok(r) => r,
-        Err(e) => {
-            heprintln!("edgekf-crank-qemu: hil_input.csv has no usable header (need crank_alpha)");
-            defmt::error!("bad header: {}", e);
-            exit(3)
-        }
-    };
+    let mut reader = open_channels("edgekf-crank-qemu", CHANNELS);
     let mut storage: Storage = [0.0; WINDOW - 1];
     let mut node = match CrankNode::new(&mut storage) {
         Ok(n) => n,

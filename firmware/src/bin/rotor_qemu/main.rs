@@ -7,28 +7,15 @@
 #![no_main]
 
 use cortex_m_rt::entry;
-use cortex_m_semihosting::heprintln;
 use defmt_semihosting as _;
-use edgekf_firmware::line_feed::ChannelReader;
 use edgekf_firmware::rotor::{RotorEstimator, CHANNELS};
-use edgekf_firmware::semihost::{exit, HostFile};
+use edgekf_firmware::semihost::{exit, open_channels};
 use edgekf_firmware::stack;
 
 #[entry]
 fn main() -> ! {
     stack::paint();
-    let Some(file) = HostFile::open("hil_input.csv\0") else {
-        heprintln!("edgekf-rotor-qemu: cannot open hil_input.csv in QEMU's working directory");
-        exit(2)
-    };
-    let mut reader = match ChannelReader::new(file, CHANNELS) {
-        Ok(r) => r,
-        Err(e) => {
-            heprintln!("edgekf-rotor-qemu: hil_input.csv has no usable header (need n5_x, n5_y, n32_x, n32_y)");
-            defmt::error!("bad header: {}", e);
-            exit(3)
-        }
-    };
+    let mut reader = open_channels("edgekf-rotor-qemu", CHANNELS);
     let mut est = RotorEstimator::new();
     let (boot_stack, _) = stack::high_water();
     stack::paint();
