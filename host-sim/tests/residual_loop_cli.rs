@@ -58,3 +58,38 @@ fn loop_rotor_writes_the_report() {
     assert!(html.contains("<html") && html.contains("sensor_bias"), "{}", &html[..200.min(html.len())]);
     assert!(html.matches("<svg").count() >= 3);
 }
+
+/// `--estimate-speed` on the rig: the speed in report.json is read from the data, and the
+/// summary says so.
+#[test]
+fn loop_rotor_estimates_the_speed() {
+    let rig = concat!(env!("CARGO_MANIFEST_DIR"), "/configs/rotor_rig_bearing.toml");
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("residual-loop-cli-speed");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let model = RotorModel::from_config(&RotorConfig::load(Path::new(rig)).unwrap()).unwrap();
+    // The motor runs 3 % slow.
+    let speed = 0.97 * model.config().operation.speed;
+    let opts = SimOptions { duration: 2.0, seed: 11, speed: Some(speed), ..SimOptions::default() };
+    let csv = dir.join("data.csv");
+    std::fs::write(&csv, model.simulate(&opts).unwrap().to_data_file().to_csv_string().unwrap()).unwrap();
+    let report = dir.join("report");
+    let out = Command::new(env!("CARGO_BIN_EXE_edgekf"))
+        .args(["loop", "rotor", "--quiet", "--estimate-speed", "--config", rig, "--data"])
+        .arg(&csv)
+        .arg("--report")
+        .arg(&report)
+        .output()
+        .expect("run edgekf");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(stdout.contains("estimated from the data"), "{stdout}");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(report.join("report.json")).unwrap()).unwrap();
+    let s = &v["running_speed"];
+    assert_eq!(s["source"], "estimated");
+    let truth = speed / std::f64::consts::TAU;
+    assert!((s["hz"].as_f64().unwrap() / truth - 1.0).abs() < 1e-3, "{s} against {truth} Hz");
+    assert!((s["declared_hz"].as_f64().unwrap() - 30.0).abs() < 1e-3);
+    assert_eq!(v["effects_added"].as_array().unwrap().len(), 0, "{}", v["effects_added"]);
+}
