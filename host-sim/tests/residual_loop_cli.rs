@@ -7,6 +7,18 @@ use std::process::Command;
 
 const PAPER: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/configs/rotor_paper.toml");
 
+/// Runs `edgekf loop rotor --config config --data csv --report report` with `extra` flags.
+fn edgekf_loop(config: &str, csv: &Path, report: &Path, extra: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_edgekf"))
+        .args(["loop", "rotor", "--config", config, "--data"])
+        .arg(csv)
+        .arg("--report")
+        .arg(report)
+        .args(extra)
+        .output()
+        .expect("run edgekf")
+}
+
 #[test]
 fn loop_rotor_writes_the_report() {
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("residual-loop-cli");
@@ -20,13 +32,7 @@ fn loop_rotor_writes_the_report() {
     let csv = dir.join("data.csv");
     std::fs::write(&csv, data.to_csv_string().unwrap()).unwrap();
     let report = dir.join("report");
-    let out = Command::new(env!("CARGO_BIN_EXE_edgekf"))
-        .args(["loop", "rotor", "--config", PAPER, "--data"])
-        .arg(&csv)
-        .arg("--report")
-        .arg(&report)
-        .output()
-        .expect("run edgekf");
+    let out = edgekf_loop(PAPER, &csv, &report, &[]);
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     assert!(stdout.contains("sensor_bias") && stdout.contains("before") && stdout.contains("after"), "{stdout}");
@@ -74,13 +80,7 @@ fn loop_rotor_estimates_the_speed() {
     let csv = dir.join("data.csv");
     std::fs::write(&csv, model.simulate(&opts).unwrap().to_data_file().to_csv_string().unwrap()).unwrap();
     let report = dir.join("report");
-    let out = Command::new(env!("CARGO_BIN_EXE_edgekf"))
-        .args(["loop", "rotor", "--quiet", "--estimate-speed", "--config", rig, "--data"])
-        .arg(&csv)
-        .arg("--report")
-        .arg(&report)
-        .output()
-        .expect("run edgekf");
+    let out = edgekf_loop(rig, &csv, &report, &["--quiet", "--estimate-speed"]);
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     assert!(stdout.contains("estimated from the data"), "{stdout}");
