@@ -7,8 +7,14 @@
 //!   Euler), its spread, its slope, and the clearance std the windows allow together;
 //! * `ukf [DURATION] [RECORDINGS]`: the UKF (default options) from 0.01, 0.1 and 0.2 mm on
 //!   recordings of 0.25 mm at A (adaptive integrator at 1e-9, released 30° + 0.0013° · r, seed
-//!   7 + r).
+//!   7 + r);
+//! * `two-clearances [RUNS] [DURATION] [SPREAD] [stencil]`: identifiability of A and B together
+//!   ([`edgekf_sim::crank::estimate::identify2`]): the likelihood surface over cA 0.15–0.35 ×
+//!   cB 0.05–0.25 mm about A 0.25 + B 0.15 mm, the Fisher information there and the
+//!   single-clearance bound (default 16 runs of 10 s per point released 30 ± 10°; `stencil`:
+//!   only cA 0.20–0.30 × cB 0.10–0.20 mm, enough for the Fisher matrix).
 use edgekf_sim::crank::config::Method;
+use edgekf_sim::crank::estimate::identify2::{Analysis, Design};
 use edgekf_sim::crank::estimate::ukf::{self, UkfOptions};
 use edgekf_sim::crank::estimate::Recording;
 use edgekf_sim::crank::feature::window_features;
@@ -135,6 +141,34 @@ fn main() {
             let worst = errs.iter().fold(0.0_f64, |m, e| m.max(e.abs()));
             println!("{dur} s: {within} of {} runs within ±5 %, worst {:.1} %", errs.len(), worst * 100.0);
         }
-        _ => eprintln!("usage: crank_study release-curve | information | ukf [DURATION] [RECORDINGS]"),
+        Some("two-clearances") => {
+            let runs: usize = args.get(1).map_or(16, |s| s.parse().expect("runs per point"));
+            let duration: f64 = args.get(2).map_or(10.0, |s| s.parse().expect("duration, s"));
+            let spread: f64 = args.get(3).map_or(10.0, |s| s.parse().expect("release spread, degrees"));
+            let design = Design { runs, duration, release_spread_deg: spread, ..Design::default() };
+            // `stencil`: only the reference's 3 × 3 neighbourhood (the Fisher matrix; a cheaper run).
+            let stencil = args.get(4).is_some_and(|s| s == "stencil");
+            let (ca, cb, r) = if stencil {
+                (vec![0.20e-3, 0.25e-3, 0.30e-3], vec![0.10e-3, 0.15e-3, 0.20e-3], (1, 1))
+            } else {
+                (
+                    vec![0.15e-3, 0.20e-3, 0.25e-3, 0.30e-3, 0.35e-3],
+                    vec![0.05e-3, 0.10e-3, 0.15e-3, 0.20e-3, 0.25e-3],
+                    (2, 2),
+                )
+            };
+            let start = std::time::Instant::now();
+            let a = Analysis::simulate(&CrankConfig::default(), &ca, &cb, r, true, &design, &|k, n| {
+                if k % 20 == 0 || k == n {
+                    eprintln!("{k}/{n} runs, {:.0} s", start.elapsed().as_secs_f64());
+                }
+            })
+            .unwrap();
+            print!("{}", a.report());
+            println!("{:.0} s", start.elapsed().as_secs_f64());
+        }
+        _ => eprintln!(
+            "usage: crank_study release-curve | information | ukf [DURATION] [RECORDINGS] | two-clearances [RUNS] [DURATION] [SPREAD] [stencil]"
+        ),
     }
 }

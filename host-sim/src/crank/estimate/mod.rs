@@ -40,6 +40,7 @@
 
 pub mod chip;
 pub mod fast;
+pub mod identify2;
 pub mod model;
 pub mod release;
 pub mod train;
