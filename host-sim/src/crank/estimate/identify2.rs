@@ -108,20 +108,23 @@ pub const FEATURES: usize = super::model::FEATURES + 2;
 
 /// The features of a run: the fast model's ten, then `ln a` of the release window and of the
 /// mean over the later windows.
-pub const FEATURE_NAMES: [&str; FEATURES] = [
-    "ln_rms",
-    "ln_diff_rms",
-    "ln_diff2_rms",
-    "ln_highpass_rms",
-    "ln_diff_kurtosis",
-    "ln_kurtosis",
-    "ln_impact_rate",
-    "ln_impact_peak",
-    "ln_impact_width",
-    "ln_diff_median",
-    "ln_a_release",
-    "ln_a_later",
-];
+///
+/// ```
+/// use edgekf_sim::crank::estimate::identify2::FEATURE_NAMES;
+/// assert_eq!((FEATURE_NAMES[0], FEATURE_NAMES[9]), ("ln_rms", "ln_diff_median"));
+/// assert_eq!(&FEATURE_NAMES[10..], ["ln_a_release", "ln_a_later"]);
+/// ```
+pub const FEATURE_NAMES: [&str; FEATURES] = {
+    let mut names = [""; FEATURES];
+    let mut i = 0;
+    while i < super::model::FEATURES {
+        names[i] = super::model::FEATURE_NAMES[i];
+        i += 1;
+    }
+    names[FEATURES - 2] = "ln_a_release";
+    names[FEATURES - 1] = "ln_a_later";
+    names
+};
 
 /// Which features a likelihood or Fisher matrix uses.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
