@@ -50,19 +50,34 @@ pub fn strongest_line(columns: &[Vec<f64>], rate: f64, low: f64, high: f64) -> O
     }
     let span = n as f64 / rate;
     let step = 1.0 / (20.0 * span);
-    let window: Vec<f64> = (0..n).map(|k| 0.5 - 0.5 * (TAU * k as f64 / (n - 1) as f64).cos()).collect();
+    // Each channel without its mean, Hann-windowed, missing samples as 0: computed once, not
+    // per frequency.
+    let weighted: Vec<Vec<f64>> = columns
+        .iter()
+        .map(|col| {
+            let finite = col[..n].iter().filter(|v| v.is_finite());
+            let mean = finite.clone().sum::<f64>() / finite.count().max(1) as f64;
+            (0..n)
+                .map(|k| {
+                    let w = 0.5 - 0.5 * (TAU * k as f64 / (n - 1) as f64).cos();
+                    if col[k].is_finite() {
+                        (col[k] - mean) * w
+                    } else {
+                        0.0
+                    }
+                })
+                .collect()
+        })
+        .collect();
     let power = |f: f64| -> f64 {
         let (c, s) = ((TAU * f / rate).cos(), (TAU * f / rate).sin());
-        columns
+        weighted
             .iter()
-            .map(|col| {
+            .map(|x| {
                 let (mut re, mut im, mut cr, mut ci) = (0.0, 0.0, 1.0f64, 0.0f64);
-                let mean = col[..n].iter().filter(|v| v.is_finite()).sum::<f64>() / n as f64;
-                for (v, w) in col[..n].iter().zip(&window) {
-                    if v.is_finite() {
-                        re += (v - mean) * w * cr;
-                        im -= (v - mean) * w * ci;
-                    }
+                for v in x {
+                    re += v * cr;
+                    im -= v * ci;
                     (cr, ci) = (cr * c - ci * s, ci * c + cr * s);
                 }
                 re * re + im * im
