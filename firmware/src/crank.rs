@@ -12,7 +12,7 @@ use edgekf::clearance::{ClearanceEstimate, ClearanceEstimator, ClearanceModel, F
 
 #[allow(missing_docs, clippy::excessive_precision, clippy::unreadable_literal)]
 mod constants {
-    use edgekf::clearance::ClearanceModel;
+    use edgekf::clearance::{ClearanceModel, ReleaseModel};
     include!("generated/clearance.rs");
 }
 
@@ -37,6 +37,24 @@ const _: () = {
 
 /// The channel read from the input file.
 pub const CHANNELS: [&str; 1] = ["crank_alpha"];
+
+/// [`release_law`] of an estimate the window features gave.
+pub const NO_RELEASE_LAW: u8 = u8::MAX;
+
+/// The release law behind an estimate as one byte for the log: its hypothesis (0: the first
+/// contact was seen, 1: the second), or [`NO_RELEASE_LAW`].
+///
+/// ```
+/// use edgekf::clearance::ClearanceEstimate;
+/// use edgekf_firmware::crank::{release_law, NO_RELEASE_LAW};
+/// let mut e = ClearanceEstimate { joint: 0, clearance: 2.5e-4f32, scores: [0.0; 3], per_joint: [2.5e-4; 3], release: None };
+/// assert_eq!(release_law(&e), NO_RELEASE_LAW);
+/// e.release = Some(1);
+/// assert_eq!(release_law(&e), 1);
+/// ```
+pub fn release_law(e: &ClearanceEstimate<f32>) -> u8 {
+    e.release.map_or(NO_RELEASE_LAW, |h| u8::try_from(h).unwrap_or(NO_RELEASE_LAW))
+}
 
 /// The window's `|Δα|`, the estimator's one large buffer.
 pub type Storage = [f32; WINDOW - 1];
@@ -91,6 +109,12 @@ impl<'s> CrankNode<'s> {
     /// The recording's features so far (`ln` of the window means).
     pub fn features(&self) -> [f32; edgekf::clearance::FEATURES] {
         self.est.features().features()
+    }
+
+    /// The first contact after release, once seen: its time (s) and the mean crank
+    /// acceleration before it (rad/s²).
+    pub fn release_contact(&self) -> Option<edgekf::clearance::ReleaseFeatures<f32>> {
+        self.est.release().features()
     }
 
     /// Completed windows.

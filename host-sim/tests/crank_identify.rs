@@ -13,23 +13,32 @@ fn long() -> bool {
     std::env::var_os("EDGEKF_LONG").is_some()
 }
 
-/// Identification rate, worst and RMS relative clearance error of the built-in model on `runs`.
-fn evaluate(runs: &[Run]) -> (f64, f64, f64) {
+/// Identification rate, worst and RMS relative clearance error of the built-in model on `runs`,
+/// and the number of runs with the right joint within ±3 %.
+fn evaluate(runs: &[Run]) -> (f64, f64, f64, usize) {
+    evaluate_with(&FastModel::builtin(), runs)
+}
+
+fn evaluate_with(model: &FastModel, runs: &[Run]) -> (f64, f64, f64, usize) {
+    let mut within = 0;
     let cfg = CrankConfig::default();
-    let model = FastModel::builtin();
     let feats = train::features_of(&cfg, runs, model.window, 2, &|_, _| {}).unwrap();
     for (r, f) in runs.iter().zip(&feats) {
         let e = model.estimate_features(*f);
+        let c = e.clearance[e.joint.index()];
+        within += usize::from(e.joint == r.joint && (c / r.clearance - 1.0).abs() <= 0.03);
         eprintln!(
-            "{} {:.3} mm (release {:.1}°, radius ×{:.2}, seed {}): named {} {:.4} mm ({:+.1} %), scores {:.1}/{:.1}/{:.1}, {} operations",
+            "{} {:.3} mm (release {:.1}°, radius ×{:.2}, seed {}): named {} {:.4} mm ({:+.1} %; window features {:+.1} %, release law {:?}), scores {:.1}/{:.1}/{:.1}, {} operations",
             r.joint,
             r.clearance * 1e3,
             r.release_deg,
             r.radius,
             r.seed,
             e.joint,
-            e.per_joint[r.joint.index()] * 1e3,
+            c * 1e3,
+            (c / r.clearance - 1.0) * 100.0,
             (e.per_joint[r.joint.index()] / r.clearance - 1.0) * 100.0,
+            e.release,
             e.scores[0],
             e.scores[1],
             e.scores[2],
@@ -40,27 +49,46 @@ fn evaluate(runs: &[Run]) -> (f64, f64, f64) {
             assert_eq!(e.clearance[j.index()] > 0.0, j == e.joint);
         }
     }
-    let (rate, worst, rms) = train::score(&model, runs, &feats);
+    let (rate, worst, rms) = train::score(model, runs, &feats);
     eprintln!(
-        "{} runs: joint right in {:.1} %, clearance error RMS {:.1} %, worst {:.1} %",
+        "{} runs: joint right in {:.1} %, clearance error RMS {:.1} %, worst {:.1} %, within ±3 % in {within}",
         runs.len(),
         rate * 100.0,
         rms * 100.0,
         worst * 100.0
     );
-    (rate, worst, rms)
+    (rate, worst, rms, within)
 }
 
-/// CI subset: one unseen 10 s run per joint at 0.15 and 0.4 mm; every joint named right.
+/// CI subset: one unseen 10 s run per joint at 0.1, 0.2, 0.3, 0.4 and 0.5 mm (release angle
+/// and journal radius drawn from 20–40° and × 0.8–1.2): every joint named right and every
+/// clearance within ±3 % (the target).
 #[test]
-fn fast_model_names_the_joint() {
-    let runs = train::grid(&[0.15e-3, 0.4e-3], 1, 700_000, 10.0);
-    let (rate, worst, _) = evaluate(&runs);
-    assert_eq!(rate, 1.0);
-    assert!(worst < 0.35, "{worst}");
+fn fast_model_names_the_joint_and_meets_3_percent() {
+    let runs = train::grid(&[0.1e-3, 0.2e-3, 0.3e-3, 0.4e-3, 0.5e-3], 1, 700_000, 10.0);
+    let (rate, worst, _, within) = evaluate(&runs);
+    assert_eq!((rate, within), (1.0, runs.len()));
+    assert!(worst <= 0.03, "{worst}");
 }
 
-/// Full test grid, EDGEKF_LONG=1: A, B, C × 0.1–0.5 mm in 0.05 mm steps × 4 unseen draws.
+/// Without its release stage the same model is the window features' regression alone, which
+/// chaos limits to about 8 % RMS: the release stage is what meets ±3 %.
+#[test]
+fn without_the_release_stage_the_error_is_several_times_larger() {
+    let runs = train::grid(&[0.1e-3, 0.3e-3, 0.5e-3], 1, 710_000, 10.0);
+    let mut model = FastModel::builtin();
+    model.release = None;
+    let (_, worst_off, rms_off, _) = evaluate_with(&model, &runs);
+    let (_, worst_on, rms_on, _) = evaluate(&runs);
+    assert!(
+        worst_on <= 0.03 && rms_off > 2.0 * rms_on && worst_off > 0.03,
+        "{rms_off} {worst_off} {rms_on} {worst_on}"
+    );
+}
+
+/// Full test grid, EDGEKF_LONG=1: A, B, C × 0.1–0.5 mm in 0.05 mm steps × 4 unseen draws. At
+/// least 95 % within ±3 % and none beyond ±5 %: at 0.1 mm the first contact comes after about 45
+/// samples, and placing it to one sample alone is ±2.2 % of the clearance.
 #[test]
 fn fast_model_long_grid() {
     if !long() {
@@ -69,8 +97,9 @@ fn fast_model_long_grid() {
     }
     let cs: Vec<f64> = (0..9).map(|k| (0.1 + 0.05 * k as f64) * 1e-3).collect();
     let runs = train::grid(&cs, 4, 800_000, 10.0);
-    let (rate, _, _) = evaluate(&runs);
+    let (rate, worst, _, within) = evaluate(&runs);
     assert!(rate >= 0.95, "{rate}");
+    assert!(within as f64 >= 0.95 * runs.len() as f64 && worst <= 0.05, "{within} {worst}");
 }
 
 /// The built-in model round-trips through its TOML, and a broken one is refused.

@@ -4,7 +4,7 @@
 
 use anyhow::{anyhow, bail, Result};
 use edgekf::clearance::{ClearanceEstimate, FEATURES};
-use edgekf_firmware::crank::{CrankNode, Storage, WindowReport, CHANNELS, WINDOW};
+use edgekf_firmware::crank::{CrankNode, Storage, WindowReport, CHANNELS, NO_RELEASE_LAW, WINDOW};
 use edgekf_firmware::line_feed::ChannelReader;
 
 /// What a run of the node's estimator reports: every window's estimate, then the whole
@@ -52,16 +52,24 @@ pub fn parse(lines: &[String]) -> Result<CrankRun> {
     };
     let f32_of = |s: &str| s.parse::<f32>().map_err(|_| anyhow!("bad value {s:?}"));
     let u32_of = |s: &str| s.parse::<u32>().map_err(|_| anyhow!("bad value {s:?}"));
-    // joint, clearance, three scores, three per-joint clearances.
+    // joint, clearance, three scores, three per-joint clearances, the release law.
     let estimate_of = |v: &[String]| -> Result<ClearanceEstimate<f32>> {
         let joint = v[0].parse::<usize>().ok().filter(|&j| j < 3).ok_or_else(|| anyhow!("bad joint {:?}", v[0]))?;
         let f: Vec<f32> = v[1..8].iter().map(|s| f32_of(s)).collect::<Result<_>>()?;
-        Ok(ClearanceEstimate { joint, clearance: f[0], scores: [f[1], f[2], f[3]], per_joint: [f[4], f[5], f[6]] })
+        let law = v[8].parse::<u8>().map_err(|_| anyhow!("bad release law {:?}", v[8]))?;
+        let release = (law != NO_RELEASE_LAW).then_some(usize::from(law));
+        Ok(ClearanceEstimate {
+            joint,
+            clearance: f[0],
+            scores: [f[1], f[2], f[3]],
+            per_joint: [f[4], f[5], f[6]],
+            release,
+        })
     };
     let (mut windows, mut features, mut end) = (Vec::new(), None, None);
     for line in lines {
         if line.starts_with("win ") {
-            let v = fields(line, 10)?;
+            let v = fields(line, 11)?;
             windows.push(WindowReport {
                 window: u32_of(&v[0])?,
                 samples: u32_of(&v[1])?,
@@ -75,21 +83,21 @@ pub fn parse(lines: &[String]) -> Result<CrankRun> {
             }
             features = Some(f);
         } else if line.starts_with("crank ") {
-            end = Some(fields(line, 12)?);
+            end = Some(fields(line, 13)?);
         }
     }
     let end = end.ok_or_else(|| anyhow!("no `crank` line: the run did not finish"))?;
     let features = features.ok_or_else(|| anyhow!("no `feat` line"))?;
-    let windows_done = u32_of(&end[8])?;
+    let windows_done = u32_of(&end[9])?;
     if windows_done as usize != windows.len() {
         bail!("{} window lines but the end line says {windows_done}", windows.len());
     }
     Ok(CrankRun {
         windows,
         features,
-        estimate: estimate_of(&end[..8])?,
-        samples: u32_of(&end[9])?,
-        skipped: u32_of(&end[10])?,
+        estimate: estimate_of(&end[..9])?,
+        samples: u32_of(&end[10])?,
+        skipped: u32_of(&end[11])?,
     })
 }
 

@@ -88,10 +88,16 @@ pub struct TrainArgs {
     /// Regress ln c on the standardised features only (default: on their squares too).
     #[arg(long)]
     pub linear: bool,
-    /// Also fit the second stage from the release transient (`estimate::release`;
-    /// experimental: it does not yet beat the first stage).
-    #[arg(long)]
-    pub release_stage: bool,
+    /// Runs per joint and clearance of the release laws' own grid of 0.11 s runs
+    /// (`estimate::release`); 0 leaves the release stage out.
+    #[arg(long, value_name = "N", default_value_t = 100)]
+    pub release_variants: usize,
+    /// First noise seed of the release grid.
+    #[arg(long, value_name = "N", default_value_t = 500_000)]
+    pub release_seed_base: u64,
+    /// Largest |ln c| step from the window features' clearance to a release law's that is taken.
+    #[arg(long, value_name = "L", default_value_t = 0.3)]
+    pub max_step: f64,
     /// Write the training runs' features to this CSV.
     #[arg(long, value_name = "CSV")]
     pub save_features: Option<PathBuf>,
@@ -553,9 +559,47 @@ fn train(args: TrainArgs) -> anyhow::Result<()> {
         if !args.linear { ", with squares" } else { "" }
     );
     let mut model = train::fit(&runs, &feats, window, args.ridge, !args.linear, desc);
-    if args.release_stage {
-        let rf: Vec<_> = feats.iter().map(|f| f.release).collect();
-        model.release = Some(super::estimate::release::ReleaseModel::fit(&runs, &rf, 0.25));
+    if args.release_variants > 0 {
+        if !(args.max_step.is_finite() && args.max_step > 0.0) {
+            anyhow::bail!("--max-step {} must be positive", args.max_step);
+        }
+        let grid = train::release_grid(&args.clearances, args.release_variants, args.release_seed_base);
+        let total = grid.len();
+        let rf = train::features_of(&config, &grid, window, args.threads, &|k, _| {
+            if (k + 1) % 100 == 0 || k + 1 == total {
+                eprintln!("crank train: release run {}/{total}", k + 1);
+            }
+        })?;
+        let labels: Vec<usize> = rf.iter().map(|f| f.missed.unwrap_or(usize::MAX)).collect();
+        let seen = |h: usize| labels.iter().filter(|&&l| l == h).count();
+        eprintln!(
+            "crank train: release grid: contact seen in {} of {total} runs; first contact {} , second {}, later {}",
+            rf.iter().filter(|f| f.release.is_some()).count(),
+            seen(0),
+            seen(1),
+            labels.iter().filter(|&&l| (2..usize::MAX).contains(&l)).count()
+        );
+        let features: Vec<_> = rf.iter().map(|f| f.release).collect();
+        // The window features' own error, from the training runs, weighs the hypotheses.
+        let (_, _, spread) = train::score(&model, &runs, &feats);
+        let stage = super::estimate::release::ReleaseStage::fit(&grid, &features, &labels, args.max_step, spread);
+        for fit in stage.residuals(&grid, &features, &labels) {
+            eprintln!(
+                "crank train: release law {} / contact {}: {} runs, ln c residual RMS {:.4}, largest {:.4}",
+                fit.joint,
+                fit.hypothesis + 1,
+                fit.runs,
+                fit.rms,
+                fit.largest
+            );
+        }
+        model.trained_on += &format!(
+            "; release laws: {total} runs of {:.2} s, {} draws, seeds from {}",
+            grid.first().map_or(0.0, |r| r.duration),
+            args.release_variants,
+            args.release_seed_base
+        );
+        model.release = Some(stage);
     }
     let (rate, worst, rms) = train::score(&model, &runs, &feats);
     println!(
@@ -593,7 +637,10 @@ fn train(args: TrainArgs) -> anyhow::Result<()> {
                 e.clearance[e.joint.index()] * 1e3,
                 (e.clearance[e.joint.index()] / r.clearance - 1.0) * 100.0,
                 (e.per_joint[r.joint.index()] / r.clearance - 1.0) * 100.0,
-                if e.refined { ", refined" } else { "" }
+                match e.release {
+                    Some(h) => format!(", release law {}", ["first contact", "second contact", "third contact", "fourth contact"][h.min(3)]),
+                    None => String::new(),
+                }
             );
         }
         let (rate, worst, rms) = train::score(&model, &test, &tf);

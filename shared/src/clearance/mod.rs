@@ -8,7 +8,9 @@
 //! * [`ClearanceModel`]: a linear discriminant that names the joint (A, B or C) and a ridge
 //!   regression per joint for `ln c`, learned on the host from the reference simulator and
 //!   compiled into the firmware ([`ClearanceModel::write_rust`], [`ClearanceModel::from_f64`]);
-//! * [`ClearanceEstimator`]: both, with an estimate after every window;
+//! * [`ReleaseDetector`] and [`ReleaseModel`]: the first contact after release, whose time is
+//!   not chaotic, refines the named joint's clearance;
+//! * [`ClearanceEstimator`]: all of it, with an estimate after every window;
 //! * [`select_nth`]: the exact median of a window without reordering it.
 //!
 //! The host's `FastModel` computes its features and estimates with this code in `f64`, so the
@@ -17,11 +19,16 @@
 mod features;
 mod float;
 mod model;
+mod release;
 mod select;
 
 pub use features::{CrankFeatures, FeatureError, MIN_WINDOW};
 pub use float::ClearanceFloat;
 pub use model::{window_samples, ClearanceEstimate, ClearanceEstimator, ClearanceModel, CLEARANCE_RANGE, REGRESSORS};
+pub use release::{
+    release_regressors, ReleaseDetector, ReleaseFeatures, ReleaseModel, MIN_FIT, MIN_SIGMA, RELEASE_HYPOTHESES,
+    RELEASE_SPAN, RELEASE_TERMS, THRESHOLD_SIGMAS,
+};
 pub use select::select_nth;
 
 /// Number of features.

@@ -2,6 +2,7 @@
 //! estimator that combines it with [`CrankFeatures`].
 
 use super::features::{CrankFeatures, FeatureError};
+use super::release::{ReleaseDetector, ReleaseFeatures, ReleaseModel, RELEASE_HYPOTHESES, RELEASE_TERMS};
 use super::ClearanceFloat;
 use super::{FEATURES, FEATURE_NAMES};
 use core::fmt::{self, Write};
@@ -27,6 +28,9 @@ pub struct ClearanceModel<T> {
     pub discriminant: [[T; FEATURES + 1]; 3],
     /// Per joint: `[bias, w₁ … w_F, v₁ … v_F]` of `ln c` on `z` and `z²`.
     pub regression: [[T; REGRESSORS]; 3],
+    /// The release-transient stage, which refines the named joint's clearance
+    /// ([`super::release`]).
+    pub release: ReleaseModel<T>,
 }
 
 /// What a [`ClearanceModel`] says about a feature vector.
@@ -41,6 +45,10 @@ pub struct ClearanceEstimate<T> {
     pub scores: [T; 3],
     /// The clearance each joint's regression gives, m, whichever joint is named.
     pub per_joint: [T; 3],
+    /// The release law's hypothesis that gave `clearance` (0: first contact seen, 1: second,
+    /// 2: third),
+    /// or `None` where the window features' regression gave it.
+    pub release: Option<usize>,
 }
 
 /// Clearances the estimate is clamped to, m.
@@ -50,10 +58,11 @@ impl<T: ClearanceFloat> ClearanceModel<T> {
     /// Joint and clearance from the recording's features ([`CrankFeatures::features`]).
     ///
     /// ```
-    /// use edgekf::clearance::{ClearanceModel, FEATURES, REGRESSORS};
+    /// use edgekf::clearance::{ClearanceModel, ReleaseModel, FEATURES, REGRESSORS};
     /// // A toy model: the joint is C when feature 0 is above its mean, and ln c = ln 1e-4 + z₀.
     /// let mut m = ClearanceModel { window: 0.25, mean: [1.0f64; FEATURES], scale: [2.0; FEATURES],
-    ///     discriminant: [[0.0; FEATURES + 1]; 3], regression: [[0.0; REGRESSORS]; 3] };
+    ///     discriminant: [[0.0; FEATURES + 1]; 3], regression: [[0.0; REGRESSORS]; 3],
+    ///     release: ReleaseModel::off() };
     /// m.discriminant[2][1] = 1.0;
     /// m.regression[2][0] = 1e-4f64.ln();
     /// m.regression[2][1] = 1.0;
@@ -64,6 +73,16 @@ impl<T: ClearanceFloat> ClearanceModel<T> {
     /// assert!((e.clearance - 1e-4 * 0.5f64.exp()).abs() < 1e-18);
     /// ```
     pub fn estimate(&self, features: &[T; FEATURES]) -> ClearanceEstimate<T> {
+        self.estimate_with_release(features, None)
+    }
+
+    /// As [`ClearanceModel::estimate`], then the release stage ([`ReleaseModel::refine`]) on
+    /// the named joint if the release features are known.
+    pub fn estimate_with_release(
+        &self,
+        features: &[T; FEATURES],
+        release: Option<&ReleaseFeatures<T>>,
+    ) -> ClearanceEstimate<T> {
         let mut z = [T::zero(); FEATURES];
         for i in 0..FEATURES {
             z[i] = (features[i] - self.mean[i]) / self.scale[i];
@@ -90,7 +109,9 @@ impl<T: ClearanceFloat> ClearanceModel<T> {
                 joint = j;
             }
         }
-        ClearanceEstimate { joint, clearance: per_joint[joint], scores, per_joint }
+        let refined = release.and_then(|f| self.release.refine(joint, per_joint[joint], f));
+        let clearance = refined.map_or(per_joint[joint], |(c, _)| c.max(lo).min(hi));
+        ClearanceEstimate { joint, clearance, scores, per_joint, release: refined.map(|(_, h)| h) }
     }
 }
 
@@ -104,6 +125,13 @@ impl ClearanceModel<f32> {
             scale: [0.0; FEATURES],
             discriminant: [[0.0; FEATURES + 1]; 3],
             regression: [[0.0; REGRESSORS]; 3],
+            release: ReleaseModel {
+                max_step: m.release.max_step as f32,
+                spread: m.release.spread as f32,
+                centre: [0.0; 3],
+                prior: [[0.0; RELEASE_HYPOTHESES]; 3],
+                weights: [[[0.0; RELEASE_TERMS]; RELEASE_HYPOTHESES]; 3],
+            },
         };
         let mut i = 0;
         while i < FEATURES {
@@ -121,6 +149,17 @@ impl ClearanceModel<f32> {
                 out.regression[j][c] = m.regression[j][c] as f32;
                 c += 1;
             }
+            out.release.centre[j] = m.release.centre[j] as f32;
+            let mut h = 0;
+            while h < RELEASE_HYPOTHESES {
+                out.release.prior[j][h] = m.release.prior[j][h] as f32;
+                let mut r = 0;
+                while r < RELEASE_TERMS {
+                    out.release.weights[j][h][r] = m.release.weights[j][h][r] as f32;
+                    r += 1;
+                }
+                h += 1;
+            }
             j += 1;
         }
         out
@@ -134,9 +173,10 @@ impl ClearanceModel<f64> {
     /// to this model. Fails (`fmt::Error`) on a non-finite value.
     ///
     /// ```
-    /// use edgekf::clearance::{ClearanceModel, FEATURES, REGRESSORS};
+    /// use edgekf::clearance::{ClearanceModel, ReleaseModel, FEATURES, REGRESSORS};
     /// let m = ClearanceModel { window: 0.25, mean: [0.5f64; FEATURES], scale: [1.0; FEATURES],
-    ///     discriminant: [[0.0; FEATURES + 1]; 3], regression: [[-8.0; REGRESSORS]; 3] };
+    ///     discriminant: [[0.0; FEATURES + 1]; 3], regression: [[-8.0; REGRESSORS]; 3],
+    ///     release: ReleaseModel::off() };
     /// let mut s = String::new();
     /// m.write_rust(&mut s, "MODEL", "a test").unwrap();
     /// assert!(s.starts_with("// a test\n"));
@@ -145,7 +185,13 @@ impl ClearanceModel<f64> {
     /// ```
     pub fn write_rust(&self, out: &mut impl Write, name: &str, header: &str) -> fmt::Result {
         let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
-        let rows_finite = self.discriminant.iter().all(|r| finite(r)) && self.regression.iter().all(|r| finite(r));
+        let rows_finite = self.discriminant.iter().all(|r| finite(r))
+            && self.regression.iter().all(|r| finite(r))
+            && self.release.weights.iter().flatten().all(|r| finite(r))
+            && finite(&self.release.centre)
+            && self.release.prior.iter().all(|r| finite(r))
+            && self.release.max_step.is_finite()
+            && self.release.spread.is_finite();
         if !(self.window.is_finite() && finite(&self.mean) && finite(&self.scale) && rows_finite) {
             return Err(fmt::Error);
         }
@@ -185,7 +231,27 @@ impl ClearanceModel<f64> {
             list(out, row)?;
             writeln!(out, ",")?;
         }
-        writeln!(out, "    ],\n}};")
+        writeln!(out, "    ],\n    release: ReleaseModel {{\n        max_step: {:?},", self.release.max_step)?;
+        writeln!(out, "        spread: {:?},", self.release.spread)?;
+        write!(out, "        centre: ")?;
+        list(out, &self.release.centre)?;
+        writeln!(out, ",\n        prior: [")?;
+        for row in &self.release.prior {
+            write!(out, "            ")?;
+            list(out, row)?;
+            writeln!(out, ",")?;
+        }
+        writeln!(out, "        ],\n        weights: [")?;
+        for joint in &self.release.weights {
+            writeln!(out, "            [")?;
+            for law in joint {
+                write!(out, "                ")?;
+                list(out, law)?;
+                writeln!(out, ",")?;
+            }
+            writeln!(out, "            ],")?;
+        }
+        writeln!(out, "        ],\n    }},\n}};")
     }
 }
 
@@ -193,9 +259,10 @@ impl ClearanceModel<f64> {
 /// after every completed window it gives the estimate for the recording so far.
 ///
 /// ```
-/// use edgekf::clearance::{ClearanceEstimator, ClearanceModel, FEATURES, REGRESSORS};
+/// use edgekf::clearance::{ClearanceEstimator, ClearanceModel, ReleaseModel, FEATURES, REGRESSORS};
 /// let model = ClearanceModel { window: 0.025, mean: [0.0f32; FEATURES], scale: [1.0; FEATURES],
-///     discriminant: [[0.0; FEATURES + 1]; 3], regression: [[-8.0; REGRESSORS]; 3] };
+///     discriminant: [[0.0; FEATURES + 1]; 3], regression: [[-8.0; REGRESSORS]; 3],
+///     release: ReleaseModel::off() };
 /// // 0.025 s at 1 kHz: 25 samples per window.
 /// let mut est = ClearanceEstimator::new(&model, [0.0f32; 24], 1000.0).unwrap();
 /// let mut reports = 0;
@@ -211,6 +278,7 @@ impl ClearanceModel<f64> {
 pub struct ClearanceEstimator<'m, T: ClearanceFloat, S: AsRef<[T]> + AsMut<[T]>> {
     model: &'m ClearanceModel<T>,
     features: CrankFeatures<T, S>,
+    release: ReleaseDetector<T>,
 }
 
 /// Samples in a window of `window_s` seconds at `rate` Hz: `round(window_s · rate)`, at least
@@ -229,12 +297,17 @@ impl<'m, T: ClearanceFloat, S: AsRef<[T]> + AsMut<[T]>> ClearanceEstimator<'m, T
     /// ([`window_samples`]); `storage` must hold one value less than a window.
     pub fn new(model: &'m ClearanceModel<T>, storage: S, rate: f64) -> Result<Self, FeatureError> {
         let n = window_samples(model.window, rate);
-        Ok(Self { model, features: CrankFeatures::new(storage, n, T::of_f64(rate))? })
+        Ok(Self {
+            model,
+            features: CrankFeatures::new(storage, n, T::of_f64(rate))?,
+            release: ReleaseDetector::new(rate),
+        })
     }
 
     /// Adds a sample (rad/s²; non-finite ones are skipped and counted); after a completed
     /// window, the estimate for everything so far.
     pub fn push(&mut self, x: T) -> Option<ClearanceEstimate<T>> {
+        self.release.push(x);
         self.features.push(x).then(|| self.estimate())
     }
 
@@ -242,7 +315,12 @@ impl<'m, T: ClearanceFloat, S: AsRef<[T]> + AsMut<[T]>> ClearanceEstimator<'m, T
     /// so that the per-sample path does not carry this once-a-window frame.
     #[inline(never)]
     pub fn estimate(&self) -> ClearanceEstimate<T> {
-        self.model.estimate(&self.features.features())
+        self.model.estimate_with_release(&self.features.features(), self.release.features().as_ref())
+    }
+
+    /// The release transient's detector.
+    pub fn release(&self) -> &ReleaseDetector<T> {
+        &self.release
     }
 
     /// The features behind it.

@@ -167,7 +167,7 @@ fn rotor() {
 /// (`crank_window`, 2 500 samples, including about 10 instructions per sample to synthesise the
 /// input), whose count / 2 500 is the average per sample.
 fn crank() {
-    use edgekf_firmware::crank::{CrankNode, Storage, WINDOW};
+    use edgekf_firmware::crank::{Storage, WINDOW};
     // Noise-like values from a multiplicative hash, and an impact every 97 samples.
     let alpha = |k: u32| {
         let noise = (k.wrapping_mul(2_654_435_761) >> 20) as f32 - 2048.0;
@@ -178,10 +178,7 @@ fn crank() {
         }
     };
     let mut storage: Storage = [0.0; WINDOW - 1];
-    let Ok(mut node) = CrankNode::new(&mut storage) else {
-        defmt::error!("bench crank: no estimator");
-        exit(1)
-    };
+    let mut node = crank_node(&mut storage);
     let mut k = 0u32;
     let window = WINDOW as u32;
     // One whole window, then into the second one for an ordinary sample, then its last sample.
@@ -196,25 +193,62 @@ fn crank() {
         node.step(Some(alpha(k)));
         k += 1;
     }
-    let x = alpha(k);
-    bench_start();
-    core::hint::black_box(node.step(core::hint::black_box(Some(x))));
-    bench_end();
+    measured_crank_step(&mut node, alpha(k));
     defmt::info!("bench crank_sample n={=usize} m={=usize} windows={=u32}", WINDOW, 1usize, node.windows());
     k += 1;
     while k < 2 * window - 1 {
         node.step(Some(alpha(k)));
         k += 1;
     }
-    let x = alpha(k);
-    bench_start();
-    let report = core::hint::black_box(node.step(core::hint::black_box(Some(x))));
-    bench_end();
+    let report = measured_crank_step(&mut node, alpha(k));
     if report.is_none() || node.windows() != 2 {
         defmt::error!("bench crank: the measured sample did not close the second window");
         exit(1)
     }
     defmt::info!("bench crank_window_end n={=usize} m={=usize} windows={=u32}", WINDOW, 1usize, node.windows());
+}
+
+/// The crank node on `storage`, or the bench ends with an error.
+fn crank_node(storage: &mut edgekf_firmware::crank::Storage) -> edgekf_firmware::crank::CrankNode<'_> {
+    match edgekf_firmware::crank::CrankNode::new(storage) {
+        Ok(node) => node,
+        Err(_) => {
+            defmt::error!("bench crank: no estimator");
+            exit(1)
+        }
+    }
+}
+
+/// One step of `node` on `x`, its instructions counted.
+fn measured_crank_step(
+    node: &mut edgekf_firmware::crank::CrankNode<'_>,
+    x: f32,
+) -> Option<edgekf_firmware::crank::WindowReport> {
+    bench_start();
+    let report = core::hint::black_box(node.step(core::hint::black_box(Some(x))));
+    bench_end();
+    report
+}
+
+/// A sample while the release detector still looks for the first contact
+/// (`crank_release_sample`: an ordinary sample plus the running quadratic fit, its 3 × 3 solve
+/// and the threshold test). Only the samples before the first contact pay it, at most the first
+/// 0.1 s of a recording.
+fn crank_release() {
+    use edgekf_firmware::crank::{Storage, WINDOW};
+    // Small noise-like values about a slow ramp: no contact.
+    let alpha = |k: u32| ((k.wrapping_mul(2_654_435_761) >> 24) as f32 - 128.0) * 0.04 - 27.0 - 0.01 * k as f32;
+    let mut storage: Storage = [0.0; WINDOW - 1];
+    let mut node = crank_node(&mut storage);
+    for k in 0..60 {
+        node.step(Some(alpha(k)));
+    }
+    measured_crank_step(&mut node, alpha(60));
+    if node.release_contact().is_some() {
+        defmt::error!("bench crank: the release detector fired on a smooth ramp");
+        exit(1)
+    }
+    defmt::info!("bench crank_release_sample n={=usize} m={=usize} windows={=u32}", WINDOW, 1usize, node.windows());
 }
 
 fn harmonic() {
@@ -252,6 +286,7 @@ fn main() -> ! {
     ukf::<14, 4>(&mut rng);
     rotor();
     crank();
+    crank_release();
     defmt::info!("done");
     exit(0)
 }

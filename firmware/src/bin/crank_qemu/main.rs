@@ -17,7 +17,7 @@
 use cortex_m_rt::entry;
 use cortex_m_semihosting::heprintln;
 use defmt_semihosting as _;
-use edgekf_firmware::crank::{CrankNode, Storage, CHANNELS, WINDOW};
+use edgekf_firmware::crank::{release_law, CrankNode, Storage, CHANNELS, WINDOW};
 use edgekf_firmware::semihost::{exit, open_channels};
 use edgekf_firmware::stack;
 
@@ -40,7 +40,7 @@ fn main() -> ! {
         if let Some(r) = node.step(line.ok().map(|[a]| a)) {
             let e = r.estimate;
             defmt::info!(
-                "win {=u32} {=u32} {=u8} {=f32} {=f32} {=f32} {=f32} {=f32} {=f32} {=f32}",
+                "win {=u32} {=u32} {=u8} {=f32} {=f32} {=f32} {=f32} {=f32} {=f32} {=f32} {=u8}",
                 r.window,
                 r.samples,
                 e.joint as u8,
@@ -50,7 +50,8 @@ fn main() -> ! {
                 e.scores[2],
                 e.per_joint[0],
                 e.per_joint[1],
-                e.per_joint[2]
+                e.per_joint[2],
+                release_law(&e)
             );
         }
     }
@@ -70,7 +71,7 @@ fn main() -> ! {
     );
     let e = node.estimate();
     defmt::info!(
-        "crank {=u8} {=f32} {=f32} {=f32} {=f32} {=f32} {=f32} {=f32} {=u32} {=u32} {=u32} {=u32}",
+        "crank {=u8} {=f32} {=f32} {=f32} {=f32} {=f32} {=f32} {=f32} {=u8} {=u32} {=u32} {=u32} {=u32}",
         e.joint as u8,
         e.clearance,
         e.scores[0],
@@ -79,6 +80,7 @@ fn main() -> ! {
         e.per_joint[0],
         e.per_joint[1],
         e.per_joint[2],
+        release_law(&e),
         node.windows(),
         node.samples(),
         node.skipped(),

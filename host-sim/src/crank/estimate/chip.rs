@@ -4,7 +4,7 @@
 //! the built-in `fast_model.toml` gives).
 
 use super::model::{FastModel, FEATURES};
-use edgekf::clearance::{ClearanceModel, REGRESSORS};
+use edgekf::clearance::{ClearanceModel, ReleaseModel, REGRESSORS};
 
 /// Name of the constant in the generated file.
 pub const CONST_NAME: &str = "CLEARANCE_MODEL";
@@ -19,6 +19,7 @@ impl FastModel {
             scale: [1.0; FEATURES],
             discriminant: [[0.0; FEATURES + 1]; 3],
             regression: [[0.0; REGRESSORS]; 3],
+            release: self.release.as_ref().map_or_else(ReleaseModel::off, |r| r.to_shared()),
         };
         m.mean.iter_mut().zip(&self.mean).for_each(|(a, b)| *a = *b);
         m.scale.iter_mut().zip(&self.scale).for_each(|(a, b)| *a = *b);

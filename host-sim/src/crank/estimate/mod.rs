@@ -9,33 +9,31 @@
 //!   ±11 %, one at −35 % (`cargo run --release -p edgekf-sim --example crank_study -- ukf 10
 //!   3`). Almost all the information is in the release window, whose `a` is many-branched in
 //!   the clearance (see [`ukf`]); ~1 000 simulations of 0.25 s per 10 s;
-//! * [`release`]: an experimental second stage for the fast estimator, the clearance from the
-//!   free flight before the first impact after release (not in the built-in model);
-//! * [`model`]: the fast estimator: ten cheap time-domain features of the recording, a linear
+//! * [`model`]: the fast estimator. Ten cheap time-domain features of the recording, a linear
 //!   discriminant that names the joint with the clearance and a per-joint regression for its
-//!   size, learned on the host from the reference simulator ([`train`], `edgekf crank train`)
-//!   and built in as `fast_model.toml`; no simulation at run time;
+//!   size; then the release stage ([`release`]): the time of the first contact seen after
+//!   release and the crank acceleration before it give the clearance through per-joint laws
+//!   (`c ∝ t₁²`). Learned on the host from the reference simulator ([`train`], `edgekf crank
+//!   train`) and built in as `fast_model.toml`; no simulation at run time;
 //! * [`identify2`]: identifiability of two clearances (A and B): ensemble likelihood surface
-//!   and Fisher information over (cA, cB); with these features a 10 s recording bounds cA and
-//!   cB at 0.25 + 0.15 mm to ~13 % and ~15 % (correlation −0.6), not ±10 %;
+//!   and Fisher information over (cA, cB); with the window features a 10 s recording bounds cA
+//!   and cB at 0.25 + 0.15 mm to ~13 % and ~15 % (correlation −0.6), not ±10 %;
 //! * [`fast`]: the earlier single-feature map (impact rate → clearance at A), kept for old
 //!   `--model` files.
 //!
 //! Measured (built-in model; unseen seeds and draws of release 20–40° and journal radius
-//! × 0.8–1.2, 10 s, adaptive integrator; `edgekf crank train --test-variants 4` and
-//! `EDGEKF_LONG=1 cargo test --release -p edgekf-sim --test crank_identify`): the joint is named
-//! right in all 60 + 108 test runs (A, B, C × 0.1–0.5 mm). The clearance of the named joint is
-//! within RMS 7.6 %, worst 20 %, over the 60-run grid and RMS 8.5 % (A 7.1, B 9.0, C 9.1 %),
-//! median 6.2 %, worst 26 % over the 108-run grid; 25 of 108 within ±3 %, 86 within ±10 %.
-//! The training set fits no better (RMS 7.3 %): the limit is the scatter of 10 s of chaotic
-//! impacts, not the fit. Six runs at 0.3 mm released 30.00°, 30.01° … 30.05° give 0.269–0.321
-//! mm at A and 0.269–0.367 mm at C. Two clearances at once are outside the model: over A
-//! 0.15–0.35 mm × B 0.1–0.25 mm (30°, 10 s) it names A and reads 0.10–0.19 mm (0.35 at A 0.35 +
-//! B 0.25), nearly flat in the clearance at A, while the discriminant score of A jumps from
-//! ~150 (one clearance) to ~550–640: a second clearance is visible, but this feature set does
-//! not resolve the two sizes ([`identify2`]: the features see mainly a weighted sum of the
-//! two; Cramér–Rao bounds 13 % at A, 15 % at B for 10 s). The features cost 32 operations
-//! per sample (3.2 M for 10 s, 1 ms); the UKF integrates 30 steps of the full model per sample (3 M steps for 10 s, 0.96 s in release).
+//! × 0.8–1.2, 10 s, adaptive integrator; `EDGEKF_LONG=1 cargo test --release -p edgekf-sim
+//! --test crank_identify`): the joint is named right in all 108 test runs (A, B, C × 0.1–0.5
+//! mm in 0.05 mm steps × 4). The clearance of the named joint is within RMS 0.8 %, 107 of 108
+//! within ±3 %, worst +3.7 % (B at 0.1 mm, where one sample is 2.2 % of the clearance). The
+//! window features alone reach RMS 8.5 %, worst 26 %: 10 s of chaotic impacts scatter them
+//! (six runs at 0.3 mm released 30.00°, 30.01° … 30.05° give 0.269–0.321 mm at A). Two
+//! clearances at once are outside the model: over A 0.15–0.35 mm × B 0.1–0.25 mm (30°, 10 s)
+//! the window features name A and read 0.10–0.19 mm, while the discriminant score of A jumps
+//! from ~150 (one clearance) to ~550–640 ([`identify2`]). The features cost 32 operations per
+//! sample (3.2 M for 10 s, 1 ms), the release detector ~40 per sample until the contact; the
+//! UKF integrates 30 steps of the full model per sample (3 M steps for 10 s, 0.96 s in
+//! release).
 //!
 //! Both read a [`Recording`] (a data CSV with `t` and `crank_alpha`; `truth_clearance_*`
 //! columns, when present, are only reported) and write one [`EstimateRow`] per window

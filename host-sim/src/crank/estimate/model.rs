@@ -5,15 +5,17 @@
 //!   first and second differences and of a high-pass residual, kurtoses, impact rate, impact
 //!   peak and width), averaged over the windows and taken in logarithms;
 //! * [`FastModel`]: standardised features → a linear discriminant per joint (the largest names
-//!   the joint) and a ridge regression per joint for `ln c`. Learned by [`super::train`]
+//!   the joint) and a ridge regression per joint for `ln c`, refined by the release stage
+//!   ([`super::release`]: the first contact after release, `c ∝ t₁²`). Learned by [`super::train`]
 //!   (`edgekf crank train --out model.toml`); the built-in model ([`FastModel::builtin`]) is
 //!   `fast_model.toml` next to this file, written by that command with its defaults
 //!   (`edgekf crank train --out host-sim/src/crank/estimate/fast_model.toml`: 264 runs of 10 s,
 //!   about 3 minutes on two cores in release).
 
-use super::release::{release_features, ReleaseFeatures, ReleaseModel, RELEASE_SPAN, RELEASE_TERMS};
+use super::release::{release_features, ReleaseFeatures, ReleaseStage, RELEASE_SPAN};
 use super::{EstimateRow, Recording};
 use crate::crank::Joint;
+use edgekf::clearance::{MIN_FIT, RELEASE_HYPOTHESES, RELEASE_TERMS};
 use serde::{Deserialize, Serialize};
 
 pub use edgekf::clearance::{FEATURES, FEATURE_NAMES};
@@ -31,12 +33,23 @@ pub struct FeatureVector {
     /// Windows averaged.
     pub windows: usize,
     /// Arithmetic operations spent (per sample [`OPS_PER_SAMPLE`] plus the median of `|Δα|`
-    /// by quickselect, ~3 comparisons per sample; plus ~8 per sample of the first 0.1 s for the
-    /// release features).
+    /// by quickselect, ~3 comparisons per sample; plus [`RELEASE_OPS_PER_SAMPLE`] per sample
+    /// of the release detector until the contact).
     pub operations: u64,
-    /// The release transient's features ([`super::release`]), if two impacts were seen.
-    pub release: Option<ReleaseFeatures>,
+    /// The release transient's features ([`super::release`]), if a contact was seen.
+    pub release: Option<ReleaseFeatures<f64>>,
+    /// Training truth, not a feature: contacts the sampled recording missed before the one
+    /// the release detector saw ([`super::release::missed_contacts`]); `None` when unknown.
+    pub missed: Option<usize>,
 }
+
+/// Latest first sample, s after release, that [`FastModel::estimate`] corrects the release
+/// stage's contact time for.
+pub const MAX_FIRST_SAMPLE: f64 = 0.002;
+
+/// Arithmetic operations per sample of the release detector while it looks for the contact:
+/// 12 for the sums, 30 for the 3 × 3 solve, residual and threshold.
+pub const RELEASE_OPS_PER_SAMPLE: u64 = 42;
 
 /// Features of `x` sampled at `rate` Hz, from windows of `window_s` (a trailing partial window
 /// is dropped). `windows == 0` if `x` is shorter than one window.
@@ -46,19 +59,27 @@ pub struct FeatureVector {
 pub fn feature_vector(x: &[f64], rate: f64, window_s: f64) -> FeatureVector {
     let n = edgekf::clearance::window_samples(window_s, rate);
     let Ok(mut f) = edgekf::clearance::CrankFeatures::new(vec![0.0; n.saturating_sub(1)], n, rate) else {
-        return FeatureVector { values: [1e-12f64.ln(); FEATURES], windows: 0, operations: 0, release: None };
+        return FeatureVector {
+            values: [1e-12f64.ln(); FEATURES],
+            windows: 0,
+            operations: 0,
+            release: None,
+            missed: None,
+        };
     };
     for &v in x {
         f.push(v);
     }
     let windows = f.windows() as usize;
     let release = release_features(x, rate);
-    let release_ops = 8 * (RELEASE_SPAN * rate).round().min(x.len() as f64) as u64;
+    let examined = release.map_or((RELEASE_SPAN * rate).round().min(x.len() as f64), |r| (r.contact * rate).round());
+    let release_ops = RELEASE_OPS_PER_SAMPLE * (examined as u64).saturating_sub(MIN_FIT as u64);
     FeatureVector {
         values: f.features(),
         windows,
         operations: (OPS_PER_SAMPLE + 3) * (windows * n) as u64 + release_ops,
         release,
+        missed: None,
     }
 }
 
@@ -93,7 +114,7 @@ pub struct FastModel {
     pub regression: Vec<Vec<f64>>,
     /// Second stage from the release transient ([`super::release`]); absent in older files.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub release: Option<ReleaseModel>,
+    pub release: Option<ReleaseStage>,
 }
 
 /// Result of [`FastModel::estimate`].
@@ -109,8 +130,9 @@ pub struct ModelEstimate {
     pub per_joint: [f64; 3],
     /// The features.
     pub features: FeatureVector,
-    /// Whether the second stage (release transient) gave the clearance.
-    pub refined: bool,
+    /// The release law's hypothesis that gave the clearance (0: the first contact was seen,
+    /// 1: the second, 2: the third), or `None` where the window features gave it.
+    pub release: Option<usize>,
     /// Arithmetic operations: features plus the model (at most `12 (F + 1)` and 3 exp of ~20).
     pub operations: u64,
 }
@@ -161,7 +183,7 @@ impl FastModel {
             list(&self.scale),
             rows(&self.discriminant),
             rows(&self.regression)
-        ) + &self.release.as_ref().map_or(String::new(), ReleaseModel::to_toml)
+        ) + &self.release.as_ref().map_or(String::new(), ReleaseStage::to_toml)
     }
 
     fn validate(&self) -> Result<(), String> {
@@ -213,31 +235,36 @@ impl FastModel {
     /// Joint and clearance from a feature vector (the shared crate's
     /// [`edgekf::clearance::ClearanceModel::estimate`], the chip's code, in `f64`).
     pub fn estimate_features(&self, f: FeatureVector) -> ModelEstimate {
-        let e = self.to_shared().estimate(&f.values);
+        let e = self.to_shared().estimate_with_release(&f.values, f.release.as_ref());
         let mut clearance = [0.0; 3];
         clearance[e.joint] = e.clearance;
-        let joint = Joint::ALL[e.joint];
-        let second = match (&self.release, &f.release) {
-            (Some(m), Some(r)) => m.refine(joint, e.clearance, r),
-            _ => None,
-        };
-        if let Some(c) = second {
-            clearance[e.joint] = c.clamp(1e-5, 1e-3);
-        }
         ModelEstimate {
-            refined: second.is_some(),
+            release: e.release,
             joint: Joint::ALL[e.joint],
             clearance,
             scores: e.scores,
             per_joint: e.per_joint,
             features: f,
-            operations: f.operations + 12 * (FEATURES as u64 + 1) + 3 * 20 + 2 * RELEASE_TERMS as u64 + 20,
+            operations: f.operations
+                + 12 * (FEATURES as u64 + 1)
+                + 3 * 20
+                + RELEASE_HYPOTHESES as u64 * (2 * RELEASE_TERMS as u64 + 20),
         }
     }
 
     /// Joint and clearance from a recording.
+    ///
+    /// The release stage takes the mechanism as released at `t = 0`. The streaming detector
+    /// counts samples from the first one; if the file's first sample is a little after the
+    /// release (`0 < t₀ <` [`MAX_FIRST_SAMPLE`], e.g. a simulator that writes its state after
+    /// the first step), the contact time is moved by `t₀`. A file whose clock starts anywhere
+    /// else is taken to start at release.
     pub fn estimate(&self, rec: &Recording) -> anyhow::Result<ModelEstimate> {
-        let f = feature_vector(&rec.crank_alpha, rec.sample_rate, self.window);
+        let mut f = feature_vector(&rec.crank_alpha, rec.sample_rate, self.window);
+        let t0 = rec.t.first().copied().unwrap_or(0.0);
+        if let Some(r) = f.release.as_mut().filter(|_| t0 > 0.0 && t0 < MAX_FIRST_SAMPLE) {
+            r.contact += t0;
+        }
         if f.windows == 0 {
             anyhow::bail!("the recording is shorter than one {} s window", self.window);
         }

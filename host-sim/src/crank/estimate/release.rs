@@ -1,168 +1,230 @@
-//! Second stage of the fast estimator: the clearance from the release transient.
+//! Second stage of the fast estimator, on the host: fitting the release-transient laws of
+//! [`edgekf::clearance::ReleaseModel`] (the detector, the laws and their use are the chip's
+//! code, in `edgekf::clearance`, whose module text explains the physics).
 //!
-//! The mechanism is released at rest with every journal centred in its bearing, so the journal
-//! of the clearance joint first flies freely across the clearance: the first impact comes after
-//! `t₁ ≈ √(2c / a)`, `a` the relative acceleration of journal and bearing at release (g at A
-//! from 30°: 0.25 mm gives 7.1 ms, 0.1 mm 4.5 ms). That flight happens before any impact, so
-//! it is not chaotic: any simulator of the mechanism, or the mechanism itself, gives the same
-//! `t₁` for the same clearance and release, whatever impact sequence follows. `a` depends on
-//! the release angle, which the crank acceleration before the first impact gives (−79, −27 and
-//! +12 rad/s² at 20°, 30° and 40° with a clearance at A).
+//! Training labels each run with the hypothesis that is true for it: how many contacts the
+//! sampled recording missed before the one detected. The simulator knows: the journal's
+//! eccentricity rises monotonically from the centre until the first contact, and every contact
+//! turns it back. So the number of rise-to-fall turns of the sampled eccentricity before the
+//! detected sample is the number of contacts missed ([`missed_contacts`]).
 //!
-//! Features ([`release_features`], on the first 0.1 s only, ~5 operations per sample): the
-//! sample of the first jump of `|Δα|` above 12 × its median over the first 0.1 s (the impact),
-//! the gap to the next one (the rebound's flight), and the mean α before the first. The model
-//! ([`ReleaseModel`]) is, per joint, a least-squares fit of `ln c` on
-//! `1, l, l², u, u², l·u, g` with `l = ln(t₁ / 5 ms)`, `u = α₀ / 100 rad/s²`,
-//! `g = ln(gap / 5 ms)`; it refines the first stage's estimate of the named joint when the
-//! two agree within [`ReleaseModel::max_step`] (in `ln c`), and leaves it alone otherwise.
-//! The timing is read to one sample (0.1 ms at 10 kHz), which bounds what it can give: ±2 %
-//! of `c` at 0.25 mm and ±2.2 % at 0.1 mm from the first impact alone.
-//!
-//! The recording must start at release (as the paper's experiment and the UKF assume).
-//!
-//! Status: experimental, off in the built-in model (`edgekf crank train --release-stage` fits
-//! it). On the 264 training runs, `2c / t₁²` is 9–11 m/s² at A for most runs (free fall, as
-//! expected), but the detector sometimes takes a later impact for the first (a soft first
-//! contact, or at C, whose impacts barely show in the crank's acceleration), and the second
-//! gap is already irregular; with this stage the training-set error rose from RMS 7.3 % to
-//! 8.3 % (worst 36 %). A detector that finds the first contact reliably (e.g. a matched
-//! filter on the pre-impact level) is what it needs.
+//! The laws need only the first [`RELEASE_SPAN`] of a run, so they are trained on their own
+//! grid of short runs ([`super::train::release_grid`]), many more than the window features' 10 s
+//! runs: 1 080 runs of 0.1 s cost less than one 10 s run per joint and clearance.
 
 use super::train::Run;
 use crate::crank::Joint;
+use edgekf::clearance::{release_regressors, ReleaseDetector, ReleaseModel, RELEASE_HYPOTHESES, RELEASE_TERMS};
 use serde::{Deserialize, Serialize};
 
-/// Number of regressors of [`ReleaseModel`].
-pub const RELEASE_TERMS: usize = 7;
+pub use edgekf::clearance::{ReleaseFeatures, RELEASE_SPAN};
 
-/// Length of the transient examined, s.
-pub const RELEASE_SPAN: f64 = 0.1;
-
-/// What the release transient shows.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ReleaseFeatures {
-    /// Time of the first impact after release, s.
-    pub first_impact: f64,
-    /// Time from the first impact to the next, s.
-    pub second_gap: f64,
-    /// Mean crank acceleration before the first impact, rad/s².
-    pub release_alpha: f64,
+/// The release features of `x` (sampled at `rate` Hz from the release on), through the chip's
+/// detector in `f64`; `None` if no contact shows within [`RELEASE_SPAN`].
+pub fn release_features(x: &[f64], rate: f64) -> Option<ReleaseFeatures<f64>> {
+    let mut d = ReleaseDetector::<f64>::new(rate);
+    for &v in x.iter().take((RELEASE_SPAN * rate).round() as usize + 1) {
+        d.push(v);
+    }
+    d.features()
 }
 
-/// The release features of `x` (sampled at `rate` Hz from the release on); `None` if the
-/// first 0.1 s hold fewer than two impacts.
-pub fn release_features(x: &[f64], rate: f64) -> Option<ReleaseFeatures> {
-    let n = ((RELEASE_SPAN * rate).round() as usize).min(x.len());
-    if n < 16 {
-        return None;
-    }
-    let mut d: Vec<f64> = x[..n].windows(2).map(|w| (w[1] - w[0]).abs()).collect();
-    let mid = d.len() / 2;
-    let median = *d.select_nth_unstable_by(mid, f64::total_cmp).1;
-    let thr = 12.0 * median.max(1e-9);
-    // Onsets: |Δα| above the threshold after at least 3 samples below it.
-    let mut onsets = Vec::with_capacity(2);
-    let mut quiet = 3usize;
-    for k in 1..n {
-        if (x[k] - x[k - 1]).abs() > thr {
-            if quiet >= 3 {
-                onsets.push(k);
-                if onsets.len() == 2 {
-                    break;
-                }
-            }
-            quiet = 0;
-        } else {
-            quiet += 1;
+/// Contacts missed before the detected one (sample `detected`), from the journal's sampled
+/// eccentricity `e` (m) at the clearance joint of clearance `c`: the rise-to-fall turns of `e`
+/// before that sample (a fall by more than 0.1 % of `c` counts; the rise from the centre has
+/// none).
+///
+/// ```
+/// use edgekf_sim::crank::estimate::release::missed_contacts;
+/// let rise = [0.0, 1e-5, 4e-5, 9e-5, 1.6e-4];
+/// assert_eq!(missed_contacts(&rise, 2e-4, 4), 0);
+/// let bounced = [0.0, 4e-5, 1.6e-4, 1.9e-4, 1.7e-4, 1.8e-4, 2e-4];
+/// assert_eq!(missed_contacts(&bounced, 2e-4, 6), 1);
+/// ```
+pub fn missed_contacts(e: &[f64], c: f64, detected: usize) -> usize {
+    let tol = 1e-3 * c;
+    // Rising: `extreme` is the peak so far; falling: the trough so far.
+    let (mut turns, mut rising, mut extreme) = (0, true, f64::NEG_INFINITY);
+    for &v in e.iter().take(detected) {
+        if rising && v < extreme - tol {
+            turns += 1;
+            rising = false;
+        } else if !rising && v > extreme + tol {
+            rising = true;
         }
+        extreme = if rising { extreme.max(v) } else { extreme.min(v) };
     }
-    let (k1, k2) = (*onsets.first()?, *onsets.get(1)?);
-    let release_alpha = x[..k1].iter().sum::<f64>() / k1 as f64;
-    Some(ReleaseFeatures { first_impact: (k1 as f64 - 0.5) / rate, second_gap: (k2 - k1) as f64 / rate, release_alpha })
+    turns
 }
 
-/// Regressors `1, l, l², u, u², l·u, g` of [`ReleaseModel`].
-pub fn release_regressor(f: &ReleaseFeatures) -> [f64; RELEASE_TERMS] {
-    let l = (f.first_impact / 5e-3).ln();
-    let u = f.release_alpha / 100.0;
-    let g = (f.second_gap / 5e-3).ln();
-    [1.0, l, l * l, u, u * u, l * u, g]
+/// The fit of one release law ([`ReleaseStage::residuals`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LawFit {
+    /// Its joint.
+    pub joint: Joint,
+    /// Its hypothesis (contacts missed before the one seen).
+    pub hypothesis: usize,
+    /// Runs it was fitted to.
+    pub runs: usize,
+    /// RMS residual of `ln c`.
+    pub rms: f64,
+    /// Largest absolute residual of `ln c`.
+    pub largest: f64,
 }
 
-/// The second stage: per joint, `ln c` from the release features.
+/// The second stage as stored in a model file: [`ReleaseModel`] in `f64`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct ReleaseModel {
-    /// Largest `|ln c₂ − ln c₁|` between the first stage's estimate and this one for which this
-    /// one is used.
+pub struct ReleaseStage {
+    /// Largest `|ln c₂ − ln c₁|` between the window features' estimate and a release law's for
+    /// which the law is taken.
     pub max_step: f64,
-    /// Per joint A, B, C: weights on [`release_regressor`].
-    pub weights: Vec<Vec<f64>>,
+    /// Standard deviation of the window features' `ln c` (the training set's RMS error).
+    pub spread: f64,
+    /// Per joint A, B, C: the centre of the pre-contact level, rad/s².
+    pub centre: Vec<f64>,
+    /// Per joint A, B, C, per hypothesis: the natural logarithm of its prior probability (its
+    /// share of the training runs, with one run added to every hypothesis).
+    pub prior: Vec<Vec<f64>>,
+    /// Per joint A, B, C, per hypothesis (first contact seen, second, third, fourth): weights on
+    /// `1, l, u, u², u³, l·u`.
+    pub weights: Vec<Vec<Vec<f64>>>,
 }
 
-impl ReleaseModel {
-    /// Checks the numbers.
+impl ReleaseStage {
+    /// Checks the shapes and numbers.
     pub fn validate(&self) -> Result<(), String> {
-        if self.weights.len() != 3 || self.weights.iter().any(|w| w.len() != RELEASE_TERMS) {
-            return Err(format!("release.weights needs 3 rows of {RELEASE_TERMS}"));
+        let shape = self.centre.len() == 3
+            && self.prior.len() == 3
+            && self.prior.iter().all(|p| p.len() == RELEASE_HYPOTHESES)
+            && self.weights.len() == 3
+            && self.weights.iter().all(|j| j.len() == RELEASE_HYPOTHESES && j.iter().all(|w| w.len() == RELEASE_TERMS));
+        if !shape {
+            return Err(format!(
+                "release: centre needs 3 values, prior 3 rows of {RELEASE_HYPOTHESES}, weights 3 × {RELEASE_HYPOTHESES} rows of {RELEASE_TERMS}"
+            ));
         }
-        if !(self.max_step.is_finite() && self.max_step > 0.0) || self.weights.iter().flatten().any(|v| !v.is_finite())
-        {
-            return Err("release: every number must be finite, max_step positive".into());
+        let all = self.weights.iter().flatten().flatten().chain(&self.centre).chain(self.prior.iter().flatten());
+        let ok = self.max_step.is_finite()
+            && self.max_step >= 0.0
+            && self.spread.is_finite()
+            && self.spread > 0.0
+            && all.clone().all(|v| v.is_finite());
+        if !ok {
+            return Err("release: every number must be finite, max_step not negative, spread positive".into());
         }
         Ok(())
     }
 
-    /// `ln c` of `joint` from the release features.
-    pub fn ln_clearance(&self, joint: Joint, f: &ReleaseFeatures) -> f64 {
-        let r = release_regressor(f);
-        self.weights[joint.index()].iter().zip(r).map(|(w, r)| w * r).sum()
+    /// The chip's form.
+    pub fn to_shared(&self) -> ReleaseModel<f64> {
+        let mut m = ReleaseModel::off();
+        m.max_step = self.max_step;
+        m.spread = self.spread;
+        for j in 0..3 {
+            m.centre[j] = self.centre[j];
+            for h in 0..RELEASE_HYPOTHESES {
+                m.prior[j][h] = self.prior[j][h];
+                for (w, v) in m.weights[j][h].iter_mut().zip(&self.weights[j][h]) {
+                    *w = *v;
+                }
+            }
+        }
+        m
     }
 
-    /// The refined clearance of `joint` given the first stage's `first` (m), or `None` when the
-    /// two disagree by more than [`ReleaseModel::max_step`].
-    pub fn refine(&self, joint: Joint, first: f64, f: &ReleaseFeatures) -> Option<f64> {
-        let l = self.ln_clearance(joint, f);
-        (l.is_finite() && (l - first.ln()).abs() <= self.max_step).then(|| l.exp())
-    }
-
-    /// Least-squares fit per joint on the runs with release features (runs are labelled by
-    /// their joint); `max_step` as given.
-    pub fn fit(runs: &[Run], feats: &[Option<ReleaseFeatures>], max_step: f64) -> Self {
+    /// Least squares per joint and hypothesis on labelled runs (`labels[i]`: contacts missed
+    /// before the detected one, [`missed_contacts`]); runs without release features or with
+    /// a label beyond the hypotheses are left out. A law with fewer than `2 × RELEASE_TERMS`
+    /// runs is all zeros and never taken (its `ln c` of 0 is 1 m, outside every step).
+    /// `spread`: the window features' error in `ln c`.
+    pub fn fit(
+        runs: &[Run],
+        feats: &[Option<ReleaseFeatures<f64>>],
+        labels: &[usize],
+        max_step: f64,
+        spread: f64,
+    ) -> Self {
         use nalgebra::{DMatrix, DVector};
-        let weights = Joint::ALL
-            .iter()
-            .map(|&j| {
-                let rows: Vec<(Vec<f64>, f64)> = runs
+        let mut centre = vec![0.0; 3];
+        let mut weights = vec![vec![vec![0.0; RELEASE_TERMS]; RELEASE_HYPOTHESES]; 3];
+        let mut prior = vec![vec![0.0; RELEASE_HYPOTHESES]; 3];
+        for joint in Joint::ALL {
+            let j = joint.index();
+            let of_joint: Vec<usize> =
+                runs.iter().zip(labels).filter(|(r, _)| r.joint == joint).map(|(_, &l)| l).collect();
+            for (h, p) in prior[j].iter_mut().enumerate() {
+                let n = of_joint.iter().filter(|&&l| l == h).count();
+                *p = ((n + 1) as f64 / (of_joint.len() + RELEASE_HYPOTHESES) as f64).ln();
+            }
+            let levels: Vec<f64> = runs
+                .iter()
+                .zip(feats)
+                .filter(|(r, _)| r.joint == joint)
+                .filter_map(|(_, f)| f.map(|f| f.release_alpha))
+                .collect();
+            centre[j] = levels.iter().sum::<f64>() / levels.len().max(1) as f64;
+            for (h, law) in weights[j].iter_mut().enumerate() {
+                let rows: Vec<([f64; RELEASE_TERMS], f64)> = runs
                     .iter()
                     .zip(feats)
-                    .filter(|(r, f)| r.joint == j && f.is_some())
-                    .map(|(r, f)| (release_regressor(f.as_ref().expect("filtered")).to_vec(), r.clearance.ln()))
+                    .zip(labels)
+                    .filter(|((r, _), &l)| r.joint == joint && l == h)
+                    .filter_map(|((r, f), _)| f.map(|f| (release_regressors(&f, centre[j]), r.clearance.ln())))
                     .collect();
-                if rows.len() < RELEASE_TERMS {
-                    return vec![0.0; RELEASE_TERMS];
+                if rows.len() < 2 * RELEASE_TERMS {
+                    continue;
                 }
                 let x = DMatrix::from_fn(rows.len(), RELEASE_TERMS, |i, c| rows[i].0[c]);
                 let y = DVector::from_iterator(rows.len(), rows.iter().map(|r| r.1));
-                let mut a = x.transpose() * &x;
-                for i in 1..RELEASE_TERMS {
-                    a[(i, i)] += 1e-9 * rows.len() as f64;
+                if let Some(w) = (x.transpose() * &x).lu().solve(&(x.transpose() * y)) {
+                    *law = w.iter().copied().collect();
                 }
-                let w = a.lu().solve(&(x.transpose() * y)).unwrap_or_else(|| DVector::zeros(RELEASE_TERMS));
-                w.iter().copied().collect()
-            })
-            .collect();
-        Self { max_step, weights }
+            }
+        }
+        Self { max_step, spread, centre, prior, weights }
     }
 
-    /// The model as a TOML table `[release]`.
+    /// How well each law fits the runs it was fitted to (labelled as for [`ReleaseStage::fit`]).
+    pub fn residuals(&self, runs: &[Run], feats: &[Option<ReleaseFeatures<f64>>], labels: &[usize]) -> Vec<LawFit> {
+        let model = self.to_shared();
+        let mut out = Vec::new();
+        for joint in Joint::ALL {
+            for hypothesis in 0..RELEASE_HYPOTHESES {
+                let r: Vec<f64> = runs
+                    .iter()
+                    .zip(feats)
+                    .zip(labels)
+                    .filter(|((r, _), &l)| r.joint == joint && l == hypothesis)
+                    .filter_map(|((r, f), _)| {
+                        f.map(|f| model.ln_clearances(joint.index(), &f)[hypothesis] - r.clearance.ln())
+                    })
+                    .collect();
+                if self.weights[joint.index()][hypothesis].iter().all(|w| *w == 0.0) {
+                    continue;
+                }
+                let rms = (r.iter().map(|e| e * e).sum::<f64>() / r.len().max(1) as f64).sqrt();
+                let largest = r.iter().fold(0.0_f64, |m, e| m.max(e.abs()));
+                out.push(LawFit { joint, hypothesis, runs: r.len(), rms, largest });
+            }
+        }
+        out
+    }
+
+    /// The stage as a TOML table `[release]`.
     pub fn to_toml(&self) -> String {
         let list = |v: &[f64]| format!("[{}]", v.iter().map(|x| format!("{x:?}")).collect::<Vec<_>>().join(", "));
-        let rows = self.weights.iter().map(|w| format!("    {},\n", list(w))).collect::<String>();
+        let joints = self
+            .weights
+            .iter()
+            .map(|j| format!("    [{}],\n", j.iter().map(|w| list(w)).collect::<Vec<_>>().join(", ")))
+            .collect::<String>();
         format!(
-            "\n# Second stage (release transient): rows A, B, C, weights on 1, l, l², u, u², l·u, g\n[release]\nmax_step = {:?}\nweights = [\n{rows}]\n",
-            self.max_step
+            "\n# Second stage (release transient): per joint A, B, C the pre-contact level's centre\n# and, per hypothesis (first contact seen, second, third, fourth), ln prior and weights on\n# 1, l, u, u², u³, l·u\n[release]\nmax_step = {:?}\nspread = {:?}\ncentre = {}\nprior = [\n{}]\nweights = [\n{joints}]\n",
+            self.max_step,
+            self.spread,
+            list(&self.centre),
+            self.prior.iter().map(|p| format!("    {},\n", list(p))).collect::<String>()
         )
     }
 }

@@ -6,6 +6,7 @@
 //! of `ln c`.
 
 use super::model::{feature_vector, regressor, FastModel, FeatureVector, FEATURES, FEATURE_NAMES};
+use super::release::{missed_contacts, ReleaseFeatures, RELEASE_SPAN};
 use super::Recording;
 use crate::crank::config::Method;
 use crate::crank::{CrankConfig, Joint, Mechanism, SimOptions};
@@ -35,6 +36,11 @@ pub struct Run {
 impl Run {
     /// The recording of this run from `base` (adaptive integrator).
     pub fn simulate(&self, base: &CrankConfig) -> anyhow::Result<Recording> {
+        self.simulate_with_eccentricity(base).map(|(r, _)| r)
+    }
+
+    /// The recording and the sampled journal eccentricity (m) of the clearance joint.
+    pub fn simulate_with_eccentricity(&self, base: &CrankConfig) -> anyhow::Result<(Recording, Vec<f64>)> {
         let mut cfg = *base;
         cfg.release.crank_angle_deg = self.release_deg;
         cfg.contact.journal_radius *= self.radius;
@@ -49,8 +55,9 @@ impl Run {
         let mut c = [None; 3];
         c[self.joint.index()] = Some(self.clearance);
         let m = Mechanism::new(&cfg, c)?;
-        let rec = m.simulate(&SimOptions { seed: self.seed, ..SimOptions::from_config(&cfg, self.duration) })?;
-        Ok(Recording::from_simulation(&rec, cfg.sensor.sample_rate))
+        let mut rec = m.simulate(&SimOptions { seed: self.seed, ..SimOptions::from_config(&cfg, self.duration) })?;
+        let e = std::mem::take(&mut rec.truth_eccentricity[self.joint.index()]);
+        Ok((Recording::from_simulation(&rec, cfg.sensor.sample_rate), e))
     }
 }
 
@@ -79,7 +86,14 @@ pub fn grid(clearances: &[f64], variants: usize, seed_base: u64, duration: f64) 
     runs
 }
 
-/// The features of every run, on `threads` threads, in the order of `runs`.
+/// The release laws' training grid: every joint × every clearance × `variants` draws as in
+/// [`grid`], each run only as long as the release detector looks ([`RELEASE_SPAN`] + 10 ms).
+pub fn release_grid(clearances: &[f64], variants: usize, seed_base: u64) -> Vec<Run> {
+    grid(clearances, variants, seed_base, RELEASE_SPAN + 0.01)
+}
+
+/// The features of every run, on `threads` threads, in the order of `runs`, each labelled with
+/// the contacts its recording missed before the release detector's ([`FeatureVector::missed`]).
 pub fn features_of(
     base: &CrankConfig,
     runs: &[Run],
@@ -94,7 +108,13 @@ pub fn features_of(
             s.spawn(|| loop {
                 let k = next.fetch_add(1, Ordering::Relaxed);
                 let Some(run) = runs.get(k) else { break };
-                let f = run.simulate(base).map(|r| feature_vector(&r.crank_alpha, r.sample_rate, window));
+                let f = run.simulate_with_eccentricity(base).map(|(r, e)| {
+                    let mut f = feature_vector(&r.crank_alpha, r.sample_rate, window);
+                    f.missed = f
+                        .release
+                        .map(|x| missed_contacts(&e, run.clearance, (x.contact * r.sample_rate).round() as usize));
+                    f
+                });
                 progress(k, run);
                 out.lock().unwrap_or_else(|e| e.into_inner())[k] = Some(f);
             });
@@ -206,12 +226,12 @@ pub fn score(model: &FastModel, runs: &[Run], feats: &[FeatureVector]) -> (f64, 
 /// then the features), to refit without simulating ([`read_features`]).
 pub fn write_features(path: &std::path::Path, runs: &[Run], feats: &[FeatureVector]) -> std::io::Result<()> {
     let mut text = format!(
-        "joint,clearance,release_deg,radius,seed,duration,windows,operations,{},first_impact,second_gap,release_alpha\n",
+        "joint,clearance,release_deg,radius,seed,duration,windows,operations,{},contact,release_alpha,missed\n",
         FEATURE_NAMES.join(",")
     );
     for (r, f) in runs.iter().zip(feats) {
         text += &format!(
-            "{},{:?},{:?},{:?},{},{:?},{},{},{},{}\n",
+            "{},{:?},{:?},{:?},{},{:?},{},{},{},{},{}\n",
             r.joint,
             r.clearance,
             r.release_deg,
@@ -221,10 +241,8 @@ pub fn write_features(path: &std::path::Path, runs: &[Run], feats: &[FeatureVect
             f.windows,
             f.operations,
             f.values.iter().map(|v| format!("{v:?}")).collect::<Vec<_>>().join(","),
-            f.release.map_or("NaN,NaN,NaN".to_string(), |r| format!(
-                "{:?},{:?},{:?}",
-                r.first_impact, r.second_gap, r.release_alpha
-            ))
+            f.release.map_or("NaN,NaN".to_string(), |r| format!("{:?},{:?}", r.contact, r.release_alpha)),
+            f.missed.map_or("NaN".to_string(), |m| m.to_string())
         );
     }
     std::fs::write(path, text)
@@ -237,7 +255,7 @@ pub fn read_features(path: &std::path::Path) -> anyhow::Result<(Vec<Run>, Vec<Fe
     for (k, line) in text.lines().enumerate().skip(1) {
         let bad = || anyhow::anyhow!("{}: line {}: not a feature row", path.display(), k + 1);
         let cells: Vec<&str> = line.split(',').collect();
-        if cells.len() != 8 + FEATURES && cells.len() != 11 + FEATURES {
+        if cells.len() != 11 + FEATURES {
             return Err(bad());
         }
         let num = |i: usize| cells[i].trim().parse::<f64>().map_err(|_| bad());
@@ -254,17 +272,10 @@ pub fn read_features(path: &std::path::Path) -> anyhow::Result<(Vec<Run>, Vec<Fe
         for (i, v) in values.iter_mut().enumerate() {
             *v = num(8 + i)?;
         }
-        let release = if cells.len() == 11 + FEATURES {
-            let (a, b, c) = (num(8 + FEATURES)?, num(9 + FEATURES)?, num(10 + FEATURES)?);
-            a.is_finite().then_some(super::release::ReleaseFeatures {
-                first_impact: a,
-                second_gap: b,
-                release_alpha: c,
-            })
-        } else {
-            None
-        };
-        feats.push(FeatureVector { values, windows: int(6)? as usize, operations: int(7)?, release });
+        let (contact, release_alpha) = (num(8 + FEATURES)?, num(9 + FEATURES)?);
+        let release = contact.is_finite().then_some(ReleaseFeatures { contact, release_alpha });
+        let missed = cells[10 + FEATURES].trim().parse::<usize>().ok();
+        feats.push(FeatureVector { values, windows: int(6)? as usize, operations: int(7)?, release, missed });
     }
     Ok((runs, feats))
 }
