@@ -24,11 +24,9 @@ fn path(p: &Path) -> &str {
     p.to_str().unwrap()
 }
 
-#[test]
-fn simulate_writes_the_data_contract_and_feature_reads_it() {
-    let dir = scratch("simulate");
-    let data = dir.join("data.csv");
-    let out = edgekf(&[
+/// `edgekf crank simulate` of the paper's mechanism with 0.25 mm at A into `data`.
+fn simulate_paper(data: &Path, duration: &str, extra: &[&str]) -> Output {
+    let mut args = vec![
         "crank",
         "simulate",
         "--config",
@@ -36,12 +34,19 @@ fn simulate_writes_the_data_contract_and_feature_reads_it() {
         "--clearance",
         "A=0.25e-3",
         "--duration",
-        "0.3",
+        duration,
         "--out",
-        path(&data),
-        "--seed",
-        "7",
-    ]);
+        path(data),
+    ];
+    args.extend_from_slice(extra);
+    edgekf(&args)
+}
+
+#[test]
+fn simulate_writes_the_data_contract_and_feature_reads_it() {
+    let dir = scratch("simulate");
+    let data = dir.join("data.csv");
+    let out = simulate_paper(&data, "0.3", &["--seed", "7"]);
     let stdout = text(&out.stdout);
     assert!(out.status.success(), "{stdout}\n{}", text(&out.stderr));
     assert!(stdout.contains("3000 samples at 10000 Hz over 0.3 s, seed 7"), "{stdout}");
@@ -139,4 +144,58 @@ fn mistakes_get_one_clear_line() {
     let stderr = text(&out.stderr);
     assert_eq!(out.status.code(), Some(1));
     assert!(stderr.contains("bad.toml") && stderr.contains("restitusion"), "{stderr}");
+}
+
+/// The fast model knows the mechanism it was trained for: another mechanism is refused with
+/// what differs and how to train one, a release angle outside its training range is a warning,
+/// and a recording at another sample rate is refused.
+#[test]
+fn fast_estimate_checks_the_mechanism_the_model_was_trained_for() {
+    let dir = scratch("trained-for");
+    let data = dir.join("data.csv");
+    let out = simulate_paper(&data, "1", &[]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let paper = std::fs::read_to_string(PAPER).unwrap();
+    let estimate = |config: &str, data: &Path| {
+        let cfg = dir.join("c.toml");
+        std::fs::write(&cfg, config).unwrap();
+        let est = dir.join("est.csv");
+        edgekf(&[
+            "crank",
+            "estimate",
+            "--config",
+            path(&cfg),
+            "--data",
+            path(data),
+            "--method",
+            "fast",
+            "--out",
+            path(&est),
+        ])
+    };
+    let heavier = estimate(&paper.replace("mass = 0.14 ", "mass = 0.2 "), &data);
+    let stderr = text(&heavier.stderr);
+    assert!(!heavier.status.success());
+    assert!(
+        stderr.contains("slider mass 0.2 (the model's: 0.14)") && stderr.contains("edgekf crank train --config"),
+        "{stderr}"
+    );
+    let steep = estimate(&paper.replace("crank_angle_deg = 30.0", "crank_angle_deg = 55.0"), &data);
+    let stderr = text(&steep.stderr);
+    assert!(steep.status.success(), "{stderr}");
+    assert!(stderr.contains("warning: release angle 55° is outside the 20–40°"), "{stderr}");
+    // Every other sample: 5 kHz.
+    let csv = std::fs::read_to_string(&data).unwrap();
+    let mut lines = csv.lines();
+    let mut half = format!("{}\n", lines.next().unwrap());
+    for line in lines.step_by(2) {
+        half.push_str(line);
+        half.push('\n');
+    }
+    let slow = dir.join("slow.csv");
+    std::fs::write(&slow, half).unwrap();
+    let rate = estimate(&paper, &slow);
+    let stderr = text(&rate.stderr);
+    assert!(!rate.status.success());
+    assert!(stderr.contains("sampled at 5000.0 Hz, the fast model at 10000.0 Hz"), "{stderr}");
 }

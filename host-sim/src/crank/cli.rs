@@ -90,7 +90,7 @@ pub struct TrainArgs {
     pub linear: bool,
     /// Runs per joint and clearance of the release laws' own grid of 0.11 s runs
     /// (`estimate::release`); 0 leaves the release stage out.
-    #[arg(long, value_name = "N", default_value_t = 100)]
+    #[arg(long, value_name = "N", default_value_t = 300)]
     pub release_variants: usize,
     /// First noise seed of the release grid.
     #[arg(long, value_name = "N", default_value_t = 500_000)]
@@ -482,6 +482,11 @@ fn estimate(args: EstimateArgs) -> anyhow::Result<()> {
                 None => Some(estimate::model::FastModel::builtin()),
             };
             let model = model.expect("set above");
+            if let Some(t) = &model.trained_for {
+                for w in t.check(&config).map_err(anyhow::Error::msg)? {
+                    eprintln!("warning: {w}");
+                }
+            }
             let est = model.estimate(&rec)?;
             println!(
                 "fast: {} windows, {} operations, wall {:.3} s; joint scores A {:.2}, B {:.2}, C {:.2}",
@@ -559,6 +564,8 @@ fn train(args: TrainArgs) -> anyhow::Result<()> {
         if !args.linear { ", with squares" } else { "" }
     );
     let mut model = train::fit(&runs, &feats, window, args.ridge, !args.linear, desc);
+    model.trained_for =
+        Some(super::estimate::trained_for::TrainedFor::new(&config, train::RELEASE_RANGE_DEG, train::RADIUS_RANGE));
     if args.release_variants > 0 {
         if !(args.max_step.is_finite() && args.max_step > 0.0) {
             anyhow::bail!("--max-step {} must be positive", args.max_step);

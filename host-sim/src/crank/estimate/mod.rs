@@ -46,6 +46,7 @@ pub mod identify2;
 pub mod model;
 pub mod release;
 pub mod train;
+pub mod trained_for;
 pub mod ukf;
 
 use super::simulate::CrankRecording;

@@ -13,6 +13,7 @@
 //!   about 3 minutes on two cores in release).
 
 use super::release::{release_features, ReleaseFeatures, ReleaseStage, RELEASE_SPAN};
+use super::trained_for::TrainedFor;
 use super::{EstimateRow, Recording};
 use crate::crank::Joint;
 use edgekf::clearance::{MIN_FIT, RELEASE_HYPOTHESES, RELEASE_TERMS};
@@ -115,6 +116,10 @@ pub struct FastModel {
     /// Second stage from the release transient ([`super::release`]); absent in older files.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub release: Option<ReleaseStage>,
+    /// The mechanism and sensor it was trained for ([`super::trained_for`]); absent in older
+    /// files, which are then not checked.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub trained_for: Option<TrainedFor>,
 }
 
 /// Result of [`FastModel::estimate`].
@@ -184,6 +189,7 @@ impl FastModel {
             rows(&self.discriminant),
             rows(&self.regression)
         ) + &self.release.as_ref().map_or(String::new(), ReleaseStage::to_toml)
+            + &self.trained_for.as_ref().map_or(String::new(), TrainedFor::to_toml)
     }
 
     fn validate(&self) -> Result<(), String> {
@@ -259,7 +265,11 @@ impl FastModel {
     /// release (`0 < t₀ <` [`MAX_FIRST_SAMPLE`], e.g. a simulator that writes its state after
     /// the first step), the contact time is moved by `t₀`. A file whose clock starts anywhere
     /// else is taken to start at release.
+    /// A recording at another sample rate than the model's is refused.
     pub fn estimate(&self, rec: &Recording) -> anyhow::Result<ModelEstimate> {
+        if let Some(t) = &self.trained_for {
+            t.check_rate(rec.sample_rate).map_err(anyhow::Error::msg)?;
+        }
         let mut f = feature_vector(&rec.crank_alpha, rec.sample_rate, self.window);
         let t0 = rec.t.first().copied().unwrap_or(0.0);
         if let Some(r) = f.release.as_mut().filter(|_| t0 > 0.0 && t0 < MAX_FIRST_SAMPLE) {

@@ -61,6 +61,12 @@ impl Run {
     }
 }
 
+/// Release angles the grids draw from, degrees.
+pub const RELEASE_RANGE_DEG: [f64; 2] = [20.0, 40.0];
+
+/// Factors on the journal radius the grids draw from.
+pub const RADIUS_RANGE: [f64; 2] = [0.8, 1.2];
+
 /// A grid: every joint × every clearance × `variants` random (release 20–40°, journal radius
 /// × 0.8–1.2) draws, noise seeds `seed_base + i`; the draws come from `seed_base` too, so
 /// training and test grids with different bases share no seed.
@@ -74,8 +80,8 @@ pub fn grid(clearances: &[f64], variants: usize, seed_base: u64, duration: f64) 
                 runs.push(Run {
                     joint,
                     clearance: c,
-                    release_deg: rng.gen_range(20.0..40.0),
-                    radius: rng.gen_range(0.8..1.2),
+                    release_deg: rng.gen_range(RELEASE_RANGE_DEG[0]..RELEASE_RANGE_DEG[1]),
+                    radius: rng.gen_range(RADIUS_RANGE[0]..RADIUS_RANGE[1]),
                     seed: seed_base + i,
                     duration,
                 });
@@ -203,6 +209,7 @@ pub fn fit(
         discriminant,
         regression,
         release: None,
+        trained_for: None,
     }
 }
 
