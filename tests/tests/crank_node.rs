@@ -74,7 +74,7 @@ fn node_f32_agrees_with_the_host_f64_estimator() {
         for w in &node.windows {
             let k = w.samples as usize;
             let f = feature_vector(&rec.crank_alpha[..k], rec.sample_rate, 0.25);
-            let e = shared.estimate_with_release(&f.values, f.release.as_ref());
+            let e = shared.estimate_with_release(&f.values, f.release.as_ref(), f.windows as u32);
             assert_eq!(w.estimate.joint, e.joint, "window {}", w.window);
             worst_window = worst_window.max((w.estimate.clearance as f64 / e.clearance - 1.0).abs());
         }

@@ -19,6 +19,7 @@ pub const CLEARANCE_MODEL: ClearanceModel<f64> = ClearanceModel {
     release: ReleaseModel {
         max_step: 0.3,
         spread: 0.0732071255363343,
+        windows: 40.0,
         centre: [-28.30221018199382, -320.49079004055136, -193.81235594394354],
         prior: [
             [-0.12389276378675396, -2.154854145460223, -8.102889134640868, -8.102889134640868],

@@ -589,7 +589,9 @@ fn train(args: TrainArgs) -> anyhow::Result<()> {
         let features: Vec<_> = rf.iter().map(|f| f.release).collect();
         // The window features' own error, from the training runs, weighs the hypotheses.
         let (_, _, spread) = train::score(&model, &runs, &feats);
-        let stage = super::estimate::release::ReleaseStage::fit(&grid, &features, &labels, args.max_step, spread);
+        let windows = feats.iter().map(|f| f.windows as f64).sum::<f64>() / feats.len().max(1) as f64;
+        let stage =
+            super::estimate::release::ReleaseStage::fit(&grid, &features, &labels, args.max_step, (spread, windows));
         for fit in stage.residuals(&grid, &features, &labels) {
             eprintln!(
                 "crank train: release law {} / contact {}: {} runs, ln c residual RMS {:.4}, largest {:.4}",

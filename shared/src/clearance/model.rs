@@ -73,15 +73,17 @@ impl<T: ClearanceFloat> ClearanceModel<T> {
     /// assert!((e.clearance - 1e-4 * 0.5f64.exp()).abs() < 1e-18);
     /// ```
     pub fn estimate(&self, features: &[T; FEATURES]) -> ClearanceEstimate<T> {
-        self.estimate_with_release(features, None)
+        self.estimate_with_release(features, None, 0)
     }
 
     /// As [`ClearanceModel::estimate`], then the release stage ([`ReleaseModel::refine`]) on
-    /// the named joint if the release features are known.
+    /// the named joint if the release features are known; `windows`: the windows the features
+    /// are the mean of.
     pub fn estimate_with_release(
         &self,
         features: &[T; FEATURES],
         release: Option<&ReleaseFeatures<T>>,
+        windows: u32,
     ) -> ClearanceEstimate<T> {
         let mut z = [T::zero(); FEATURES];
         for i in 0..FEATURES {
@@ -109,7 +111,7 @@ impl<T: ClearanceFloat> ClearanceModel<T> {
                 joint = j;
             }
         }
-        let refined = release.and_then(|f| self.release.refine(joint, per_joint[joint], f));
+        let refined = release.and_then(|f| self.release.refine(joint, per_joint[joint], f, windows));
         let clearance = refined.map_or(per_joint[joint], |(c, _)| c.max(lo).min(hi));
         ClearanceEstimate { joint, clearance, scores, per_joint, release: refined.map(|(_, h)| h) }
     }
@@ -128,6 +130,7 @@ impl ClearanceModel<f32> {
             release: ReleaseModel {
                 max_step: m.release.max_step as f32,
                 spread: m.release.spread as f32,
+                windows: m.release.windows as f32,
                 centre: [0.0; 3],
                 prior: [[0.0; RELEASE_HYPOTHESES]; 3],
                 weights: [[[0.0; RELEASE_TERMS]; RELEASE_HYPOTHESES]; 3],
@@ -191,7 +194,8 @@ impl ClearanceModel<f64> {
             && finite(&self.release.centre)
             && self.release.prior.iter().all(|r| finite(r))
             && self.release.max_step.is_finite()
-            && self.release.spread.is_finite();
+            && self.release.spread.is_finite()
+            && self.release.windows.is_finite();
         if !(self.window.is_finite() && finite(&self.mean) && finite(&self.scale) && rows_finite) {
             return Err(fmt::Error);
         }
@@ -233,6 +237,7 @@ impl ClearanceModel<f64> {
         }
         writeln!(out, "    ],\n    release: ReleaseModel {{\n        max_step: {:?},", self.release.max_step)?;
         writeln!(out, "        spread: {:?},", self.release.spread)?;
+        writeln!(out, "        windows: {:?},", self.release.windows)?;
         write!(out, "        centre: ")?;
         list(out, &self.release.centre)?;
         writeln!(out, ",\n        prior: [")?;
@@ -315,7 +320,8 @@ impl<'m, T: ClearanceFloat, S: AsRef<[T]> + AsMut<[T]>> ClearanceEstimator<'m, T
     /// so that the per-sample path does not carry this once-a-window frame.
     #[inline(never)]
     pub fn estimate(&self) -> ClearanceEstimate<T> {
-        self.model.estimate_with_release(&self.features.features(), self.release.features().as_ref())
+        let f = &self.features;
+        self.model.estimate_with_release(&f.features(), self.release.features().as_ref(), f.windows())
     }
 
     /// The release transient's detector.

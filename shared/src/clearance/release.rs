@@ -207,8 +207,12 @@ pub struct ReleaseModel<T> {
     /// Largest `|ln c_release − ln c_features|` for which the release law is taken; 0 turns the
     /// stage off.
     pub max_step: T,
-    /// Standard deviation of the window features' `ln c`.
+    /// Standard deviation of the window features' `ln c` on recordings of `windows` windows.
     pub spread: T,
+    /// Windows of the recordings `spread` was measured on. After fewer windows the window
+    /// features scatter more, by `√(windows / n)` (their windows' statistics average out), and
+    /// `spread` and `max_step` widen by that factor.
+    pub windows: T,
     /// Per joint A, B, C: the centre of the pre-contact level, rad/s².
     pub centre: [T; 3],
     /// Per joint A, B, C and hypothesis: the natural logarithm of its prior probability.
@@ -224,6 +228,7 @@ impl<T: ClearanceFloat> ReleaseModel<T> {
         Self {
             max_step: z,
             spread: T::one(),
+            windows: T::one(),
             centre: [z; 3],
             prior: [[z; RELEASE_HYPOTHESES]; 3],
             weights: [[[z; RELEASE_TERMS]; RELEASE_HYPOTHESES]; 3],
@@ -237,8 +242,9 @@ impl<T: ClearanceFloat> ReleaseModel<T> {
     }
 
     /// The clearance of `joint` (m) and the hypothesis it came from: the most probable
-    /// hypothesis given the window features' clearance `first` (see the type's text), if its
-    /// law is within [`ReleaseModel::max_step`] of `first` in `ln c`.
+    /// hypothesis given the window features' clearance `first` after `windows` windows (see
+    /// the type's text), if its law is within [`ReleaseModel::max_step`] of `first` in `ln c`
+    /// (both widened for fewer windows than [`ReleaseModel::windows`]).
     ///
     /// ```
     /// use edgekf::clearance::{ReleaseFeatures, ReleaseModel};
@@ -254,26 +260,30 @@ impl<T: ClearanceFloat> ReleaseModel<T> {
     /// m.weights[0][3][0] = 5.0;
     /// m.prior[0] = [0.9f64.ln(), 0.1f64.ln(), -10.0, -10.0];
     /// let f = ReleaseFeatures { contact: 5e-3, release_alpha: 0.0 };
-    /// let (c, h) = m.refine(0, 0.1e-3, &f).unwrap();
+    /// let (c, h) = m.refine(0, 0.1e-3, &f, 1).unwrap();
     /// assert_eq!(h, 1);
     /// assert!((c - 0.25e-3 * (-1.0f64).exp()).abs() < 1e-12);
-    /// assert!(m.refine(0, 1e-3, &f).is_none()); // no law near 1 mm
+    /// assert!(m.refine(0, 1e-3, &f, 1).is_none()); // no law near 1 mm
+    /// m.windows = 100.0; // after 1 of 100 windows, steps up to 10 × 0.3 are taken
+    /// assert_eq!(m.refine(0, 1e-3, &f, 1).map(|(_, h)| h), Some(0));
     /// ```
-    pub fn refine(&self, joint: usize, first: T, f: &ReleaseFeatures<T>) -> Option<(T, usize)> {
+    pub fn refine(&self, joint: usize, first: T, f: &ReleaseFeatures<T>, windows: u32) -> Option<(T, usize)> {
         if !(self.max_step > T::zero() && self.spread > T::zero()) || joint >= 3 {
             return None;
         }
+        let widen = (self.windows / T::of_f64(f64::from(windows.max(1)))).max(T::one()).sqrt();
+        let (spread, max_step) = (self.spread * widen, self.max_step * widen);
         let target = first.ln_m();
         let laws = self.ln_clearances(joint, f);
         let mut best: Option<(T, usize)> = None;
         for (h, &l) in laws.iter().enumerate() {
-            let z = (l - target) / self.spread;
+            let z = (l - target) / spread;
             let score = self.prior[joint][h] - T::of_f64(0.5) * z * z;
             if score.is_finite() && best.is_none_or(|(s, _)| score > s) {
                 best = Some((score, h));
             }
         }
         let (_, h) = best?;
-        ((laws[h] - target).abs() <= self.max_step).then(|| (laws[h].exp_m(), h))
+        ((laws[h] - target).abs() <= max_step).then(|| (laws[h].exp_m(), h))
     }
 }

@@ -241,7 +241,8 @@ impl FastModel {
     /// Joint and clearance from a feature vector (the shared crate's
     /// [`edgekf::clearance::ClearanceModel::estimate`], the chip's code, in `f64`).
     pub fn estimate_features(&self, f: FeatureVector) -> ModelEstimate {
-        let e = self.to_shared().estimate_with_release(&f.values, f.release.as_ref());
+        let windows = u32::try_from(f.windows).unwrap_or(u32::MAX);
+        let e = self.to_shared().estimate_with_release(&f.values, f.release.as_ref(), windows);
         let mut clearance = [0.0; 3];
         clearance[e.joint] = e.clearance;
         ModelEstimate {

@@ -81,6 +81,8 @@ pub struct ReleaseStage {
     pub max_step: f64,
     /// Standard deviation of the window features' `ln c` (the training set's RMS error).
     pub spread: f64,
+    /// Windows of the training recordings `spread` was measured on (fewer windows widen it).
+    pub windows: f64,
     /// Per joint A, B, C: the centre of the pre-contact level, rad/s².
     pub centre: Vec<f64>,
     /// Per joint A, B, C, per hypothesis: the natural logarithm of its prior probability (its
@@ -109,6 +111,8 @@ impl ReleaseStage {
             && self.max_step >= 0.0
             && self.spread.is_finite()
             && self.spread > 0.0
+            && self.windows.is_finite()
+            && self.windows >= 1.0
             && all.clone().all(|v| v.is_finite());
         if !ok {
             return Err("release: every number must be finite, max_step not negative, spread positive".into());
@@ -121,6 +125,7 @@ impl ReleaseStage {
         let mut m = ReleaseModel::off();
         m.max_step = self.max_step;
         m.spread = self.spread;
+        m.windows = self.windows;
         for j in 0..3 {
             m.centre[j] = self.centre[j];
             for h in 0..RELEASE_HYPOTHESES {
@@ -137,13 +142,13 @@ impl ReleaseStage {
     /// before the detected one, [`missed_contacts`]); runs without release features or with
     /// a label beyond the hypotheses are left out. A law with fewer than `2 × RELEASE_TERMS`
     /// runs is all zeros and never taken (its `ln c` of 0 is 1 m, outside every step).
-    /// `spread`: the window features' error in `ln c`.
+    /// `spread`: the window features' error in `ln c` on recordings of `windows` windows.
     pub fn fit(
         runs: &[Run],
         feats: &[Option<ReleaseFeatures<f64>>],
         labels: &[usize],
         max_step: f64,
-        spread: f64,
+        (spread, windows): (f64, f64),
     ) -> Self {
         use nalgebra::{DMatrix, DVector};
         let mut centre = vec![0.0; 3];
@@ -182,7 +187,7 @@ impl ReleaseStage {
                 }
             }
         }
-        Self { max_step, spread, centre, prior, weights }
+        Self { max_step, spread, windows, centre, prior, weights }
     }
 
     /// How well each law fits the runs it was fitted to (labelled as for [`ReleaseStage::fit`]).
@@ -220,9 +225,10 @@ impl ReleaseStage {
             .map(|j| format!("    [{}],\n", j.iter().map(|w| list(w)).collect::<Vec<_>>().join(", ")))
             .collect::<String>();
         format!(
-            "\n# Second stage (release transient): per joint A, B, C the pre-contact level's centre\n# and, per hypothesis (first contact seen, second, third, fourth), ln prior and weights on\n# 1, l, u, u², u³, l·u\n[release]\nmax_step = {:?}\nspread = {:?}\ncentre = {}\nprior = [\n{}]\nweights = [\n{joints}]\n",
+            "\n# Second stage (release transient): per joint A, B, C the pre-contact level's centre\n# and, per hypothesis (first contact seen, second, third, fourth), ln prior and weights on\n# 1, l, u, u², u³, l·u\n[release]\nmax_step = {:?}\nspread = {:?}\nwindows = {:?}\ncentre = {}\nprior = [\n{}]\nweights = [\n{joints}]\n",
             self.max_step,
             self.spread,
+            self.windows,
             list(&self.centre),
             self.prior.iter().map(|p| format!("    {},\n", list(p))).collect::<String>()
         )
