@@ -132,6 +132,7 @@ impl ClearanceModel<f32> {
                 spread: m.release.spread as f32,
                 windows: m.release.windows as f32,
                 centre: [0.0; 3],
+                level: [[0.0; 2]; 3],
                 prior: [[0.0; RELEASE_HYPOTHESES]; 3],
                 weights: [[[0.0; RELEASE_TERMS]; RELEASE_HYPOTHESES]; 3],
             },
@@ -153,6 +154,7 @@ impl ClearanceModel<f32> {
                 c += 1;
             }
             out.release.centre[j] = m.release.centre[j] as f32;
+            out.release.level[j] = [m.release.level[j][0] as f32, m.release.level[j][1] as f32];
             let mut h = 0;
             while h < RELEASE_HYPOTHESES {
                 out.release.prior[j][h] = m.release.prior[j][h] as f32;
@@ -192,6 +194,7 @@ impl ClearanceModel<f64> {
             && self.regression.iter().all(|r| finite(r))
             && self.release.weights.iter().flatten().all(|r| finite(r))
             && finite(&self.release.centre)
+            && self.release.level.iter().all(|r| finite(r))
             && self.release.prior.iter().all(|r| finite(r))
             && self.release.max_step.is_finite()
             && self.release.spread.is_finite()
@@ -240,6 +243,13 @@ impl ClearanceModel<f64> {
         writeln!(out, "        windows: {:?},", self.release.windows)?;
         write!(out, "        centre: ")?;
         list(out, &self.release.centre)?;
+        writeln!(out, ",\n        level: [")?;
+        for row in &self.release.level {
+            write!(out, "            ")?;
+            list(out, row)?;
+            writeln!(out, ",")?;
+        }
+        write!(out, "        ]")?;
         writeln!(out, ",\n        prior: [")?;
         for row in &self.release.prior {
             write!(out, "            ")?;

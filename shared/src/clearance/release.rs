@@ -215,6 +215,11 @@ pub struct ReleaseModel<T> {
     pub windows: T,
     /// Per joint A, B, C: the centre of the pre-contact level, rad/s².
     pub centre: [T; 3],
+    /// Per joint A, B, C: the range of pre-contact levels the laws were fitted on, rad/s².
+    /// A level outside it means a release the laws do not describe (e.g. a journal already
+    /// resting in its bearing at release, where the crank moves as the ideal mechanism's from
+    /// the first sample), and the release stage stays out.
+    pub level: [[T; 2]; 3],
     /// Per joint A, B, C and hypothesis: the natural logarithm of its prior probability.
     pub prior: [[T; RELEASE_HYPOTHESES]; 3],
     /// Per joint A, B, C and hypothesis: weights on [`release_regressors`].
@@ -230,6 +235,7 @@ impl<T: ClearanceFloat> ReleaseModel<T> {
             spread: T::one(),
             windows: T::one(),
             centre: [z; 3],
+            level: [[z; 2]; 3],
             prior: [[z; RELEASE_HYPOTHESES]; 3],
             weights: [[[z; RELEASE_TERMS]; RELEASE_HYPOTHESES]; 3],
         }
@@ -259,6 +265,7 @@ impl<T: ClearanceFloat> ReleaseModel<T> {
     /// m.weights[0][2][0] = 5.0; // laws never near (c = e⁵ m)
     /// m.weights[0][3][0] = 5.0;
     /// m.prior[0] = [0.9f64.ln(), 0.1f64.ln(), -10.0, -10.0];
+    /// m.level[0] = [-50.0, 50.0]; // pre-contact levels the laws hold for
     /// let f = ReleaseFeatures { contact: 5e-3, release_alpha: 0.0 };
     /// let (c, h) = m.refine(0, 0.1e-3, &f, 1).unwrap();
     /// assert_eq!(h, 1);
@@ -266,9 +273,15 @@ impl<T: ClearanceFloat> ReleaseModel<T> {
     /// assert!(m.refine(0, 1e-3, &f, 1).is_none()); // no law near 1 mm
     /// m.windows = 100.0; // after 1 of 100 windows, steps up to 10 × 0.3 are taken
     /// assert_eq!(m.refine(0, 1e-3, &f, 1).map(|(_, h)| h), Some(0));
+    /// let resting = ReleaseFeatures { contact: 5e-3, release_alpha: -160.0 };
+    /// assert!(m.refine(0, 0.1e-3, &resting, 1).is_none()); // a level the laws never saw
     /// ```
     pub fn refine(&self, joint: usize, first: T, f: &ReleaseFeatures<T>, windows: u32) -> Option<(T, usize)> {
         if !(self.max_step > T::zero() && self.spread > T::zero()) || joint >= 3 {
+            return None;
+        }
+        let [lo, hi] = self.level[joint];
+        if !(f.release_alpha >= lo && f.release_alpha <= hi) {
             return None;
         }
         let widen = (self.windows / T::of_f64(f64::from(windows.max(1)))).max(T::one()).sqrt();

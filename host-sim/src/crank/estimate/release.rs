@@ -57,6 +57,10 @@ pub fn missed_contacts(e: &[f64], c: f64, detected: usize) -> usize {
     turns
 }
 
+/// Margin on the training runs' range of pre-contact levels, rad/s²: about 4 standard
+/// deviations of the level's noise at 5 rad/s² over the ~40 samples before the first contact.
+pub const LEVEL_MARGIN: f64 = 4.0;
+
 /// The fit of one release law ([`ReleaseStage::residuals`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LawFit {
@@ -85,6 +89,9 @@ pub struct ReleaseStage {
     pub windows: f64,
     /// Per joint A, B, C: the centre of the pre-contact level, rad/s².
     pub centre: Vec<f64>,
+    /// Per joint A, B, C: the range of pre-contact levels the laws hold for, rad/s² (the
+    /// training runs' range widened by [`LEVEL_MARGIN`]).
+    pub level: Vec<[f64; 2]>,
     /// Per joint A, B, C, per hypothesis: the natural logarithm of its prior probability (its
     /// share of the training runs, with one run added to every hypothesis).
     pub prior: Vec<Vec<f64>>,
@@ -97,16 +104,25 @@ impl ReleaseStage {
     /// Checks the shapes and numbers.
     pub fn validate(&self) -> Result<(), String> {
         let shape = self.centre.len() == 3
+            && self.level.len() == 3
+            && self.level.iter().all(|[lo, hi]| lo <= hi)
             && self.prior.len() == 3
             && self.prior.iter().all(|p| p.len() == RELEASE_HYPOTHESES)
             && self.weights.len() == 3
             && self.weights.iter().all(|j| j.len() == RELEASE_HYPOTHESES && j.iter().all(|w| w.len() == RELEASE_TERMS));
         if !shape {
             return Err(format!(
-                "release: centre needs 3 values, prior 3 rows of {RELEASE_HYPOTHESES}, weights 3 × {RELEASE_HYPOTHESES} rows of {RELEASE_TERMS}"
+                "release: centre needs 3 values, level 3 ranges [low, high], prior 3 rows of {RELEASE_HYPOTHESES}, weights 3 × {RELEASE_HYPOTHESES} rows of {RELEASE_TERMS}"
             ));
         }
-        let all = self.weights.iter().flatten().flatten().chain(&self.centre).chain(self.prior.iter().flatten());
+        let all = self
+            .weights
+            .iter()
+            .flatten()
+            .flatten()
+            .chain(&self.centre)
+            .chain(self.prior.iter().flatten())
+            .chain(self.level.iter().flatten());
         let ok = self.max_step.is_finite()
             && self.max_step >= 0.0
             && self.spread.is_finite()
@@ -128,6 +144,7 @@ impl ReleaseStage {
         m.windows = self.windows;
         for j in 0..3 {
             m.centre[j] = self.centre[j];
+            m.level[j] = self.level[j];
             for h in 0..RELEASE_HYPOTHESES {
                 m.prior[j][h] = self.prior[j][h];
                 for (w, v) in m.weights[j][h].iter_mut().zip(&self.weights[j][h]) {
@@ -152,6 +169,7 @@ impl ReleaseStage {
     ) -> Self {
         use nalgebra::{DMatrix, DVector};
         let mut centre = vec![0.0; 3];
+        let mut level = vec![[0.0; 2]; 3];
         let mut weights = vec![vec![vec![0.0; RELEASE_TERMS]; RELEASE_HYPOTHESES]; 3];
         let mut prior = vec![vec![0.0; RELEASE_HYPOTHESES]; 3];
         for joint in Joint::ALL {
@@ -169,6 +187,8 @@ impl ReleaseStage {
                 .filter_map(|(_, f)| f.map(|f| f.release_alpha))
                 .collect();
             centre[j] = levels.iter().sum::<f64>() / levels.len().max(1) as f64;
+            let (lo, hi) = levels.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
+            level[j] = if lo <= hi { [lo - LEVEL_MARGIN, hi + LEVEL_MARGIN] } else { [0.0, 0.0] };
             for (h, law) in weights[j].iter_mut().enumerate() {
                 let rows: Vec<([f64; RELEASE_TERMS], f64)> = runs
                     .iter()
@@ -187,7 +207,7 @@ impl ReleaseStage {
                 }
             }
         }
-        Self { max_step, spread, windows, centre, prior, weights }
+        Self { max_step, spread, windows, centre, level, prior, weights }
     }
 
     /// How well each law fits the runs it was fitted to (labelled as for [`ReleaseStage::fit`]).
@@ -225,11 +245,12 @@ impl ReleaseStage {
             .map(|j| format!("    [{}],\n", j.iter().map(|w| list(w)).collect::<Vec<_>>().join(", ")))
             .collect::<String>();
         format!(
-            "\n# Second stage (release transient): per joint A, B, C the pre-contact level's centre\n# and, per hypothesis (first contact seen, second, third, fourth), ln prior and weights on\n# 1, l, u, u², u³, l·u\n[release]\nmax_step = {:?}\nspread = {:?}\nwindows = {:?}\ncentre = {}\nprior = [\n{}]\nweights = [\n{joints}]\n",
+            "\n# Second stage (release transient): per joint A, B, C the pre-contact level's centre\n# and, per hypothesis (first contact seen, second, third, fourth), ln prior and weights on\n# 1, l, u, u², u³, l·u\n[release]\nmax_step = {:?}\nspread = {:?}\nwindows = {:?}\ncentre = {}\nlevel = {}\nprior = [\n{}]\nweights = [\n{joints}]\n",
             self.max_step,
             self.spread,
             self.windows,
             list(&self.centre),
+            format!("[{}]", self.level.iter().map(|r| list(r)).collect::<Vec<_>>().join(", ")),
             self.prior.iter().map(|p| format!("    {},\n", list(p))).collect::<String>()
         )
     }
