@@ -215,6 +215,20 @@ impl ClearanceModel<f64> {
             }
             write!(out, "]")
         };
+        // `field: [` then one row per line at `indent`, then `]` (no trailing comma).
+        let rows = |out: &mut dyn Write, field: &str, indent: &str, rows: &mut dyn Iterator<Item = &[f64]>| {
+            if field.is_empty() {
+                writeln!(out, "[")?;
+            } else {
+                writeln!(out, "{field}: [")?;
+            }
+            for row in rows {
+                write!(out, "{indent}    ")?;
+                list(out, row)?;
+                writeln!(out, ",")?;
+            }
+            write!(out, "{indent}]")
+        };
         write!(out, "/// The fast clearance model; features: ")?;
         for (i, name) in FEATURE_NAMES.iter().enumerate() {
             write!(out, "{}{name}", if i > 0 { ", " } else { "" })?;
@@ -226,45 +240,24 @@ impl ClearanceModel<f64> {
         list(out, &self.mean)?;
         write!(out, ",\n    scale: ")?;
         list(out, &self.scale)?;
-        writeln!(out, ",\n    discriminant: [")?;
-        for row in &self.discriminant {
-            write!(out, "        ")?;
-            list(out, row)?;
-            writeln!(out, ",")?;
-        }
-        writeln!(out, "    ],\n    regression: [")?;
-        for row in &self.regression {
-            write!(out, "        ")?;
-            list(out, row)?;
-            writeln!(out, ",")?;
-        }
-        writeln!(out, "    ],\n    release: ReleaseModel {{\n        max_step: {:?},", self.release.max_step)?;
+        write!(out, ",\n    ")?;
+        rows(out, "discriminant", "    ", &mut self.discriminant.iter().map(|r| &r[..]))?;
+        write!(out, ",\n    ")?;
+        rows(out, "regression", "    ", &mut self.regression.iter().map(|r| &r[..]))?;
+        writeln!(out, ",\n    release: ReleaseModel {{\n        max_step: {:?},", self.release.max_step)?;
         writeln!(out, "        spread: {:?},", self.release.spread)?;
         writeln!(out, "        windows: {:?},", self.release.windows)?;
         write!(out, "        centre: ")?;
         list(out, &self.release.centre)?;
-        writeln!(out, ",\n        level: [")?;
-        for row in &self.release.level {
-            write!(out, "            ")?;
-            list(out, row)?;
-            writeln!(out, ",")?;
-        }
-        write!(out, "        ]")?;
-        writeln!(out, ",\n        prior: [")?;
-        for row in &self.release.prior {
-            write!(out, "            ")?;
-            list(out, row)?;
-            writeln!(out, ",")?;
-        }
-        writeln!(out, "        ],\n        weights: [")?;
+        write!(out, ",\n        ")?;
+        rows(out, "level", "        ", &mut self.release.level.iter().map(|r| &r[..]))?;
+        write!(out, ",\n        ")?;
+        rows(out, "prior", "        ", &mut self.release.prior.iter().map(|r| &r[..]))?;
+        writeln!(out, ",\n        weights: [")?;
         for joint in &self.release.weights {
-            writeln!(out, "            [")?;
-            for law in joint {
-                write!(out, "                ")?;
-                list(out, law)?;
-                writeln!(out, ",")?;
-            }
-            writeln!(out, "            ],")?;
+            write!(out, "            ")?;
+            rows(out, "", "            ", &mut joint.iter().map(|r| &r[..]))?;
+            writeln!(out, ",")?;
         }
         writeln!(out, "        ],\n    }},\n}};")
     }
