@@ -165,3 +165,35 @@ fn fast_model_on_the_papers_integrator() {
     }
     assert!(worst <= 0.03, "{worst}");
 }
+
+/// A release the laws do not describe: the journal at A already rests at the bottom of its
+/// bearing, so the crank swings as the ideal mechanism's from the first sample (about
+/// −160 rad/s² at 30° instead of the free flight's −28). The release stage stays out and the
+/// window features give the clearance.
+#[test]
+fn a_journal_resting_at_release_is_left_to_the_window_features() {
+    use edgekf_sim::crank::estimate::Recording;
+    use edgekf_sim::crank::state::eccentricity_index;
+    use edgekf_sim::crank::{Mechanism, SimOptions};
+    let cfg = CrankConfig::default();
+    let c = 0.25e-3;
+    let m = Mechanism::new(&cfg, [Some(c), None, None]).unwrap();
+    let mut start = m.release_state();
+    start.z[eccentricity_index(Joint::A) + 1] = -0.9999 * c;
+    let opts = SimOptions { seed: 5, initial: Some(start), ..SimOptions::from_config(&cfg, 10.0) };
+    let rec = Recording::from_simulation(&m.simulate(&opts).unwrap(), cfg.sensor.sample_rate);
+    let model = FastModel::builtin();
+    let e = model.estimate(&rec).unwrap();
+    let level = e.features.release.map(|r| r.release_alpha);
+    eprintln!(
+        "resting journal: pre-contact level {level:?} rad/s², release law {:?}, named {} {:.4} mm ({:+.1} %)",
+        e.release,
+        e.joint,
+        e.clearance[e.joint.index()] * 1e3,
+        (e.clearance[e.joint.index()] / c - 1.0) * 100.0
+    );
+    let [lo, hi] = model.release.as_ref().unwrap().level[0];
+    assert!(level.is_none_or(|l| l < lo || l > hi), "{level:?}");
+    assert_eq!(e.release, None);
+    assert_eq!(e.clearance[e.joint.index()], e.per_joint[e.joint.index()]);
+}
