@@ -148,13 +148,18 @@ fn estimate_command_writes_the_estimate_file() {
         let text = std::fs::read_to_string(&out).unwrap();
         let mut lines = text.lines();
         assert_eq!(lines.next(), Some("t,clearance_A,clearance_B,clearance_C"));
-        let rows = if method == "ukf" { 5 } else { 1 };
+        // Both: one row per 0.25 s window, then the whole recording's.
         let body: Vec<&str> = lines.collect();
-        assert_eq!(body.len(), rows, "{method}: {text}");
+        assert_eq!(body.len(), 5, "{method}: {text}");
         if method == "fast" {
-            // The fast estimator names one joint: one non-zero clearance column.
-            let cells: Vec<f64> = body[0].split(',').skip(1).map(|c| c.parse().unwrap()).collect();
-            assert_eq!(cells.iter().filter(|c| **c > 0.0).count(), 1, "{text}");
+            // The fast estimator names one joint: one non-zero clearance column in every row; the
+            // last window (t = 0.9999 s) holds the whole recording's 4 windows, as the last row.
+            let cells = |row: &str| -> Vec<f64> { row.split(',').map(|c| c.parse().unwrap()).collect() };
+            for row in &body {
+                assert_eq!(cells(row)[1..].iter().filter(|c| **c > 0.0).count(), 1, "{text}");
+            }
+            assert_eq!(cells(body[3])[1..], cells(body[4])[1..], "{text}");
+            assert!((cells(body[4])[1] / 0.25e-3 - 1.0).abs() < 0.03, "{text}");
         }
         let back = Recording::read(&data).unwrap();
         assert_eq!(back.truth_clearance, Some([0.25e-3, 0.0, 0.0]));
@@ -172,7 +177,7 @@ fn estimate_command_writes_the_estimate_file() {
     let model = dir.join("model.toml");
     let o = std::process::Command::new(env!("CARGO_BIN_EXE_edgekf"))
         .args(["crank", "train", "--out", model.to_str().unwrap(), "--clearances", "0.2e-3,0.4e-3"])
-        .args(["--variants", "2", "--duration", "0.5", "--threads", "2"])
+        .args(["--variants", "2", "--duration", "0.5", "--threads", "2", "--release-variants", "10"])
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));

@@ -503,7 +503,7 @@ fn estimate(args: EstimateArgs) -> anyhow::Result<()> {
                 describe_clearances(&est.clearance.map(|v| (v > 0.0).then_some(v))),
                 truth.map_or(String::new(), |t| format!("; truth: {t}"))
             );
-            est.rows(&rec)
+            model.rows(&rec)?
         }
     };
     estimate::write_estimates(&args.out, &rows).map_err(|e| anyhow::anyhow!("{e}"))?;

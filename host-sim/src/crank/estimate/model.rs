@@ -143,9 +143,9 @@ pub struct ModelEstimate {
 }
 
 impl ModelEstimate {
-    /// Rows of the estimate file: one, the whole recording.
-    pub fn rows(&self, rec: &Recording) -> Vec<EstimateRow> {
-        vec![EstimateRow { t: rec.t.last().copied().unwrap_or(0.0), clearance: self.clearance }]
+    /// The last row of the estimate file: the whole recording.
+    pub fn row(&self, rec: &Recording) -> EstimateRow {
+        EstimateRow { t: rec.t.last().copied().unwrap_or(0.0), clearance: self.clearance }
     }
 }
 
@@ -257,6 +257,37 @@ impl FastModel {
                 + 3 * 20
                 + RELEASE_HYPOTHESES as u64 * (2 * RELEASE_TERMS as u64 + 20),
         }
+    }
+
+    /// Rows of the estimate file for `rec`: the running estimate after every window (the
+    /// recording up to the window's end, as the node reports it), then the whole recording's
+    /// ([`FastModel::estimate`]).
+    pub fn rows(&self, rec: &Recording) -> anyhow::Result<Vec<EstimateRow>> {
+        let whole = self.estimate(rec)?;
+        let model = self.to_shared();
+        let n = edgekf::clearance::window_samples(self.window, rec.sample_rate);
+        let mut est =
+            edgekf::clearance::ClearanceEstimator::new(&model, vec![0.0; n.saturating_sub(1)], rec.sample_rate)
+                .map_err(|e| anyhow::anyhow!("window of {n} samples: {e:?}"))?;
+        let t0 = rec.t.first().copied().unwrap_or(0.0);
+        let mut rows = Vec::new();
+        for (k, &x) in rec.crank_alpha.iter().enumerate() {
+            if est.push(x).is_none() {
+                continue;
+            }
+            // As `estimate`: the release features moved by a late first sample.
+            let mut release = est.release().features();
+            if let Some(r) = release.as_mut().filter(|_| t0 > 0.0 && t0 < MAX_FIRST_SAMPLE) {
+                r.contact += t0;
+            }
+            let f = est.features();
+            let e = model.estimate_with_release(&f.features(), release.as_ref(), f.windows());
+            let mut clearance = [0.0; 3];
+            clearance[e.joint] = e.clearance;
+            rows.push(EstimateRow { t: rec.t[k], clearance });
+        }
+        rows.push(whole.row(rec));
+        Ok(rows)
     }
 
     /// Joint and clearance from a recording.
