@@ -244,13 +244,14 @@ impl ReleaseStage {
             .iter()
             .map(|j| format!("    [{}],\n", j.iter().map(|w| list(w)).collect::<Vec<_>>().join(", ")))
             .collect::<String>();
+        let level = format!("[{}]", self.level.iter().map(|r| list(r)).collect::<Vec<_>>().join(", "));
         format!(
             "\n# Second stage (release transient): per joint A, B, C the pre-contact level's centre\n# and, per hypothesis (first contact seen, second, third, fourth), ln prior and weights on\n# 1, l, u, u², u³, l·u\n[release]\nmax_step = {:?}\nspread = {:?}\nwindows = {:?}\ncentre = {}\nlevel = {}\nprior = [\n{}]\nweights = [\n{joints}]\n",
             self.max_step,
             self.spread,
             self.windows,
             list(&self.centre),
-            format!("[{}]", self.level.iter().map(|r| list(r)).collect::<Vec<_>>().join(", ")),
+            level,
             self.prior.iter().map(|p| format!("    {},\n", list(p))).collect::<String>()
         )
     }
