@@ -184,6 +184,10 @@ fn fast_estimate_checks_the_mechanism_the_model_was_trained_for() {
     let stderr = text(&steep.stderr);
     assert!(steep.status.success(), "{stderr}");
     assert!(stderr.contains("warning: release angle 55° is outside the 20–40°"), "{stderr}");
+    // The summary says where the clearance came from: 0.25 mm at A touches after 7.1 ms.
+    let stdout = text(&steep.stdout);
+    assert!(stdout.contains("release: first contact seen at 7.1 ms"), "{stdout}");
+    assert!(stdout.contains("taken as contact 1 after release: A 0.2"), "{stdout}");
     // Every other sample: 5 kHz.
     let csv = std::fs::read_to_string(&data).unwrap();
     let mut lines = csv.lines();

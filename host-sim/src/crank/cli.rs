@@ -497,6 +497,26 @@ fn estimate(args: EstimateArgs) -> anyhow::Result<()> {
                 est.scores[1],
                 est.scores[2]
             );
+            let features_only = est.per_joint[est.joint.index()] * 1e3;
+            match (est.features.release, est.release) {
+                (Some(r), Some(h)) => println!(
+                    "release: first contact seen at {:.1} ms, crank acceleration before it {:.1} rad/s²; taken as contact {} after release: {} {:.4} mm (window features alone {features_only:.4} mm)",
+                    r.contact * 1e3,
+                    r.release_alpha,
+                    h + 1,
+                    est.joint,
+                    est.clearance[est.joint.index()] * 1e3
+                ),
+                (Some(r), None) => println!(
+                    "release: first contact seen at {:.1} ms, crank acceleration before it {:.1} rad/s²; no release law fits it, so the window features give the clearance ({features_only:.4} mm)",
+                    r.contact * 1e3,
+                    r.release_alpha
+                ),
+                (None, _) => println!(
+                    "release: no contact seen in the first {} s; the window features give the clearance ({features_only:.4} mm)",
+                    estimate::release::RELEASE_SPAN
+                ),
+            }
             println!(
                 "estimate: joint {}: {}{}",
                 est.joint,
