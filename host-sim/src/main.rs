@@ -43,7 +43,7 @@ enum Command {
         #[arg(long, value_name = "TOML")]
         config: Option<PathBuf>,
         /// Skip the second part, the residual loop on the paper rotor with an undeclared
-        /// effect (about half a minute).
+        /// effect (about half a minute); the third, the slider-crank, still runs.
         #[arg(long)]
         skip_loop: bool,
     },
@@ -152,21 +152,31 @@ fn run(command: Command) -> anyhow::Result<()> {
                 demo.write(dir)?;
                 println!("wrote {0}/data.csv, {0}/est.csv and {0}/est_f32.csv", dir.display());
             }
-            if skip_loop {
-                return Ok(());
+            if !skip_loop {
+                use edgekf_sim::residual_loop::{cli, demo::LoopDemo};
+                println!("\nclosing the loop — {}", LoopDemo::describe());
+                let demo = LoopDemo::run(true)?;
+                print!("{}", cli::summary_table(&demo.report));
+                if let Some(dir) = &out {
+                    let dir = dir.join("loop");
+                    cli::write_report(&demo.report, &dir)?;
+                    let d = &demo.data;
+                    let names: Vec<&str> = d.names.iter().map(String::as_str).collect();
+                    let cols: Vec<&[f64]> = d.columns.iter().map(Vec::as_slice).collect();
+                    data::write(&dir.join("data.csv"), &names, &d.t, &cols)?;
+                    println!("wrote {0}/data.csv and the report in {0}", dir.display());
+                }
             }
-            use edgekf_sim::residual_loop::{cli, demo::LoopDemo};
-            println!("\nclosing the loop — {}", LoopDemo::describe());
-            let demo = LoopDemo::run(true)?;
-            print!("{}", cli::summary_table(&demo.report));
-            if let Some(dir) = out {
-                let dir = dir.join("loop");
-                cli::write_report(&demo.report, &dir)?;
-                let d = &demo.data;
-                let names: Vec<&str> = d.names.iter().map(String::as_str).collect();
-                let cols: Vec<&[f64]> = d.columns.iter().map(Vec::as_slice).collect();
-                data::write(&dir.join("data.csv"), &names, &d.t, &cols)?;
-                println!("wrote {0}/data.csv and the report in {0}", dir.display());
+            use edgekf_sim::crank::demo::CrankDemo;
+            println!("\n{}", CrankDemo::describe());
+            let crank = CrankDemo::run()?;
+            print!("{}", crank.summary());
+            if let Some(dir) = &out {
+                let dir = dir.join("crank");
+                std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+                crank.recording.write_csv(&dir.join("data.csv"))?;
+                edgekf_sim::crank::estimate::write_estimates(&dir.join("est.csv"), &crank.rows)?;
+                println!("wrote {0}/data.csv and {0}/est.csv", dir.display());
             }
             Ok(())
         }

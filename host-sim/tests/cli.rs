@@ -68,6 +68,17 @@ fn demo_prints_the_summary_and_writes_files() {
     let factor = report["effects_added"][0]["value"].as_f64().unwrap();
     assert!((factor - 1.10).abs() < 0.02, "{factor}");
     assert!(dir.join("loop/data.csv").exists());
+
+    // The third part: the fast clearance estimator names joint B and sizes its 0.3 mm within
+    // ±3 % from the first contact after release; the window features alone are further off.
+    assert!(stdout.contains("slider-crank: 0.30 mm of clearance at joint B"), "{stdout}");
+    let line = stdout.lines().find(|l| l.trim_start().starts_with("estimate: joint")).expect("the crank estimate line");
+    assert!(line.contains("estimate: joint B, 0.29") || line.contains("estimate: joint B, 0.30"), "{line}");
+    assert!(line.contains("from the first contact after release"), "{line}");
+    let est = std::fs::read_to_string(dir.join("crank/est.csv")).unwrap();
+    assert!(est.starts_with("t,clearance_A,clearance_B,clearance_C\n"));
+    assert_eq!(est.lines().count(), 1 + 40 + 1);
+    assert!(dir.join("crank/data.csv").exists());
 }
 
 #[test]

@@ -70,6 +70,7 @@
 pub mod cli;
 pub mod config;
 pub mod contact;
+pub mod demo;
 mod error;
 pub mod estimate;
 pub mod feature;
