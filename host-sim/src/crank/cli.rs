@@ -523,7 +523,7 @@ fn estimate(args: EstimateArgs) -> anyhow::Result<()> {
                 describe_clearances(&est.clearance.map(|v| (v > 0.0).then_some(v))),
                 truth.map_or(String::new(), |t| format!("; truth: {t}"))
             );
-            model.rows(&rec)?
+            model.rows(&rec, &est)?
         }
     };
     estimate::write_estimates(&args.out, &rows).map_err(|e| anyhow::anyhow!("{e}"))?;

@@ -42,7 +42,8 @@ impl CrankDemo {
             Mechanism::new(&cfg, clearances)?.simulate(&SimOptions { seed, ..SimOptions::from_config(&cfg, 10.0) })?;
         let rec = Recording::from_simulation(&recording, cfg.sensor.sample_rate);
         let model = FastModel::builtin();
-        Ok(Self { estimate: model.estimate(&rec)?, rows: model.rows(&rec)?, recording })
+        let estimate = model.estimate(&rec)?;
+        Ok(Self { rows: model.rows(&rec, &estimate)?, estimate, recording })
     }
 
     /// The truth and the estimate, one line each.

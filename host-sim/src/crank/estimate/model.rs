@@ -12,11 +12,11 @@
 //!   (`edgekf crank train --out host-sim/src/crank/estimate/fast_model.toml`: 264 runs of 10 s,
 //!   about 3 minutes on two cores in release).
 
-use super::release::{release_features, ReleaseFeatures, ReleaseStage, RELEASE_SPAN};
+use super::release::{ReleaseFeatures, ReleaseStage};
 use super::trained_for::TrainedFor;
 use super::{EstimateRow, Recording};
 use crate::crank::Joint;
-use edgekf::clearance::{MIN_FIT, RELEASE_HYPOTHESES, RELEASE_TERMS};
+use edgekf::clearance::{ReleaseDetector, MIN_FIT, RELEASE_HYPOTHESES, RELEASE_TERMS};
 use serde::{Deserialize, Serialize};
 
 pub use edgekf::clearance::{FEATURES, FEATURE_NAMES};
@@ -48,6 +48,15 @@ pub struct FeatureVector {
 /// stage's contact time for.
 pub const MAX_FIRST_SAMPLE: f64 = 0.002;
 
+/// Moves the contact time by the file's first `t` if that is a little after release
+/// (`0 < t₀ <` [`MAX_FIRST_SAMPLE`]): the detector counts samples from the first one.
+fn shift_to_release(release: &mut Option<ReleaseFeatures<f64>>, rec: &Recording) {
+    let t0 = rec.t.first().copied().unwrap_or(0.0);
+    if let Some(r) = release.as_mut().filter(|_| t0 > 0.0 && t0 < MAX_FIRST_SAMPLE) {
+        r.contact += t0;
+    }
+}
+
 /// Arithmetic operations per sample of the release detector while it looks for the contact:
 /// 12 for the sums, 30 for the 3 × 3 solve, residual and threshold.
 pub const RELEASE_OPS_PER_SAMPLE: u64 = 42;
@@ -68,13 +77,14 @@ pub fn feature_vector(x: &[f64], rate: f64, window_s: f64) -> FeatureVector {
             missed: None,
         };
     };
+    let mut detector = ReleaseDetector::<f64>::new(rate);
     for &v in x {
         f.push(v);
+        detector.push(v);
     }
     let windows = f.windows() as usize;
-    let release = release_features(x, rate);
-    let examined = release.map_or((RELEASE_SPAN * rate).round().min(x.len() as f64), |r| (r.contact * rate).round());
-    let release_ops = RELEASE_OPS_PER_SAMPLE * (examined as u64).saturating_sub(MIN_FIT as u64);
+    let release = detector.features();
+    let release_ops = RELEASE_OPS_PER_SAMPLE * (detector.examined() as u64).saturating_sub(MIN_FIT as u64);
     FeatureVector {
         values: f.features(),
         windows,
@@ -260,26 +270,21 @@ impl FastModel {
     }
 
     /// Rows of the estimate file for `rec`: the running estimate after every window (the
-    /// recording up to the window's end, as the node reports it), then the whole recording's
-    /// ([`FastModel::estimate`]).
-    pub fn rows(&self, rec: &Recording) -> anyhow::Result<Vec<EstimateRow>> {
-        let whole = self.estimate(rec)?;
+    /// recording up to the window's end, as the node reports it), then `whole`, the whole
+    /// recording's ([`FastModel::estimate`]).
+    pub fn rows(&self, rec: &Recording, whole: &ModelEstimate) -> anyhow::Result<Vec<EstimateRow>> {
         let model = self.to_shared();
         let n = edgekf::clearance::window_samples(self.window, rec.sample_rate);
         let mut est =
             edgekf::clearance::ClearanceEstimator::new(&model, vec![0.0; n.saturating_sub(1)], rec.sample_rate)
                 .map_err(|e| anyhow::anyhow!("window of {n} samples: {e:?}"))?;
-        let t0 = rec.t.first().copied().unwrap_or(0.0);
         let mut rows = Vec::new();
         for (k, &x) in rec.crank_alpha.iter().enumerate() {
             if est.push(x).is_none() {
                 continue;
             }
-            // As `estimate`: the release features moved by a late first sample.
             let mut release = est.release().features();
-            if let Some(r) = release.as_mut().filter(|_| t0 > 0.0 && t0 < MAX_FIRST_SAMPLE) {
-                r.contact += t0;
-            }
+            shift_to_release(&mut release, rec);
             let f = est.features();
             let e = model.estimate_with_release(&f.features(), release.as_ref(), f.windows());
             let mut clearance = [0.0; 3];
@@ -303,10 +308,7 @@ impl FastModel {
             t.check_rate(rec.sample_rate).map_err(anyhow::Error::msg)?;
         }
         let mut f = feature_vector(&rec.crank_alpha, rec.sample_rate, self.window);
-        let t0 = rec.t.first().copied().unwrap_or(0.0);
-        if let Some(r) = f.release.as_mut().filter(|_| t0 > 0.0 && t0 < MAX_FIRST_SAMPLE) {
-            r.contact += t0;
-        }
+        shift_to_release(&mut f.release, rec);
         if f.windows == 0 {
             anyhow::bail!("the recording is shorter than one {} s window", self.window);
         }

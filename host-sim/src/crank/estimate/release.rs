@@ -14,20 +14,10 @@
 
 use super::train::Run;
 use crate::crank::Joint;
-use edgekf::clearance::{release_regressors, ReleaseDetector, ReleaseModel, RELEASE_HYPOTHESES, RELEASE_TERMS};
+use edgekf::clearance::{release_regressors, ReleaseModel, RELEASE_HYPOTHESES, RELEASE_TERMS};
 use serde::{Deserialize, Serialize};
 
 pub use edgekf::clearance::{ReleaseFeatures, RELEASE_SPAN};
-
-/// The release features of `x` (sampled at `rate` Hz from the release on), through the chip's
-/// detector in `f64`; `None` if no contact shows within [`RELEASE_SPAN`].
-pub fn release_features(x: &[f64], rate: f64) -> Option<ReleaseFeatures<f64>> {
-    let mut d = ReleaseDetector::<f64>::new(rate);
-    for &v in x.iter().take((RELEASE_SPAN * rate).round() as usize + 1) {
-        d.push(v);
-    }
-    d.features()
-}
 
 /// Contacts missed before the detected one (sample `detected`), from the journal's sampled
 /// eccentricity `e` (m) at the clearance joint of clearance `c`: the rise-to-fall turns of `e`
@@ -216,6 +206,9 @@ impl ReleaseStage {
         let mut out = Vec::new();
         for joint in Joint::ALL {
             for hypothesis in 0..RELEASE_HYPOTHESES {
+                if self.weights[joint.index()][hypothesis].iter().all(|w| *w == 0.0) {
+                    continue;
+                }
                 let r: Vec<f64> = runs
                     .iter()
                     .zip(feats)
@@ -225,9 +218,6 @@ impl ReleaseStage {
                         f.map(|f| model.ln_clearances(joint.index(), &f)[hypothesis] - r.clearance.ln())
                     })
                     .collect();
-                if self.weights[joint.index()][hypothesis].iter().all(|w| *w == 0.0) {
-                    continue;
-                }
                 let rms = (r.iter().map(|e| e * e).sum::<f64>() / r.len().max(1) as f64).sqrt();
                 let largest = r.iter().fold(0.0_f64, |m, e| m.max(e.abs()));
                 out.push(LawFit { joint, hypothesis, runs: r.len(), rms, largest });
