@@ -8,11 +8,11 @@
 //! joint and clearance for the recording so far. Memory: the window's `|Δα|` (2 499 `f32`,
 //! 10 KB, for the exact median), owned by the caller; the rest is about 200 bytes.
 
-use edgekf::clearance::{ClearanceEstimate, ClearanceEstimator, ClearanceModel, FeatureError};
+use edgekf::systems::crank::{ClearanceEstimate, ClearanceEstimator, ClearanceModel, FeatureError};
 
 #[allow(missing_docs, clippy::excessive_precision, clippy::unreadable_literal)]
 mod constants {
-    use edgekf::clearance::{ClearanceModel, ReleaseModel};
+    use edgekf::systems::crank::{ClearanceModel, ReleaseModel};
     include!("generated/clearance.rs");
 }
 
@@ -45,7 +45,7 @@ pub const NO_RELEASE_LAW: u8 = u8::MAX;
 /// contact was seen, 1: the second), or [`NO_RELEASE_LAW`].
 ///
 /// ```
-/// use edgekf::clearance::ClearanceEstimate;
+/// use edgekf::systems::crank::ClearanceEstimate;
 /// use edgekf_firmware::crank::{release_law, NO_RELEASE_LAW};
 /// let mut e = ClearanceEstimate { joint: 0, clearance: 2.5e-4f32, scores: [0.0; 3], per_joint: [2.5e-4; 3], release: None };
 /// assert_eq!(release_law(&e), NO_RELEASE_LAW);
@@ -107,13 +107,13 @@ impl<'s> CrankNode<'s> {
     }
 
     /// The recording's features so far (`ln` of the window means).
-    pub fn features(&self) -> [f32; edgekf::clearance::FEATURES] {
+    pub fn features(&self) -> [f32; edgekf::systems::crank::FEATURES] {
         self.est.features().features()
     }
 
     /// The first contact after release, once seen: its time (s) and the mean crank
     /// acceleration before it (rad/s²).
-    pub fn release_contact(&self) -> Option<edgekf::clearance::ReleaseFeatures<f32>> {
+    pub fn release_contact(&self) -> Option<edgekf::systems::crank::ReleaseFeatures<f32>> {
         self.est.release().features()
     }
 

@@ -6,7 +6,7 @@
 //! then): `cargo run -p edgekf-sim -- oscillator export --out firmware/src/generated/harmonic.rs`.
 
 use edgekf::export::{matrix, model};
-use edgekf::models::harmonic::{HarmonicForceEstimator, HarmonicForceParams, ModelError};
+use edgekf::systems::oscillator::{HarmonicForceEstimator, HarmonicForceParams, ModelError};
 
 #[allow(missing_docs, clippy::excessive_precision, clippy::unreadable_literal)]
 mod constants {
@@ -17,7 +17,7 @@ mod constants {
 /// (natural frequency, modal mass) and the gate.
 ///
 /// ```
-/// use edgekf::models::harmonic::HarmonicForceParams;
+/// use edgekf::systems::oscillator::HarmonicForceParams;
 /// let est = edgekf_firmware::model::compiled_estimator(&HarmonicForceParams::default()).unwrap();
 /// assert_eq!(est.counters().steps, 0);
 /// ```

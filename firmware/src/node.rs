@@ -14,8 +14,8 @@
 //! estimator's clock never slips against the physical one.
 
 use crate::adxl355::{self, Adxl355, Config, I2cInterface, RawSample};
-use edgekf::models::harmonic::ModelError;
-use edgekf::models::harmonic::{EstimatorCounters, HarmonicForceEstimator, HarmonicForceParams};
+use edgekf::systems::oscillator::ModelError;
+use edgekf::systems::oscillator::{EstimatorCounters, HarmonicForceEstimator, HarmonicForceParams};
 use embedded_hal::i2c::I2c;
 
 /// Largest block one poll can read: the whole 96-entry FIFO.

@@ -26,7 +26,7 @@
 //!
 //! * `fast`: the fast clearance estimator ([`edgekf_sim::crank::estimate::model::FastModel`],
 //!   the built-in model) as the chip runs it: the shared crate's streaming
-//!   `edgekf::clearance::ClearanceEstimator` in `f64`, which reports a running estimate after
+//!   `edgekf::systems::crank::ClearanceEstimator` in `f64`, which reports a running estimate after
 //!   every 0.25 s window. Nine unseen runs of 10 s
 //!   (`train::grid(&[0.1e-3, 0.3e-3, 0.5e-3], 1, 720_000, 10.0)`: joints A, B, C × three
 //!   clearances, random release angle and journal radius, noise seeds 720 000–720 008; the
@@ -47,7 +47,7 @@
 //! A wrong argument prints the usage and exits with status 2; a failed run exits with 1.
 
 use anyhow::Context;
-use edgekf::clearance::{window_samples, ClearanceEstimate, ClearanceEstimator, ClearanceModel};
+use edgekf::systems::crank::{window_samples, ClearanceEstimate, ClearanceEstimator, ClearanceModel};
 use edgekf_sim::crank::config::Method;
 use edgekf_sim::crank::estimate::model::{FastModel, ModelEstimate};
 use edgekf_sim::crank::estimate::train::{grid, Run};

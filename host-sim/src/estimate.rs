@@ -22,7 +22,7 @@
 //! ```
 
 use crate::io::data::{self, DataError, DataFile};
-use edgekf::models::harmonic::{EstimatorCounters, HarmonicForceEstimator, HarmonicForceParams};
+use edgekf::systems::oscillator::{EstimatorCounters, HarmonicForceEstimator, HarmonicForceParams};
 use edgekf::residual::{NisBounds, RunningStats};
 use edgekf::Real;
 use std::path::Path;

@@ -4,12 +4,12 @@
 use anyhow::{anyhow, Result};
 use edgekf::export::{write_model, write_steady_state};
 use edgekf::filter::solve_riccati;
-use edgekf::models::harmonic::HarmonicForceParams;
+use edgekf::systems::oscillator::HarmonicForceParams;
 
 /// Rust source with `HARMONIC_{A,C,Q,R,GAIN,S}` for the harmonic-force model of `params`.
 ///
 /// ```
-/// use edgekf::models::harmonic::HarmonicForceParams;
+/// use edgekf::systems::oscillator::HarmonicForceParams;
 /// let text = edgekf_sim::export::harmonic_constants(&HarmonicForceParams::default()).unwrap();
 /// assert!(text.contains("pub const HARMONIC_GAIN: [[f64; 1]; 4]"));
 /// ```

@@ -95,7 +95,7 @@ mod tests {
     extern crate std;
     use super::*;
     use crate::filter::solve_riccati;
-    use crate::models::harmonic::HarmonicForceParams;
+    use crate::systems::oscillator::HarmonicForceParams;
     use std::string::String;
 
     /// Every exported number reads back to the same bits (the firmware's golden test,

@@ -9,11 +9,10 @@
 //!   steady-state gain from the Riccati equation, unscented Kalman filter (Van der Merwe sigma
 //!   points) and joint state–parameter estimation; every filter guards its covariance and counts
 //!   and recovers instead of panicking;
-//! * [`models`]: reduced physical models: a single-mode oscillator driven by an unknown harmonic
-//!   force at a known frequency (the "unbalance" pattern of rotating machines), augmented Kalman
-//!   filter models for unknown inputs on structures, synthetic benchmark systems;
-//! * [`clearance`]: joint clearance of a slider-crank from its crank acceleration: streaming
-//!   window features and a learned discriminant/regression, the host's fast estimator on the chip;
+//! * [`models`]: model builders that know no system: augmented Kalman filter models for unknown
+//!   inputs on structures, synthetic benchmark systems;
+//! * [`systems`]: each system's chip code, one folder per system: the harmonic-force oscillator
+//!   ([`systems::oscillator`]) and the slider-crank's joint clearance ([`systems::crank`]);
 //! * [`export`]: models and steady-state gains written as Rust constants for the firmware;
 //! * [`residual`]: innovation diagnostics cheap enough for the chip: running mean and variance,
 //!   NIS with exact χ² bounds, Ljung–Box whiteness over a window, a Welch innovation spectrum
@@ -24,7 +23,7 @@
 //! through const generics, so one implementation serves both.
 //!
 //! ```
-//! use edgekf::models::harmonic::{HarmonicForceEstimator, HarmonicForceParams};
+//! use edgekf::systems::oscillator::{HarmonicForceEstimator, HarmonicForceParams};
 //! let params = HarmonicForceParams::default();
 //! let mut est = HarmonicForceEstimator::<f32>::new(&params).unwrap();
 //! let report = est.step(Some(0.0));
@@ -34,12 +33,12 @@
 #![deny(missing_docs)]
 #![forbid(unsafe_code)]
 
-pub mod clearance;
 pub mod export;
 pub mod filter;
 pub mod linalg;
 pub mod models;
 mod real;
 pub mod residual;
+pub mod systems;
 
 pub use real::Real;

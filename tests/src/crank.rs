@@ -3,7 +3,7 @@
 //! two-pass host features as an oracle for the streaming ones.
 
 use anyhow::{anyhow, bail, Result};
-use edgekf::clearance::{ClearanceEstimate, FEATURES};
+use edgekf::systems::crank::{ClearanceEstimate, FEATURES};
 use edgekf_firmware::crank::{CrankNode, Storage, WindowReport, CHANNELS, NO_RELEASE_LAW, WINDOW};
 use edgekf_firmware::line_feed::ChannelReader;
 
@@ -111,7 +111,7 @@ pub fn csv(t: &[f64], alpha: &[f64]) -> String {
 }
 
 /// The host's original feature computation (two passes over each stored window, `f64`, as
-/// `edgekf-sim` had it before it moved to the streaming [`edgekf::clearance::CrankFeatures`]):
+/// `edgekf-sim` had it before it moved to the streaming [`edgekf::systems::crank::CrankFeatures`]):
 /// kept only as the oracle the streaming version is checked against.
 pub fn reference_features(x: &[f64], rate: f64, window_s: f64) -> ([f64; FEATURES], usize) {
     let n = ((window_s * rate).round() as usize).max(16);

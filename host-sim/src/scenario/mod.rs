@@ -26,7 +26,7 @@ pub use recording::Recording;
 use crate::reference::oscillator::{Oscillator, DEFAULT_SUBSTEPS};
 use crate::sensor::adxl355::Adxl355;
 use anyhow::Context as _;
-use edgekf::models::harmonic::{GainMode, HarmonicForceParams};
+use edgekf::systems::oscillator::{GainMode, HarmonicForceParams};
 use serde::Deserialize;
 use std::path::Path;
 
@@ -167,7 +167,7 @@ impl Scenario {
         if tuning.iter().any(|v| !(v.is_finite() && *v >= 0.0)) {
             anyhow::bail!("filter: force_psd, motion_psd, initial_force_std and gate_nis must be non-negative numbers");
         }
-        edgekf::models::harmonic::HarmonicForceEstimator::<f64>::new(&self.estimator_params())
+        edgekf::systems::oscillator::HarmonicForceEstimator::<f64>::new(&self.estimator_params())
             .map_err(|e| anyhow::anyhow!("the filter cannot be built from this scenario: {e:?}"))?;
         Ok(())
     }

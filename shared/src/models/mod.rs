@@ -1,4 +1,4 @@
-//! Reduced physical models and the estimators built on them.
+//! Model builders that know no system (each system's own model is in [`crate::systems`]).
 //!
 //! Each model is a small module: its parameters (plain `f64`, set on the host or from a config),
 //! the discrete model it builds (computed once, in `f64`, by exact discretisation), and an
@@ -6,5 +6,4 @@
 //! (missing samples, gating, counters).
 
 pub mod augmented;
-pub mod harmonic;
 pub mod synthetic;

@@ -16,7 +16,7 @@
 use cortex_m_rt::entry;
 use defmt_semihosting as _;
 use edgekf::filter::{KalmanFilter, MerweSigmaPoints, SteadyState, SteadyStateFilter, UnscentedKalmanFilter};
-use edgekf::models::harmonic::{HarmonicForceEstimator, HarmonicForceParams};
+use edgekf::systems::oscillator::{HarmonicForceEstimator, HarmonicForceParams};
 use edgekf::models::synthetic::{dense_model, CubicModel, Lcg};
 use edgekf_firmware::semihost::exit;
 use nalgebra::{SMatrix, SVector};

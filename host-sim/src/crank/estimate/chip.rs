@@ -4,7 +4,7 @@
 //! the built-in `fast_model.toml` gives).
 
 use super::model::{FastModel, FEATURES};
-use edgekf::clearance::{ClearanceModel, ReleaseModel, REGRESSORS};
+use edgekf::systems::crank::{ClearanceModel, ReleaseModel, REGRESSORS};
 
 /// Name of the constant in the generated file.
 pub const CONST_NAME: &str = "CLEARANCE_MODEL";

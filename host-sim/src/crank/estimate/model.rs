@@ -16,10 +16,10 @@ use super::release::{ReleaseFeatures, ReleaseStage};
 use super::trained_for::TrainedFor;
 use super::{EstimateRow, Recording};
 use crate::crank::Joint;
-use edgekf::clearance::{ReleaseDetector, MIN_FIT, RELEASE_HYPOTHESES, RELEASE_TERMS};
+use edgekf::systems::crank::{ReleaseDetector, MIN_FIT, RELEASE_HYPOTHESES, RELEASE_TERMS};
 use serde::{Deserialize, Serialize};
 
-pub use edgekf::clearance::{FEATURES, FEATURE_NAMES};
+pub use edgekf::systems::crank::{FEATURES, FEATURE_NAMES};
 
 /// Arithmetic operations per sample counted for [`feature_vector`], before the median: about
 /// 4 for the differences, 3 for the 8-sample box filter, 3 + 3 + 3 + 3 for the four sums of
@@ -64,11 +64,11 @@ pub const RELEASE_OPS_PER_SAMPLE: u64 = 42;
 /// Features of `x` sampled at `rate` Hz, from windows of `window_s` (a trailing partial window
 /// is dropped). `windows == 0` if `x` is shorter than one window.
 ///
-/// The computation is the chip's ([`edgekf::clearance::CrankFeatures`], streaming, one sample
+/// The computation is the chip's ([`edgekf::systems::crank::CrankFeatures`], streaming, one sample
 /// at a time) in `f64`: one implementation for the host, the training and the firmware.
 pub fn feature_vector(x: &[f64], rate: f64, window_s: f64) -> FeatureVector {
-    let n = edgekf::clearance::window_samples(window_s, rate);
-    let Ok(mut f) = edgekf::clearance::CrankFeatures::new(vec![0.0; n.saturating_sub(1)], n, rate) else {
+    let n = edgekf::systems::crank::window_samples(window_s, rate);
+    let Ok(mut f) = edgekf::systems::crank::CrankFeatures::new(vec![0.0; n.saturating_sub(1)], n, rate) else {
         return FeatureVector {
             values: [1e-12f64.ln(); FEATURES],
             windows: 0,
@@ -249,7 +249,7 @@ impl FastModel {
     }
 
     /// Joint and clearance from a feature vector (the shared crate's
-    /// [`edgekf::clearance::ClearanceModel::estimate`], the chip's code, in `f64`).
+    /// [`edgekf::systems::crank::ClearanceModel::estimate`], the chip's code, in `f64`).
     pub fn estimate_features(&self, f: FeatureVector) -> ModelEstimate {
         let windows = u32::try_from(f.windows).unwrap_or(u32::MAX);
         let e = self.to_shared().estimate_with_release(&f.values, f.release.as_ref(), windows);
@@ -274,9 +274,9 @@ impl FastModel {
     /// recording's ([`FastModel::estimate`]).
     pub fn rows(&self, rec: &Recording, whole: &ModelEstimate) -> anyhow::Result<Vec<EstimateRow>> {
         let model = self.to_shared();
-        let n = edgekf::clearance::window_samples(self.window, rec.sample_rate);
+        let n = edgekf::systems::crank::window_samples(self.window, rec.sample_rate);
         let mut est =
-            edgekf::clearance::ClearanceEstimator::new(&model, vec![0.0; n.saturating_sub(1)], rec.sample_rate)
+            edgekf::systems::crank::ClearanceEstimator::new(&model, vec![0.0; n.saturating_sub(1)], rec.sample_rate)
                 .map_err(|e| anyhow::anyhow!("window of {n} samples: {e:?}"))?;
         let mut rows = Vec::new();
         for (k, &x) in rec.crank_alpha.iter().enumerate() {

@@ -1,6 +1,6 @@
 //! Second stage of the fast estimator, on the host: fitting the release-transient laws of
-//! [`edgekf::clearance::ReleaseModel`] (the detector, the laws and their use are the chip's
-//! code, in `edgekf::clearance`, whose module text explains the physics).
+//! [`edgekf::systems::crank::ReleaseModel`] (the detector, the laws and their use are the chip's
+//! code, in `edgekf::systems::crank`, whose module text explains the physics).
 //!
 //! Training labels each run with the hypothesis that is true for it: how many contacts the
 //! sampled recording missed before the one detected. The simulator knows: the journal's
@@ -14,10 +14,10 @@
 
 use super::train::Run;
 use crate::crank::Joint;
-use edgekf::clearance::{release_regressors, ReleaseModel, RELEASE_HYPOTHESES, RELEASE_TERMS};
+use edgekf::systems::crank::{release_regressors, ReleaseModel, RELEASE_HYPOTHESES, RELEASE_TERMS};
 use serde::{Deserialize, Serialize};
 
-pub use edgekf::clearance::{ReleaseFeatures, RELEASE_SPAN};
+pub use edgekf::systems::crank::{ReleaseFeatures, RELEASE_SPAN};
 
 /// Contacts missed before the detected one (sample `detected`), from the journal's sampled
 /// eccentricity `e` (m) at the clearance joint of clearance `c`: the rise-to-fall turns of `e`

@@ -14,7 +14,7 @@ use core::ops::{BitAnd, BitOr, Shl, Shr};
 /// bit-identical to the chip's.
 ///
 /// ```
-/// use edgekf::clearance::ClearanceFloat;
+/// use edgekf::systems::crank::ClearanceFloat;
 /// assert!(1.5f32.key() < 2.0f32.key());
 /// assert_eq!(f64::of_key(0.25f64.key()), 0.25);
 /// assert_eq!(ClearanceFloat::ln_m(1.0f32), 0.0);

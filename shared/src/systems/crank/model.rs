@@ -58,7 +58,7 @@ impl<T: ClearanceFloat> ClearanceModel<T> {
     /// Joint and clearance from the recording's features ([`CrankFeatures::features`]).
     ///
     /// ```
-    /// use edgekf::clearance::{ClearanceModel, ReleaseModel, FEATURES, REGRESSORS};
+    /// use edgekf::systems::crank::{ClearanceModel, ReleaseModel, FEATURES, REGRESSORS};
     /// // A toy model: the joint is C when feature 0 is above its mean, and ln c = ln 1e-4 + z₀.
     /// let mut m = ClearanceModel { window: 0.25, mean: [1.0f64; FEATURES], scale: [2.0; FEATURES],
     ///     discriminant: [[0.0; FEATURES + 1]; 3], regression: [[0.0; REGRESSORS]; 3],
@@ -178,7 +178,7 @@ impl ClearanceModel<f64> {
     /// to this model. Fails (`fmt::Error`) on a non-finite value.
     ///
     /// ```
-    /// use edgekf::clearance::{ClearanceModel, ReleaseModel, FEATURES, REGRESSORS};
+    /// use edgekf::systems::crank::{ClearanceModel, ReleaseModel, FEATURES, REGRESSORS};
     /// let m = ClearanceModel { window: 0.25, mean: [0.5f64; FEATURES], scale: [1.0; FEATURES],
     ///     discriminant: [[0.0; FEATURES + 1]; 3], regression: [[-8.0; REGRESSORS]; 3],
     ///     release: ReleaseModel::off() };
@@ -267,7 +267,7 @@ impl ClearanceModel<f64> {
 /// after every completed window it gives the estimate for the recording so far.
 ///
 /// ```
-/// use edgekf::clearance::{ClearanceEstimator, ClearanceModel, ReleaseModel, FEATURES, REGRESSORS};
+/// use edgekf::systems::crank::{ClearanceEstimator, ClearanceModel, ReleaseModel, FEATURES, REGRESSORS};
 /// let model = ClearanceModel { window: 0.025, mean: [0.0f32; FEATURES], scale: [1.0; FEATURES],
 ///     discriminant: [[0.0; FEATURES + 1]; 3], regression: [[-8.0; REGRESSORS]; 3],
 ///     release: ReleaseModel::off() };

@@ -52,7 +52,7 @@ pub enum FeatureError {
 /// then spans the gap, which changes one window's statistics by one sample's worth.
 ///
 /// ```
-/// use edgekf::clearance::{CrankFeatures, FEATURES};
+/// use edgekf::systems::crank::{CrankFeatures, FEATURES};
 /// // 0.25 s windows at 1 kHz: 250 samples, storage for 249 differences.
 /// let mut f = CrankFeatures::new([0.0f32; 249], 250, 1000.0).unwrap();
 /// for k in 0..600 {

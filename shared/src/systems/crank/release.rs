@@ -61,7 +61,7 @@ pub struct ReleaseFeatures<T> {
 /// Finds the first contact after release, one sample at a time (see the module's text).
 ///
 /// ```
-/// use edgekf::clearance::ReleaseDetector;
+/// use edgekf::systems::crank::ReleaseDetector;
 /// let mut d = ReleaseDetector::<f64>::new(10_000.0);
 /// for k in 0..200 {
 ///     let t = k as f64 * 1e-4;
@@ -183,7 +183,7 @@ impl<T: ClearanceFloat> ReleaseDetector<T> {
 /// The regressors of a [`ReleaseModel`] law for features `f` and a pre-contact level centre.
 ///
 /// ```
-/// use edgekf::clearance::{release_regressors, ReleaseFeatures};
+/// use edgekf::systems::crank::{release_regressors, ReleaseFeatures};
 /// let f = ReleaseFeatures { contact: 5e-3f64, release_alpha: -127.0 };
 /// let r = release_regressors(&f, -27.0);
 /// assert_eq!(r, [1.0, 0.0, -1.0, 1.0, -1.0, 0.0]);
@@ -253,7 +253,7 @@ impl<T: ClearanceFloat> ReleaseModel<T> {
     /// (both widened for fewer windows than [`ReleaseModel::windows`]).
     ///
     /// ```
-    /// use edgekf::clearance::{ReleaseFeatures, ReleaseModel};
+    /// use edgekf::systems::crank::{ReleaseFeatures, ReleaseModel};
     /// let mut m = ReleaseModel::<f64>::off();
     /// m.max_step = 0.3;
     /// m.spread = 0.1;

@@ -14,7 +14,7 @@ use super::ClearanceFloat;
 /// out of range.
 ///
 /// ```
-/// use edgekf::clearance::select_nth;
+/// use edgekf::systems::crank::select_nth;
 /// let v = [3.0f32, 0.5, 7.0, 0.5, 2.0];
 /// assert_eq!(select_nth(&v, 2), Some(2.0)); // the median
 /// assert_eq!(select_nth(&v, 1), Some(0.5));

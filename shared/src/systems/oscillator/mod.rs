@@ -195,7 +195,7 @@ pub struct HarmonicStep<T: Real> {
 /// gate and innovation statistics.
 ///
 /// ```
-/// use edgekf::models::harmonic::{HarmonicForceEstimator, HarmonicForceParams};
+/// use edgekf::systems::oscillator::{HarmonicForceEstimator, HarmonicForceParams};
 /// let p = HarmonicForceParams { gate_nis: 0.0, ..Default::default() };
 /// let mut est = HarmonicForceEstimator::<f64>::new(&p).unwrap();
 /// // Pure forced response is not needed to see convergence: a resting mode reads zero force.

@@ -1,0 +1,10 @@
+//! Each system's chip code: the reduced model, estimator or detector that the node runs and the
+//! host runs too (in `f64`), one folder per system. What every system uses (filters, linear
+//! algebra, residual statistics) stays in the crate's shared rooms.
+//!
+//! * [`oscillator`]: a single mode driven by a harmonic force at a known frequency (the
+//!   unbalance pattern of rotating machines), estimated from one accelerometer axis;
+//! * [`crank`]: a slider-crank's joint clearance from its crank angular acceleration.
+
+pub mod crank;
+pub mod oscillator;
