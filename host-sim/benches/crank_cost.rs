@@ -8,10 +8,10 @@
 //! counts are `cargo xtask bench`.
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use edgekf_sim::crank::estimate::model::FastModel;
-use edgekf_sim::crank::estimate::ukf::{self, UkfOptions};
-use edgekf_sim::crank::estimate::Recording;
-use edgekf_sim::crank::{CrankConfig, Mechanism, SimOptions};
+use edgekf_sim::systems::crank::estimate::model::FastModel;
+use edgekf_sim::systems::crank::estimate::ukf::{self, UkfOptions};
+use edgekf_sim::systems::crank::estimate::Recording;
+use edgekf_sim::systems::crank::{CrankConfig, Mechanism, SimOptions};
 use std::hint::black_box;
 
 /// 0.25 mm at A, released at 30°, `duration` s.

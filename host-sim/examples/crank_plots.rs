@@ -5,7 +5,7 @@
 //! cargo run --release -p edgekf-sim --example crank_plots -- fast [OUTDIR]
 //! ```
 //!
-//! * `convergence`: the paper's UKF ([`edgekf_sim::crank::estimate::ukf`], default options) on
+//! * `convergence`: the paper's UKF ([`edgekf_sim::systems::crank::estimate::ukf`], default options) on
 //!   one recording of 0.25 mm at joint A, started from 0.01, 0.1 and 0.2 mm. The recording is
 //!   the one of the CI test `ukf_approaches_the_clearance_from_three_starts`
 //!   (`host-sim/tests/crank_estimate.rs`): the paper's mechanism
@@ -24,7 +24,7 @@
 //!   integration steps, ~25 s; 10 s (`convergence 10`), −0.1 / +3.5 / +5.3 %, 24 M steps,
 //!   ~40–55 s.
 //!
-//! * `fast`: the fast clearance estimator ([`edgekf_sim::crank::estimate::model::FastModel`],
+//! * `fast`: the fast clearance estimator ([`edgekf_sim::systems::crank::estimate::model::FastModel`],
 //!   the built-in model) as the chip runs it: the shared crate's streaming
 //!   `edgekf::systems::crank::ClearanceEstimator` in `f64`, which reports a running estimate after
 //!   every 0.25 s window. Nine unseen runs of 10 s
@@ -48,12 +48,12 @@
 
 use anyhow::Context;
 use edgekf::systems::crank::{window_samples, ClearanceEstimate, ClearanceEstimator, ClearanceModel};
-use edgekf_sim::crank::config::Method;
-use edgekf_sim::crank::estimate::model::{FastModel, ModelEstimate};
-use edgekf_sim::crank::estimate::train::{grid, Run};
-use edgekf_sim::crank::estimate::ukf::{self, UkfOptions, UkfRun};
-use edgekf_sim::crank::estimate::Recording;
-use edgekf_sim::crank::{CrankConfig, Joint, Mechanism, SimOptions};
+use edgekf_sim::systems::crank::config::Method;
+use edgekf_sim::systems::crank::estimate::model::{FastModel, ModelEstimate};
+use edgekf_sim::systems::crank::estimate::train::{grid, Run};
+use edgekf_sim::systems::crank::estimate::ukf::{self, UkfOptions, UkfRun};
+use edgekf_sim::systems::crank::estimate::Recording;
+use edgekf_sim::systems::crank::{CrankConfig, Joint, Mechanism, SimOptions};
 use plotters::coord::CoordTranslate;
 use plotters::element::DashedPathElement;
 use plotters::prelude::*;

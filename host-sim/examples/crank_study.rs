@@ -9,16 +9,16 @@
 //!   recordings of 0.25 mm at A (adaptive integrator at 1e-9, released 30° + 0.0013° · r, seed
 //!   7 + r);
 //! * `two-clearances [RUNS] [DURATION] [SPREAD] [stencil]`: identifiability of A and B together
-//!   ([`edgekf_sim::crank::estimate::identify2`]): the likelihood surface over cA 0.15–0.35 ×
+//!   ([`edgekf_sim::systems::crank::estimate::identify2`]): the likelihood surface over cA 0.15–0.35 ×
 //!   cB 0.05–0.25 mm about A 0.25 + B 0.15 mm, the Fisher information there and the
 //!   single-clearance bound (default 16 runs of 10 s per point released 30 ± 10°; `stencil`:
 //!   only cA 0.20–0.30 × cB 0.10–0.20 mm, enough for the Fisher matrix).
-use edgekf_sim::crank::config::Method;
-use edgekf_sim::crank::estimate::identify2::{Analysis, Design};
-use edgekf_sim::crank::estimate::ukf::{self, UkfOptions};
-use edgekf_sim::crank::estimate::Recording;
-use edgekf_sim::crank::feature::window_features;
-use edgekf_sim::crank::{CrankConfig, Mechanism, SimOptions};
+use edgekf_sim::systems::crank::config::Method;
+use edgekf_sim::systems::crank::estimate::identify2::{Analysis, Design};
+use edgekf_sim::systems::crank::estimate::ukf::{self, UkfOptions};
+use edgekf_sim::systems::crank::estimate::Recording;
+use edgekf_sim::systems::crank::feature::window_features;
+use edgekf_sim::systems::crank::{CrankConfig, Mechanism, SimOptions};
 
 fn feats(c: f64, angle: f64, seed: u64, dur: f64) -> Vec<f64> {
     let mut cfg = CrankConfig::default();

@@ -3,9 +3,10 @@
 //!
 //! `cargo run --release -p edgekf-sim --example loop_table`
 
-use edgekf_sim::residual_loop::cases::Case;
-use edgekf_sim::residual_loop::cli::show_value;
-use edgekf_sim::residual_loop::{close_loop, LoopOptions, LoopReport};
+use edgekf_sim::systems::rotor::loop_system::cases::Case;
+use edgekf_sim::report::text::show_value;
+use edgekf_sim::systems::rotor::loop_system::close_loop;
+use edgekf_sim::residual_loop::{LoopOptions, LoopReport};
 
 /// The seeds `host-sim/tests/residual_loop.rs` uses.
 fn seed(case: Case) -> u64 {
@@ -36,18 +37,19 @@ fn main() -> anyhow::Result<()> {
     for case in Case::ALL {
         let s = seed(case);
         eprintln!("{} (seed {s})…", case.describe());
-        let r = close_loop(&model, &case.data(s)?, &LoopOptions::default())?;
+        let r = close_loop(&model, &case.data(s)?, &LoopOptions::default(), &Default::default())?;
         let clean = close_loop(
             &model,
             &Case::Clean.data(s)?,
             &LoopOptions { screen_parameters: false, ..LoopOptions::default() },
+            &Default::default(),
         )?;
         let mut added: Vec<String> = r
             .effects_added
             .iter()
             .map(|e| {
-                let what = e.parameter.as_ref().or(e.line.as_ref()).map(|p| format!(" {p}")).unwrap_or_default();
-                let order = e.order.map(|o| format!(" {o}×")).unwrap_or_default();
+                let what = e.detail.parameter.as_ref().or(e.detail.line.as_ref()).map(|p| format!(" {p}")).unwrap_or_default();
+                let order = e.detail.order.map(|o| format!(" {o}×")).unwrap_or_default();
                 format!("`{}`{order} at {}{what} = {}", e.kind, e.location, show_value(e.value, &e.unit))
             })
             .collect();

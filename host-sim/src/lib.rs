@@ -3,19 +3,22 @@
 //! `edgekf` runs Kalman filters on an edge vibration sensor (an ADXL355 read by a Cortex-M4F).
 //! This crate is everything around the chip that runs on a workstation:
 //!
-//! * [`io::data`]: the data contract of every CSV a user gives or gets (time column `t`, SI
-//!   channels, `truth_*` columns) with a reader that reports what it noticed instead of hiding it;
-//! * [`reference`](mod@reference): full-precision reference simulators, integrated differently from the filters
-//!   so that an agreement means something;
-//! * [`sensor`]: sensor models as seen at their outputs (noise, bias, range);
-//! * [`scenario`]: complete synthetic test cases (physics + sensor + faults + filter tuning) from
-//!   TOML, shared by the CLI demo and the hardware-in-the-loop tests;
-//! * [`estimate`]: the `edgekf` estimators run over a data file, judged against the truth;
-//! * [`report`] and [`demo`]: the summaries the `edgekf` binary prints.
+//! * [`systems`]: one folder per system (`oscillator`, `rotor`, `crank`), each with its
+//!   reference simulator (`f64`, formulated independently of the reduced model it checks), its
+//!   estimators, its residual-loop system, its command line, demo part and configuration;
+//! * [`residual_loop`]: the engine that closes the loop with measured data, written against the
+//!   `LoopSystem` trait and knowing no system;
+//! * [`report`]: what the loop writes for people and scripts (`report.json`, `report.html`
+//!   with its plots, the printed table);
+//! * [`io`]: the data contract of every CSV a user gives or gets (time column `t`, SI channels,
+//!   `truth_*` columns), read with a report of what was noticed instead of hiding it;
+//! * [`linalg`]: dense host linear algebra the simulators and the engine share (matrix
+//!   exponential of large systems);
+//! * [`cli`]: the `edgekf` command line, driven by the systems' registry.
 //!
 //! ```
-//! use edgekf_sim::estimate::{run, EstimateOptions};
-//! use edgekf_sim::scenario::Scenario;
+//! use edgekf_sim::systems::oscillator::estimate::{run, EstimateOptions};
+//! use edgekf_sim::systems::oscillator::scenario::Scenario;
 //! // 3 s of the demo: 5 N at 14 Hz on a 20 Hz mode, read by an ADXL355 at 1 kHz.
 //! let scenario = Scenario { duration_s: 3.0, ..Default::default() };
 //! let data = scenario.simulate().to_data_file();
@@ -25,15 +28,9 @@
 #![deny(missing_docs)]
 #![forbid(unsafe_code)]
 
-pub mod crank;
-pub mod demo;
-pub mod estimate;
-pub mod export;
+pub mod cli;
 pub mod io;
-pub mod reference;
+pub mod linalg;
 pub mod report;
 pub mod residual_loop;
-pub mod rotor;
-pub mod rotor_akf;
-pub mod scenario;
-pub mod sensor;
+pub mod systems;

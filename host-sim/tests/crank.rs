@@ -4,8 +4,8 @@
 //!
 //! Run with `--nocapture` to see the figures. `EDGEKF_LONG=1` adds a 10 s run per integrator.
 
-use edgekf_sim::crank::feature::window_features;
-use edgekf_sim::crank::{CrankConfig, CrankRecording, Integrator, Joint, Mechanism, SimOptions};
+use edgekf_sim::systems::crank::feature::window_features;
+use edgekf_sim::systems::crank::{CrankConfig, CrankRecording, Integrator, Joint, Mechanism, SimOptions};
 use std::time::Instant;
 
 const PAPER: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/configs/crank_paper.toml");
@@ -255,7 +255,7 @@ fn spectral_feature_rises_with_clearance() {
 
 /// Error in the crank angle against a fine reference (adaptive, tolerance 1e-12), with the work
 /// (evaluations of the equations of motion) each integrator spent, over 0.05 s from `start`.
-fn compare(m: &Mechanism, start: Option<edgekf_sim::crank::State>, cases: &[Integrator]) -> Vec<(u64, f64)> {
+fn compare(m: &Mechanism, start: Option<edgekf_sim::systems::crank::State>, cases: &[Integrator]) -> Vec<(u64, f64)> {
     let duration = 0.05;
     let go = |integrator| {
         let opts =

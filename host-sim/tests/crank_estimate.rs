@@ -4,11 +4,11 @@
 //! Run with `--nocapture` for the figures; `EDGEKF_LONG=1` adds the 10 s UKF reproduction and
 //! the fast estimator's full test grid (run those in release).
 
-use edgekf_sim::crank::config::Method;
-use edgekf_sim::crank::estimate::fast::FeatureMap;
-use edgekf_sim::crank::estimate::ukf::{self, UkfOptions};
-use edgekf_sim::crank::estimate::{write_estimates, Recording};
-use edgekf_sim::crank::{CrankConfig, Mechanism, SimOptions};
+use edgekf_sim::systems::crank::config::Method;
+use edgekf_sim::systems::crank::estimate::fast::FeatureMap;
+use edgekf_sim::systems::crank::estimate::ukf::{self, UkfOptions};
+use edgekf_sim::systems::crank::estimate::{write_estimates, Recording};
+use edgekf_sim::systems::crank::{CrankConfig, Mechanism, SimOptions};
 use std::time::Instant;
 
 fn long() -> bool {

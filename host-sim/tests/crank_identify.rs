@@ -5,9 +5,9 @@
 //! Run with `--nocapture` for the figures; `EDGEKF_LONG=1` runs the full test grid (A, B, C ×
 //! 0.1–0.5 mm × 4 draws; run it in release).
 
-use edgekf_sim::crank::estimate::model::{FastModel, FEATURES};
-use edgekf_sim::crank::estimate::train::{self, Run};
-use edgekf_sim::crank::{CrankConfig, Joint};
+use edgekf_sim::systems::crank::estimate::model::{FastModel, FEATURES};
+use edgekf_sim::systems::crank::estimate::train::{self, Run};
+use edgekf_sim::systems::crank::{CrankConfig, Joint};
 
 fn long() -> bool {
     std::env::var_os("EDGEKF_LONG").is_some()
@@ -137,8 +137,8 @@ fn features_file_round_trip_and_fit() {
 /// journal radius × 0.9 or × 1.1: every joint named right and every clearance within ±3 %.
 #[test]
 fn fast_model_on_the_papers_integrator() {
-    use edgekf_sim::crank::estimate::Recording;
-    use edgekf_sim::crank::{Mechanism, SimOptions};
+    use edgekf_sim::systems::crank::estimate::Recording;
+    use edgekf_sim::systems::crank::{Mechanism, SimOptions};
     let model = FastModel::builtin();
     let mut worst = 0.0_f64;
     for (i, (joint, c)) in Joint::ALL.iter().flat_map(|&j| [0.1e-3, 0.3e-3, 0.5e-3].map(|c| (j, c))).enumerate() {
@@ -172,9 +172,9 @@ fn fast_model_on_the_papers_integrator() {
 /// window features give the clearance.
 #[test]
 fn a_journal_resting_at_release_is_left_to_the_window_features() {
-    use edgekf_sim::crank::estimate::Recording;
-    use edgekf_sim::crank::state::eccentricity_index;
-    use edgekf_sim::crank::{Mechanism, SimOptions};
+    use edgekf_sim::systems::crank::estimate::Recording;
+    use edgekf_sim::systems::crank::state::eccentricity_index;
+    use edgekf_sim::systems::crank::{Mechanism, SimOptions};
     let cfg = CrankConfig::default();
     let c = 0.25e-3;
     let m = Mechanism::new(&cfg, [Some(c), None, None]).unwrap();

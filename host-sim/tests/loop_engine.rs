@@ -4,7 +4,8 @@
 
 use edgekf_sim::residual_loop::filter::{discretise, run_state_space, Run, StateSpace};
 use edgekf_sim::residual_loop::optimize::ScalarRange;
-use edgekf_sim::residual_loop::signature::summarise;
+use edgekf_sim::residual_loop::search::{EffectDetail, EffectKind};
+use edgekf_sim::residual_loop::signature::{summarise, Channel, ReferenceLines, SummaryContext};
 use edgekf_sim::residual_loop::{search, EffectLabel, LoopOptions, LoopSystem, RunSummary, Traces};
 use nalgebra::{DMatrix, DVector};
 use rand::SeedableRng;
@@ -48,6 +49,11 @@ fn record(factor: f64, bias: f64, seconds: f64, seed: u64) -> (Vec<f64>, Vec<f64
         x = &d.a * &x + &l * w;
     }
     (t, y, truth)
+}
+
+/// The probe: displacement, m, shown in µm.
+fn probe() -> Channel {
+    Channel::new("q", "m").shown_in(1e6, "µm")
 }
 
 /// The oscillator's effect library.
@@ -104,8 +110,17 @@ impl LoopSystem for Oscillator {
     }
 
     fn summarise(&self, run: &Run) -> RunSummary {
-        let names = ["q".to_string()];
-        summarise(run, &self.t, &names, &names, &[Some(&self.truth)], 0.0, &[FREQ_HZ], &[], RATE, &Default::default())
+        let q = [probe()];
+        let lines = ReferenceLines { naturals: vec![FREQ_HZ], ..ReferenceLines::default() };
+        let ctx = SummaryContext {
+            t: &self.t,
+            channels: &q,
+            rows: &q,
+            truth: &[Some(&self.truth)],
+            lines: &lines,
+            sample_rate: RATE,
+        };
+        summarise(run, &ctx, &Default::default())
     }
 
     fn candidates(&self, s: &RunSummary, _: &[(Effect, f64)]) -> Vec<Vec<Effect>> {
@@ -121,10 +136,11 @@ impl LoopSystem for Oscillator {
 
     fn label(&self, e: &Effect) -> EffectLabel {
         let (kind, parameter, unit) = match e {
-            Effect::Bias => ("sensor_bias", None, "m"),
-            Effect::Stiffness => ("parameter", Some("stiffness".to_string()), "1"),
+            Effect::Bias => (EffectKind::SensorBias, None, "m"),
+            Effect::Stiffness => (EffectKind::Parameter, Some("stiffness".to_string()), "1"),
         };
-        EffectLabel { kind, location: "q".into(), order: None, parameter, line: None, unit }
+        let detail = EffectDetail { parameter, ..EffectDetail::default() };
+        EffectLabel { kind, location: "q".into(), detail, unit: unit.into() }
     }
 
     fn parameters(&self, _: &Effect) -> usize {
@@ -147,7 +163,8 @@ impl LoopSystem for Oscillator {
     }
 
     fn traces(&self) -> Traces {
-        Traces { t: self.t.clone(), channels: vec!["q".into()], rows: vec!["q".into()], ..Traces::default() }
+        let truth = vec![Some(self.truth.clone())];
+        Traces { t: self.t.clone(), channels: vec![probe()], rows: vec![probe()], truth, ..Traces::default() }
     }
 }
 
@@ -160,7 +177,7 @@ fn close(factor: f64, bias: f64, seed: u64) -> edgekf_sim::residual_loop::LoopRe
 #[test]
 fn engine_finds_a_bias_on_another_system() {
     let r = close(1.0, 3e-5, 3);
-    eprintln!("{}", edgekf_sim::residual_loop::cli::summary_table(&r));
+    eprintln!("{}", edgekf_sim::report::text::summary_table(&r));
     assert_eq!(r.system, "oscillator");
     assert_eq!(r.effects_added.len(), 1, "{:?}", r.effects_added);
     let e = &r.effects_added[0];
@@ -176,10 +193,10 @@ fn engine_finds_a_bias_on_another_system() {
 #[test]
 fn engine_finds_a_wrong_stiffness_on_another_system() {
     let r = close(1.1, 0.0, 4);
-    eprintln!("{}", edgekf_sim::residual_loop::cli::summary_table(&r));
+    eprintln!("{}", edgekf_sim::report::text::summary_table(&r));
     assert_eq!(r.effects_added.len(), 1, "{:?}", r.effects_added);
     let e = &r.effects_added[0];
-    assert_eq!((e.kind.as_str(), e.parameter.as_deref()), ("parameter", Some("stiffness")));
+    assert_eq!((e.kind.as_str(), e.detail.parameter.as_deref()), ("parameter", Some("stiffness")));
     assert!((e.value - 1.1).abs() < 0.01, "{}", e.value);
 }
 

@@ -1,7 +1,7 @@
 //! `edgekf loop rotor` as a user runs it: report.json has the documented shape.
 
-use edgekf_sim::residual_loop::inject::inject_bias;
-use edgekf_sim::rotor::{RotorConfig, RotorModel, SimOptions};
+use edgekf_sim::systems::rotor::loop_system::inject::inject_bias;
+use edgekf_sim::systems::rotor::{RotorConfig, RotorModel, SimOptions};
 use std::path::Path;
 use std::process::Command;
 

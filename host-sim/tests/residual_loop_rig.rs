@@ -5,10 +5,11 @@
 //! synthetic model). Nothing in the configuration declares the defect or the slip.
 
 use edgekf_sim::io::data::DataFile;
-use edgekf_sim::residual_loop::inject::{inject_bearing_defect, DefectSignal};
-use edgekf_sim::residual_loop::{close_loop, LoopOptions, LoopReport};
-use edgekf_sim::rotor::bearing_geometry::BearingLine;
-use edgekf_sim::rotor::{RotorConfig, RotorModel, SimOptions};
+use edgekf_sim::systems::rotor::loop_system::inject::{inject_bearing_defect, DefectSignal};
+use edgekf_sim::systems::rotor::loop_system::{close_loop, RotorLoopOptions};
+use edgekf_sim::residual_loop::{LoopOptions, LoopReport};
+use edgekf_sim::systems::rotor::bearing_geometry::BearingLine;
+use edgekf_sim::systems::rotor::{RotorConfig, RotorModel, SimOptions};
 use std::f64::consts::TAU;
 
 /// The motor's slip below the configured speed.
@@ -47,20 +48,21 @@ fn recording(model: &RotorModel, defect: bool, seed: u64) -> DataFile {
 }
 
 fn close(model: &RotorModel, data: &DataFile, max_effects: usize) -> LoopReport {
-    let options =
-        LoopOptions { speed_band: Some(0.1), screen_parameters: false, max_effects, ..LoopOptions::default() };
-    let r = close_loop(model, data, &options).unwrap();
-    eprintln!("{}", edgekf_sim::residual_loop::cli::summary_table(&r));
+    let options = LoopOptions { screen_parameters: false, max_effects, ..LoopOptions::default() };
+    let rotor = RotorLoopOptions { speed_band: Some(0.1), ..RotorLoopOptions::default() };
+    let r = close_loop(model, data, &options, &rotor).unwrap();
+    eprintln!("{}", edgekf_sim::report::text::summary_table(&r));
     r
 }
 
 /// The running speed is read from the data to well under a spectral bin (0.98 Hz here).
 fn check_speed(model: &RotorModel, r: &LoopReport) {
-    let s = r.running_speed.unwrap();
+    let s = &r.section.fields["running_speed"];
     let truth = true_speed(model) / TAU;
-    assert_eq!(s.source, "estimated");
-    assert!((s.declared_hz - 30.0).abs() < 1e-3, "{s:?}");
-    assert!((s.hz / truth - 1.0).abs() < 1e-3, "{s:?} against {truth} Hz");
+    let (hz, declared_hz) = (s["hz"].as_f64().unwrap(), s["declared_hz"].as_f64().unwrap());
+    assert_eq!(s["source"], "estimated");
+    assert!((declared_hz - 30.0).abs() < 1e-3, "{s:?}");
+    assert!((hz / truth - 1.0).abs() < 1e-3, "{s:?} against {truth} Hz");
 }
 
 /// The first effect the loop adds. (Allowed to go on, the loop may add stand-ins for what is
@@ -74,9 +76,9 @@ fn an_outer_race_defect_is_named_bpfo_at_the_slipping_speed() {
     assert_eq!(r.effects_added.len(), 1, "{:?}", r.effects_added);
     let e = &r.effects_added[0];
     assert_eq!(e.kind, "bearing_defect");
-    assert_eq!(e.line.as_deref(), Some("BPFO"));
+    assert_eq!(e.detail.line.as_deref(), Some("BPFO"));
     assert_eq!(e.location, "bearing 1");
-    assert!((e.order.unwrap() - 3.585).abs() < 1e-3, "{e:?}");
+    assert!((e.detail.order.unwrap() - 3.585).abs() < 1e-3, "{e:?}");
     // It explains the line's harmonics that were in the innovations, at the true speed.
     let bpfo = 3.5848 * true_speed(&model) / TAU;
     for h in [1.0, 2.0, 4.0, 5.0] {

@@ -1,11 +1,11 @@
-//! Validation of the rotor reference model (`edgekf_sim::rotor`): closed-form beam theory, mesh
+//! Validation of the rotor reference model (`edgekf_sim::systems::rotor`): closed-form beam theory, mesh
 //! convergence, an independent FE implementation (ROSS fixtures), the time response against the
 //! steady unbalance response, gyroscopic splitting, sensors and configuration errors.
 
-use edgekf_sim::rotor::config::{Direction, SensorKind};
-use edgekf_sim::rotor::element::{cowper_shear_factor, ShaftElement};
-use edgekf_sim::rotor::sensor::butterworth_gain;
-use edgekf_sim::rotor::{dof, Method, RotorConfig, RotorError, RotorModel, SimOptions, Whirl};
+use edgekf_sim::systems::rotor::config::{Direction, SensorKind};
+use edgekf_sim::systems::rotor::element::{cowper_shear_factor, ShaftElement};
+use edgekf_sim::systems::rotor::sensor::butterworth_gain;
+use edgekf_sim::systems::rotor::{dof, Method, RotorConfig, RotorError, RotorModel, SimOptions, Whirl};
 use serde::Deserialize;
 use std::f64::consts::PI;
 
@@ -283,7 +283,7 @@ fn unbalance_response_matches_ross() {
 
 /// Largest deviation of the simulated node displacements from the steady unbalance response
 /// over samples with `t ≥ from`, relative to the largest steady amplitude.
-fn deviation_from_steady(model: &RotorModel, rec: &edgekf_sim::rotor::Recording, from: f64) -> f64 {
+fn deviation_from_steady(model: &RotorModel, rec: &edgekf_sim::systems::rotor::Recording, from: f64) -> f64 {
     let ss = model.unbalance_response(rec.speed).unwrap();
     let scale = (0..model.n_nodes()).map(|k| ss.major_axis(k)).fold(0.0, f64::max);
     let mut worst = 0.0f64;
@@ -494,7 +494,7 @@ fn shaft_sections_and_point_masses_assemble_like_their_parts() {
     // A point mass with inertias: the rigid-translation mass grows by its mass, the diagonal
     // rotational entries by its diametral inertia, the gyroscopic pair by its polar inertia.
     let mut cfg = paper();
-    cfg.masses.push(edgekf_sim::rotor::config::PointMassConfig { node: 0, mass: 0.4, ip: 2e-4, id: 1e-4 });
+    cfg.masses.push(edgekf_sim::systems::rotor::config::PointMassConfig { node: 0, mass: 0.4, ip: 2e-4, id: 1e-4 });
     let with = RotorModel::from_config(&cfg).unwrap();
     let (a, b) = (uniform.matrices(), with.matrices());
     assert!((b.m[(0, 0)] - a.m[(0, 0)] - 0.4).abs() < 1e-15);
@@ -543,7 +543,7 @@ fn bad_configurations_are_refused_with_a_clear_message() {
     assert!(config_error("").contains("missing field `shaft`"));
     // A point mass with a negative mass, through the builder too.
     let mut cfg = paper();
-    cfg.masses.push(edgekf_sim::rotor::config::PointMassConfig { node: 0, mass: -1.0, ip: 0.0, id: 0.0 });
+    cfg.masses.push(edgekf_sim::systems::rotor::config::PointMassConfig { node: 0, mass: -1.0, ip: 0.0, id: 0.0 });
     assert!(matches!(RotorModel::from_config(&cfg), Err(RotorError::Config { .. })));
     // Loading names the file.
     let err = RotorConfig::load(std::path::Path::new("/nonexistent/rotor.toml")).unwrap_err();

@@ -1,8 +1,8 @@
 //! Virtual sensing on the paper rotor: data from the reference FE simulation (never from the
 //! reduced model), estimates from the reduced phasor AKF.
 
-use edgekf_sim::rotor::{Recording, RotorConfig, RotorModel, SimOptions};
-use edgekf_sim::rotor_akf::{reduce, run, Estimates, FilterPrecision, ForceModel, Tuning};
+use edgekf_sim::systems::rotor::{Recording, RotorConfig, RotorModel, SimOptions};
+use edgekf_sim::systems::rotor::estimate::{reduce, run, Estimates, FilterPrecision, ForceModel, Tuning};
 
 fn paper() -> RotorModel {
     let cfg = RotorConfig::from_toml_str(include_str!("../configs/rotor_paper.toml")).unwrap();
@@ -146,7 +146,7 @@ fn displacement_filter_under_model_error() {
 /// after the start-up.
 #[test]
 fn switching_to_the_steady_state_gain_after_start_up() {
-    use edgekf_sim::rotor_akf::{run_with, RunOptions};
+    use edgekf_sim::systems::rotor::estimate::{run_with, RunOptions};
     for (name, text) in [
         ("displacement probes", include_str!("../configs/rotor_paper.toml")),
         ("accelerometers", include_str!("../configs/rotor_paper_accel.toml")),

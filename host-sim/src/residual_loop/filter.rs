@@ -2,8 +2,7 @@
 //! time-varying gain until the covariance has converged, then that gain frozen (the model is
 //! time-invariant, so this is the steady-state filter and costs `O(n²)` per sample).
 
-use super::model::AugmentedModel;
-use crate::rotor::linalg::expm;
+use crate::linalg::expm;
 use anyhow::{anyhow, Result};
 use faer::Mat;
 use nalgebra::{DMatrix, DVector};
@@ -94,17 +93,6 @@ pub struct StateSpace<'a> {
     pub r: &'a DMatrix<f64>,
     /// `P_0`.
     pub p0: &'a DMatrix<f64>,
-}
-
-/// Runs the filter of `model` over `columns` (`[channel][k]`, offsets removed) at `dt`, and
-/// reports the displacement rows `rows` of the model.
-pub fn run(model: &AugmentedModel, dt: f64, columns: &[&[f64]], rows: &[usize]) -> Result<Run> {
-    let n = model.a.nrows();
-    let m = model.c.nrows();
-    let out_rows = DMatrix::from_fn(rows.len(), n, |i, j| model.displacement[(rows[i], j)]);
-    let effect_idx: Vec<usize> = model.effects.iter().flat_map(|(e, _, s)| *s..*s + e.states(m)).collect();
-    let ss = StateSpace { a: &model.a, qc: &model.qc, c: &model.c, r: &model.r, p0: &model.p0 };
-    run_state_space(&ss, dt, columns, &out_rows, &effect_idx)
 }
 
 /// Runs the filter of `ss` over `columns` at `dt`; [`Run::outputs`] are the rows of

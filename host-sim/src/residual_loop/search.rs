@@ -8,24 +8,21 @@
 //! rotor, a mechanism or a vehicle.
 
 use super::filter::Run;
-use super::model::EffectTuning;
 use super::optimize::{maximise, ScalarRange};
 use super::signature::{unexplained, Signature, SignatureOptions};
-use super::speed::RunningSpeed;
-use crate::rotor_akf::Tuning;
 use anyhow::{anyhow, Result};
 use serde::Serialize;
 use std::fmt::Debug;
 
-pub use super::signature::{ChannelSignature, PeakSignature, RunSummary};
+pub use super::signature::{Channel, ChannelSignature, PeakSignature, RunSummary};
 
-/// How the loop runs.
+/// The version of `report.json`'s layout: raised when a field changes meaning or goes away
+/// (adding a field does not raise it).
+pub const SCHEMA_VERSION: u32 = 2;
+
+/// How the loop runs (the engine's own settings; a system's tuning is its own data).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LoopOptions {
-    /// The base filter's tuning.
-    pub tuning: Tuning,
-    /// The effects' noise and priors.
-    pub effect_tuning: EffectTuning,
     /// What counts as a signature.
     pub signatures: SignatureOptions,
     /// At most this many effects are added.
@@ -41,33 +38,118 @@ pub struct LoopOptions {
     pub screen_parameters: bool,
     /// Print progress to standard error.
     pub progress: bool,
-    /// Rotating systems: estimate the running speed from the data within this fraction of the
-    /// configured (nominal) speed, instead of taking the configured speed as exact.
-    pub speed_band: Option<f64>,
 }
 
 impl Default for LoopOptions {
     fn default() -> Self {
         Self {
-            tuning: Tuning::default(),
-            effect_tuning: EffectTuning::default(),
             signatures: SignatureOptions::default(),
             max_effects: 4,
             half_gain: 0.25,
             identifiable_margin: 2.0,
             screen_parameters: true,
             progress: false,
-            speed_band: None,
         }
     }
+}
+
+/// The kinds of effect, one vocabulary for every system (the README's table gives each kind's
+/// `location`, the unit of its `value` and its extra fields).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum EffectKind {
+    /// A constant offset on a channel (channel unit; `drift` in unit/s where it drifts).
+    SensorBias,
+    /// A factor on a channel's declared scale.
+    SensorScale,
+    /// A pure delay of a channel, s.
+    SensorDelay,
+    /// A first-order lag of a channel, s (time constant).
+    SensorLag,
+    /// A force at an order of the running speed, N (`order`).
+    HarmonicForce,
+    /// A catch-all input at a node or channel, RMS in N or the channel's unit.
+    UnknownInput,
+    /// A factor on a component's declared parameter (`parameter`).
+    Parameter,
+    /// A mass added at a node, kg.
+    PointMass,
+    /// A mode the model lacks, Hz (`damping`).
+    ExtraMode,
+    /// A bearing defect: impulse size in the channel's unit (`line`, `harmonics`, `band_hz`).
+    BearingDefect,
+    /// An actuator's health factor after the onset (1 = healthy; `onset_s`).
+    ActuatorHealth,
+    /// A joint's radial clearance, m.
+    Clearance,
+}
+
+impl EffectKind {
+    /// The name in reports (`sensor_bias`, …).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            EffectKind::SensorBias => "sensor_bias",
+            EffectKind::SensorScale => "sensor_scale",
+            EffectKind::SensorDelay => "sensor_delay",
+            EffectKind::SensorLag => "sensor_lag",
+            EffectKind::HarmonicForce => "harmonic_force",
+            EffectKind::UnknownInput => "unknown_input",
+            EffectKind::Parameter => "parameter",
+            EffectKind::PointMass => "point_mass",
+            EffectKind::ExtraMode => "extra_mode",
+            EffectKind::BearingDefect => "bearing_defect",
+            EffectKind::ActuatorHealth => "actuator_health",
+            EffectKind::Clearance => "clearance",
+        }
+    }
+}
+
+impl std::fmt::Display for EffectKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+impl PartialEq<&str> for EffectKind {
+    fn eq(&self, other: &&str) -> bool {
+        self.as_str() == *other
+    }
+}
+
+/// The extra fields of an effect, each used by the kinds the README's table names.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct EffectDetail {
+    /// Order of the running speed (harmonic forces, bearing lines).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub order: Option<f64>,
+    /// The parameter (`mass`, `young`, `kxx`, …) of a `parameter` effect.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub parameter: Option<String>,
+    /// The defect line (`BPFO`, `BPFI`, `BSF`, `FTF`) of a `bearing_defect`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub line: Option<String>,
+    /// Harmonics of the defect line modelled.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub harmonics: Option<u32>,
+    /// The band the defect's impulses ring in, Hz.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub band_hz: Option<[f64; 2]>,
+    /// Drift of a bias, in the channel's unit per second.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub drift: Option<f64>,
+    /// Damping ratio of an extra mode.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub damping: Option<f64>,
+    /// When the effect began, s from the first sample (change-point effects).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub onset_s: Option<f64>,
 }
 
 /// An effect the loop kept.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct AddedEffect {
-    /// One of `sensor_bias`, `sensor_scale`, `sensor_delay`, `harmonic_force`,
-    /// `unknown_input`, `parameter`, `extra_mode`, `bearing_defect`.
-    pub kind: String,
+    /// The kind ([`EffectKind`]).
+    pub kind: EffectKind,
     /// Channel name, `node N`, or a component (`disk 12`, `shaft`, `bearing 4`).
     pub location: String,
     /// Estimated size in SI units (a force's amplitude averaged over the second half of the
@@ -75,15 +157,9 @@ pub struct AddedEffect {
     pub value: f64,
     /// Unit of `value` (`1` for a factor).
     pub unit: String,
-    /// Order of the running speed (harmonic forces, bearing lines).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub order: Option<f64>,
-    /// The parameter (`mass`, `young`, `kxx`, …) of a `parameter` effect.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub parameter: Option<String>,
-    /// The bearing line (`BPFO`, `BPFI`, `BSF`, `FTF`) of a `bearing_defect`.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub line: Option<String>,
+    /// The kind's extra fields.
+    #[serde(flatten)]
+    pub detail: EffectDetail,
     /// Spectral lines (Hz) of the innovations that were there before this effect and are gone
     /// after it.
     pub explains: Vec<f64>,
@@ -93,11 +169,52 @@ pub struct AddedEffect {
     pub bic_penalty: f64,
 }
 
+/// A candidate the loop fitted and refused.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Refused {
+    /// The kind.
+    pub kind: EffectKind,
+    /// Where.
+    pub location: String,
+    /// The fitted value, as an added effect would report it, where the fit gave one.
+    pub value: Option<f64>,
+    /// Why it was refused (at a bound of its range, one half of the run only, no usable model).
+    pub reason: String,
+}
+
+/// Where a report came from, so that it can be traced and rerun.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct Source {
+    /// The data file.
+    pub data: Option<String>,
+    /// SHA-256 of the data file's bytes, hex.
+    pub data_sha256: Option<String>,
+    /// The configuration file.
+    pub config: Option<String>,
+    /// The healthy baseline the loop started from, if any.
+    pub baseline: Option<String>,
+    /// The command line.
+    pub command: Option<String>,
+    /// edgekf's version.
+    pub version: String,
+}
+
+/// A system's own part of a report, beside the engine's fields (a rotor's running speed).
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct SystemSection {
+    /// Fields written at the top level of `report.json`.
+    #[serde(flatten)]
+    pub fields: serde_json::Map<String, serde_json::Value>,
+    /// The same for people: `(label, text)`, printed under the verdict and on the page.
+    #[serde(skip)]
+    pub lines: Vec<(String, String)>,
+}
+
 /// An effect (or location) the data cannot resolve.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct NotIdentifiable {
     /// Kind.
-    pub kind: String,
+    pub kind: EffectKind,
     /// Location.
     pub location: String,
     /// The parameter, for `parameter`.
@@ -117,7 +234,7 @@ pub struct Trial {
     /// Iteration.
     pub iteration: usize,
     /// Kind.
-    pub kind: String,
+    pub kind: EffectKind,
     /// Location.
     pub location: String,
     /// Order (harmonic forces, bearing lines).
@@ -126,6 +243,8 @@ pub struct Trial {
     /// Parameter name (parameter effects).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub parameter: Option<String>,
+    /// Unit of `value`.
+    pub unit: String,
     /// Fitted value (scalar effects), as reported.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub value: Option<f64>,
@@ -145,9 +264,9 @@ pub struct Traces {
     /// Time, s.
     pub t: Vec<f64>,
     /// Sensor channels.
-    pub channels: Vec<String>,
+    pub channels: Vec<Channel>,
     /// Virtual-sensing rows (`n12_x`, …).
-    pub rows: Vec<String>,
+    pub rows: Vec<Channel>,
     /// `truth_` column of each row, where the file has one.
     pub truth: Vec<Option<Vec<f64>>>,
     /// The base model's run.
@@ -159,8 +278,12 @@ pub struct Traces {
 /// What the loop found.
 #[derive(Debug, Clone, Serialize)]
 pub struct LoopReport {
+    /// [`SCHEMA_VERSION`].
+    pub schema_version: u32,
     /// The system (`rotor`, …).
     pub system: String,
+    /// Where the report came from.
+    pub source: Source,
     /// Effects kept, in order.
     pub effects_added: Vec<AddedEffect>,
     /// The base model.
@@ -172,13 +295,15 @@ pub struct LoopReport {
     /// Signatures left that no effect of the library explains (empty when the final
     /// innovations are consistent).
     pub unexplained: Vec<Signature>,
+    /// Candidates fitted and refused, with the reason.
+    pub refused: Vec<Refused>,
     /// Every candidate evaluated.
     pub trials: Vec<Trial>,
     /// Why the loop stopped.
     pub stopped: String,
-    /// The running speed the loop used and where it came from (rotating systems).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub running_speed: Option<RunningSpeed>,
+    /// The system's own fields (`running_speed` for rotors), at the top level of the JSON.
+    #[serde(flatten)]
+    pub section: SystemSection,
     /// The series behind the plots.
     #[serde(skip)]
     pub traces: Traces,
@@ -187,18 +312,14 @@ pub struct LoopReport {
 /// How an effect is written in the report.
 #[derive(Debug, Clone, PartialEq)]
 pub struct EffectLabel {
-    /// Kind (`sensor_bias`, `harmonic_force`, …).
-    pub kind: &'static str,
+    /// Kind.
+    pub kind: EffectKind,
     /// Channel name, `node N`, or a component.
     pub location: String,
-    /// Order of the running speed, if it acts at one.
-    pub order: Option<f64>,
-    /// The parameter's name, for `parameter` effects.
-    pub parameter: Option<String>,
-    /// The bearing line, for `bearing_defect` effects.
-    pub line: Option<String>,
+    /// The kind's extra fields.
+    pub detail: EffectDetail,
     /// Unit of the reported value (`1` for a factor).
-    pub unit: &'static str,
+    pub unit: String,
 }
 
 /// A system the loop can be closed on: a base model with a filter, a library of effects that
@@ -237,9 +358,13 @@ pub trait LoopSystem {
     fn screened(&self) -> Vec<(Self::Effect, Vec<f64>)> {
         Vec::new()
     }
-    /// Time, channel names, virtual rows and truth for the report's plots (the engine fills in
+    /// Time, channels, virtual rows and truth for the report's plots (the engine fills in
     /// the runs before and after).
     fn traces(&self) -> Traces;
+    /// The system's own part of the report (none by default).
+    fn section(&self) -> SystemSection {
+        SystemSection::default()
+    }
 }
 
 /// A candidate fitted to the data.
@@ -333,10 +458,11 @@ impl<S: LoopSystem> Engine<'_, S> {
     fn trial(&self, iteration: usize, f: &Fitted<S::Effect, S::Model>, accepted: bool) -> Trial {
         Trial {
             iteration,
-            kind: f.label.kind.to_string(),
+            kind: f.label.kind,
             location: f.label.location.clone(),
-            order: f.label.order,
-            parameter: f.label.parameter.clone(),
+            order: f.label.detail.order,
+            parameter: f.label.detail.parameter.clone(),
+            unit: f.label.unit.clone(),
             value: self.sys.scalar(&f.effect).map(|_| self.sys.value(&f.model, &f.run, &f.effect, f.theta)),
             delta_log_likelihood: f.delta,
             delta_halves: f.halves,
@@ -366,6 +492,7 @@ impl<S: LoopSystem> Engine<'_, S> {
         effects: &[(S::Effect, f64)],
         cands: Vec<S::Effect>,
         base: &Run,
+        refused: &mut Vec<Refused>,
     ) -> Vec<Fitted<S::Effect, S::Model>> {
         let total = cands.len();
         let mut results = Vec::new();
@@ -376,7 +503,15 @@ impl<S: LoopSystem> Engine<'_, S> {
             });
             match self.fit(effects, cand, base) {
                 Ok(f) => results.push(f),
-                Err(e) => self.progress(|| format!("  {} at {}: {e:#}", label.kind, label.location)),
+                Err(e) => {
+                    self.progress(|| format!("  {} at {}: {e:#}", label.kind, label.location));
+                    refused.push(Refused {
+                        kind: label.kind,
+                        location: label.location.clone(),
+                        value: None,
+                        reason: format!("{e:#}"),
+                    });
+                }
             }
         }
         results
@@ -407,9 +542,9 @@ impl<S: LoopSystem> Engine<'_, S> {
                     && (winner.delta - f.delta).abs() < self.options.identifiable_margin
             })
             .map(|r| NotIdentifiable {
-                kind: winner.label.kind.into(),
+                kind: winner.label.kind,
                 location: r.label.location.clone(),
-                parameter: r.label.parameter.clone(),
+                parameter: r.label.detail.parameter.clone(),
                 statistic: "delta_log_likelihood_gap".into(),
                 value: winner.delta - r.delta,
                 reason: format!(
@@ -436,6 +571,19 @@ impl<S: LoopSystem> Engine<'_, S> {
         }
     }
 
+    /// The refusal of an effect that pays over the whole run but not in both halves.
+    fn refused_in_halves(&self, f: &Fitted<S::Effect, S::Model>) -> Refused {
+        Refused {
+            kind: f.label.kind,
+            location: f.label.location.clone(),
+            value: self.sys.scalar(&f.effect).map(|_| self.sys.value(&f.model, &f.run, &f.effect, f.theta)),
+            reason: format!(
+                "pays over the whole run (Δ log-likelihood {:.1} against a BIC cost of {:.1}) but not in both halves ({:.1} / {:.1}): it helps only part of the run",
+                f.delta, f.penalty, f.halves[0], f.halves[1]
+            ),
+        }
+    }
+
     /// Effects of [`LoopSystem::screened`] the data cannot see from the final model.
     fn screen(&self, effects: &[(S::Effect, f64)], run: &Run) -> Result<Vec<NotIdentifiable>> {
         let base = run.log_likelihood();
@@ -456,13 +604,13 @@ impl<S: LoopSystem> Engine<'_, S> {
                     break;
                 }
             }
-            let what = label.parameter.clone().unwrap_or_else(|| label.kind.to_string());
+            let what = label.detail.parameter.clone().unwrap_or_else(|| label.kind.to_string());
             self.progress(|| format!("screen: {what} of {}: |Δ log-likelihood| ≤ {worst:.2}", label.location));
             if worst <= penalty {
                 out.push(NotIdentifiable {
-                    kind: label.kind.into(),
+                    kind: label.kind,
                     location: label.location,
-                    parameter: label.parameter,
+                    parameter: label.detail.parameter,
                     statistic: "max_delta_log_likelihood".into(),
                     value: worst,
                     reason: format!(
@@ -476,8 +624,8 @@ impl<S: LoopSystem> Engine<'_, S> {
 }
 
 /// The family of an effect for identifiability: same kind and order, different location.
-fn family(l: &EffectLabel) -> (&'static str, Option<u64>, Option<&str>) {
-    (l.kind, l.order.map(f64::to_bits), l.parameter.as_deref().map(|_| "parameter"))
+fn family(l: &EffectLabel) -> (EffectKind, Option<u64>, Option<&str>) {
+    (l.kind, l.detail.order.map(f64::to_bits), l.detail.parameter.as_deref().map(|_| "parameter"))
 }
 
 /// Frequencies (Hz) of the lines in `before` that `after` no longer has (per channel, within
@@ -514,6 +662,7 @@ pub fn search<S: LoopSystem>(sys: &S, options: &LoopOptions) -> Result<LoopRepor
     let mut trials = Vec::new();
     let mut not_identifiable = Vec::new();
     let mut partial: Vec<Signature> = Vec::new();
+    let mut refused: Vec<Refused> = Vec::new();
     let stopped;
     let mut iteration = 0;
     loop {
@@ -538,10 +687,11 @@ pub fn search<S: LoopSystem>(sys: &S, options: &LoopOptions) -> Result<LoopRepor
             if chosen.is_some() || fresh.is_empty() {
                 continue;
             }
-            let mut results = engine.fit_all(iteration, &effects, fresh, &cur_run);
-            partial.extend(
-                results.iter().filter(|f| f.delta > f.penalty && !engine.pays_in_halves(f)).map(|f| engine.partial(f)),
-            );
+            let mut results = engine.fit_all(iteration, &effects, fresh, &cur_run, &mut refused);
+            for f in results.iter().filter(|f| f.delta > f.penalty && !engine.pays_in_halves(f)) {
+                partial.push(engine.partial(f));
+                refused.push(engine.refused_in_halves(f));
+            }
             let best = results
                 .iter()
                 .enumerate()
@@ -595,13 +745,11 @@ pub fn search<S: LoopSystem>(sys: &S, options: &LoopOptions) -> Result<LoopRepor
     let effects_added = added
         .into_iter()
         .map(|f| AddedEffect {
-            kind: f.label.kind.to_string(),
+            kind: f.label.kind,
             location: f.label.location,
             value: sys.value(&cur_model, &cur_run, &f.effect, f.theta),
-            unit: f.label.unit.to_string(),
-            order: f.label.order,
-            parameter: f.label.parameter,
-            line: f.label.line,
+            unit: f.label.unit,
+            detail: f.label.detail,
             explains: f.explains,
             delta_log_likelihood: f.delta,
             bic_penalty: f.penalty,
@@ -616,15 +764,18 @@ pub fn search<S: LoopSystem>(sys: &S, options: &LoopOptions) -> Result<LoopRepor
     };
     let traces = Traces { before: base_run, after: cur_run, ..sys.traces() };
     Ok(LoopReport {
+        schema_version: SCHEMA_VERSION,
         system: sys.name().to_string(),
+        source: Source { version: env!("CARGO_PKG_VERSION").into(), ..Source::default() },
         effects_added,
         before,
         after: current,
         not_identifiable,
         unexplained,
+        refused,
         trials,
         stopped,
-        running_speed: None,
+        section: sys.section(),
         traces,
     })
 }

@@ -1,10 +1,10 @@
 //! Signatures of a run's innovations: bias (mean against its standard error), NIS against its
-//! χ² bounds, whiteness (Ljung–Box), spectral lines placed at running-speed orders, natural
-//! frequencies or bearing lines, and a step in a channel's innovation power (a change during the
-//! run). The statistics come from `edgekf::residual`, the same code the node runs.
+//! χ² bounds, whiteness (Ljung–Box), spectral lines placed at the system's reference lines
+//! (orders of the running speed, natural frequencies, named lines such as a bearing's defect
+//! frequencies), and a step in a channel's innovation power (a change during the run). The
+//! statistics come from `edgekf::residual`, the same code the node runs.
 
 use super::filter::Run;
-use crate::rotor::bearing_geometry::BearingLine;
 use edgekf::residual::{locate_peak, NisBounds, PeakClass, PeakTolerance, RunningStats, Welch, WhitenessWindow};
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -34,6 +34,85 @@ impl Default for SignatureOptions {
     }
 }
 
+/// A channel as reports show it: its name and SI unit, and the scale and unit people read it in.
+///
+/// ```
+/// use edgekf_sim::residual_loop::Channel;
+/// let probe = Channel::new("n5_x", "m").shown_in(1e6, "µm");
+/// assert_eq!(probe.display(2.5e-6), 2.5);
+/// ```
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Channel {
+    /// Name, as in the data file (`n5_x`, `acc_x`).
+    pub name: String,
+    /// SI unit of its values (`m`, `m/s^2`, `V`).
+    pub unit: String,
+    /// Factor from SI to the unit people read (1e6 for metres shown in µm).
+    #[serde(skip)]
+    pub display_scale: f64,
+    /// The unit people read (`µm`).
+    #[serde(skip)]
+    pub display_unit: String,
+}
+
+impl Channel {
+    /// `name` in `unit`, shown as it is.
+    pub fn new(name: impl Into<String>, unit: impl Into<String>) -> Self {
+        let unit = unit.into();
+        Self { name: name.into(), display_unit: unit.clone(), unit, display_scale: 1.0 }
+    }
+
+    /// The same channel shown as `scale ×` its SI value in `unit`.
+    pub fn shown_in(self, scale: f64, unit: impl Into<String>) -> Self {
+        Self { display_scale: scale, display_unit: unit.into(), ..self }
+    }
+
+    /// `v` (SI) in the displayed unit.
+    pub fn display(&self, v: f64) -> f64 {
+        v * self.display_scale
+    }
+}
+
+/// A named spectral line a system expects (a bearing's defect frequency, a blade pass).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct NamedLine {
+    /// Name (`BPFO`).
+    pub name: String,
+    /// Where it comes from (`bearing #0`).
+    pub location: String,
+    /// Frequency, Hz.
+    pub hz: f64,
+}
+
+/// The spectral lines a system supplies to place the innovations' lines at.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ReferenceLines {
+    /// Running speed, rad/s: lines at its orders are named `2x`, `3/2x`. Zero: nothing rotates.
+    pub speed: f64,
+    /// Natural frequencies of the model, Hz.
+    pub naturals: Vec<f64>,
+    /// Named lines; their harmonics (up to [`LINE_HARMONICS`]) name a line too.
+    pub named: Vec<NamedLine>,
+}
+
+/// What a run is summarised against: the time base, the channels, the virtual-sensing rows
+/// with their truth (where the file has it), the reference lines and the sample rate.
+#[derive(Debug, Clone, Copy)]
+pub struct SummaryContext<'a> {
+    /// Time of each sample, s.
+    pub t: &'a [f64],
+    /// Sensor channels, in the filter's order.
+    pub channels: &'a [Channel],
+    /// Virtual-sensing rows, in [`Run::outputs`]' order.
+    pub rows: &'a [Channel],
+    /// Truth of each row, where known.
+    pub truth: &'a [Option<&'a [f64]>],
+    /// Where lines are placed.
+    pub lines: &'a ReferenceLines,
+    /// Samples per second.
+    pub sample_rate: f64,
+}
+
 /// A spectral line of one channel's normalised innovation.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct PeakSignature {
@@ -46,10 +125,10 @@ pub struct PeakSignature {
     pub class: String,
     /// The integer order of the running speed it sits at, if any.
     pub order: Option<u32>,
-    /// The bearing line it sits at (bearing index, line, harmonic: 1 for the line itself), if
-    /// any.
+    /// The named line it sits at (index into [`ReferenceLines::named`], harmonic: 1 for the
+    /// line itself), if any.
     #[serde(skip)]
-    pub line: Option<(usize, BearingLine, u8)>,
+    pub line: Option<(usize, u8)>,
 }
 
 /// Innovation statistics of one channel.
@@ -91,7 +170,7 @@ pub struct RunSummary {
     pub whiteness_p: f64,
     /// Unbiased, white (Bonferroni over the channels) and NIS-consistent.
     pub consistent: bool,
-    /// RMS error of the virtual-sensing rows against `truth_` columns, m.
+    /// RMS error of the virtual-sensing rows against `truth_` columns, in the rows' SI unit.
     pub error_rms: BTreeMap<String, f64>,
     /// `−½ Σ (ln det S + NIS)` over the run.
     pub log_likelihood: f64,
@@ -124,30 +203,22 @@ pub struct Signature {
 /// Harmonics of a bearing line that name a spectral line.
 pub const LINE_HARMONICS: u8 = 8;
 
-/// The bearing line (bearing, line, harmonic) a peak at `f` Hz sits at, within `tol_hz` (the
-/// closest, if several are). The line itself is matched first and always; its harmonics (up to [`LINE_HARMONICS`]) only when
-/// the peak is at no order of the running speed or natural frequency (`located`), because with
-/// four lines per bearing some harmonic falls near almost anything.
+/// The named line (index into `lines`, harmonic) a peak at `f` Hz sits at, within `tol_hz`
+/// (the closest, if several are). The line itself is matched first and always; its harmonics
+/// (up to [`LINE_HARMONICS`]) only when the peak is at no order of the running speed or
+/// natural frequency (`located`), because with four lines per bearing some harmonic falls near
+/// almost anything.
 ///
 /// ```
-/// use edgekf_sim::residual_loop::signature::bearing_line;
-/// use edgekf_sim::rotor::bearing_geometry::BearingLine;
-/// let speed = std::f64::consts::TAU * 30.0; // 30 Hz
-/// let lines = [(0, BearingLine::Bpfo, 3.585)];
-/// assert_eq!(bearing_line(107.55, speed, &lines, 1.0, false), Some((0, BearingLine::Bpfo, 1)));
-/// assert_eq!(bearing_line(322.6, speed, &lines, 1.0, false), Some((0, BearingLine::Bpfo, 3)));
-/// assert_eq!(bearing_line(322.6, speed, &lines, 1.0, true), None);
+/// use edgekf_sim::residual_loop::signature::{named_line, NamedLine};
+/// let lines = [NamedLine { name: "BPFO".into(), location: "bearing #0".into(), hz: 107.55 }];
+/// assert_eq!(named_line(107.55, &lines, 1.0, false), Some((0, 1)));
+/// assert_eq!(named_line(322.6, &lines, 1.0, false), Some((0, 3)));
+/// assert_eq!(named_line(322.6, &lines, 1.0, true), None);
 /// ```
-pub fn bearing_line(
-    f: f64,
-    speed: f64,
-    lines: &[(usize, BearingLine, f64)],
-    tol_hz: f64,
-    located: bool,
-) -> Option<(usize, BearingLine, u8)> {
-    let run_hz = speed / std::f64::consts::TAU;
+pub fn named_line(f: f64, lines: &[NamedLine], tol_hz: f64, located: bool) -> Option<(usize, u8)> {
     let closest = |hs: std::ops::RangeInclusive<u8>| {
-        hs.flat_map(|h| lines.iter().map(move |(b, l, order)| ((f - h as f64 * order * run_hz).abs(), (*b, *l, h))))
+        hs.flat_map(|h| lines.iter().enumerate().map(move |(i, l)| ((f - h as f64 * l.hz).abs(), (i, h))))
             .filter(|(d, _)| *d <= tol_hz)
             .min_by(|a, b| a.0.total_cmp(&b.0))
             .map(|(_, m)| m)
@@ -156,26 +227,17 @@ pub fn bearing_line(
 }
 
 /// Summarises `run`: per-channel signatures over the samples after `settle`, the NIS, and the
-/// virtual-sensing error of `rows` against `truth` (where given).
-#[allow(clippy::too_many_arguments)]
-pub fn summarise(
-    run: &Run,
-    t: &[f64],
-    channels: &[String],
-    rows: &[String],
-    truth: &[Option<&[f64]>],
-    speed: f64,
-    naturals: &[f64],
-    lines: &[(usize, BearingLine, f64)],
-    sample_rate: f64,
-    o: &SignatureOptions,
-) -> RunSummary {
+/// virtual-sensing error of the rows against their truth (where given).
+pub fn summarise(run: &Run, ctx: &SummaryContext<'_>, o: &SignatureOptions) -> RunSummary {
+    let SummaryContext { t, channels, rows, truth, lines, sample_rate } = *ctx;
+    let (speed, naturals) = (lines.speed, lines.naturals.as_slice());
     let t0 = t.first().copied().unwrap_or(0.0);
     let keep: Vec<usize> = (0..t.len()).filter(|&k| t[k] - t0 >= o.settle).collect();
     let mut out = Vec::new();
     let mut spectra = Vec::new();
     let mut bin_width_hz = sample_rate / SEGMENT as f64;
-    for (i, name) in channels.iter().enumerate() {
+    for (i, channel) in channels.iter().enumerate() {
+        let name = &channel.name;
         let mut stats = RunningStats::<f64>::new();
         let mut nis = RunningStats::<f64>::new();
         let mut white = WhitenessWindow::<f64, 2048>::new();
@@ -206,10 +268,11 @@ pub fn summarise(
                 for p in w.peaks::<8>(o.peak_db).iter() {
                     let f = p.frequency_hz as f64;
                     let located = locate_peak(f, speed, naturals, &tol).class;
-                    let line = bearing_line(f, speed, lines, tol.abs_hz, !matches!(located, PeakClass::Unexplained));
-                    let (class, order) = if let Some((b, l, h)) = line {
+                    let line = named_line(f, &lines.named, tol.abs_hz, !matches!(located, PeakClass::Unexplained));
+                    let (class, order) = if let Some((i, h)) = line {
                         let times = if h == 1 { String::new() } else { format!("{h}×") };
-                        (format!("{times}{} at bearing #{b}", l.name()), None)
+                        let l = &lines.named[i];
+                        (format!("{times}{} at {}", l.name, l.location), None)
                     } else {
                         match located {
                             PeakClass::Order(o) => {
@@ -257,7 +320,7 @@ pub fn summarise(
     let m = channels.len().max(1);
     let bounds = NisBounds::new(m, nis_total.count().max(1) as usize, o.alpha);
     let mut error_rms = BTreeMap::new();
-    for (j, name) in rows.iter().enumerate() {
+    for (j, name) in rows.iter().map(|r| &r.name).enumerate() {
         if let Some(Some(truth)) = truth.get(j) {
             let (mut s, mut n) = (0.0, 0usize);
             for ((tk, est), tr) in t.iter().zip(&run.outputs[j]).zip(truth.iter()) {

@@ -1,0 +1,97 @@
+//! `edgekf loop <system> --config C --data d.csv --report DIR`: the flags every system's loop
+//! shares, the run through the system's [`LoopEntry`](super::LoopEntry), the printed summary and
+//! the report files, with where the report came from (`source`).
+
+use super::registry::SystemEntry;
+use crate::report::text::{summary_table, write_report};
+use crate::residual_loop::{LoopOptions, LoopReport};
+use anyhow::{Context, Result};
+use clap::{ArgMatches, Args, FromArgMatches};
+use sha2::{Digest, Sha256};
+use std::path::{Path, PathBuf};
+
+/// The flags of every `edgekf loop <system>`.
+#[derive(Debug, Clone, Args)]
+pub struct LoopArgs {
+    /// The system's configuration (model, sensors, operating point, sample rate).
+    #[arg(long, value_name = "TOML")]
+    pub config: PathBuf,
+    /// Data file (channels named like the configured sensors; `truth_` columns optional).
+    #[arg(long, value_name = "CSV")]
+    pub data: PathBuf,
+    /// Directory for report.json and report.html.
+    #[arg(long, value_name = "DIR")]
+    pub report: PathBuf,
+    /// At most this many effects.
+    #[arg(long, value_name = "N", default_value_t = 4)]
+    pub max_effects: usize,
+    /// Do not print each candidate as it is tried.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+/// What a system's loop is asked to do.
+#[derive(Debug, Clone)]
+pub struct LoopRequest {
+    /// `--config`.
+    pub config: PathBuf,
+    /// `--data`.
+    pub data: PathBuf,
+    /// The engine's options from the common flags.
+    pub options: LoopOptions,
+}
+
+/// `edgekf loop` with one subcommand per system that has a loop.
+pub fn command(registry: &[SystemEntry]) -> clap::Command {
+    let mut cmd = clap::Command::new("loop")
+        .about(
+            "Close the loop with measured data: read the filter's innovations, add the model effects they \
+             point at when they pay for their parameters, report before/after",
+        )
+        .subcommand_required(true)
+        .arg_required_else_help(true);
+    for s in registry {
+        if let Some(l) = &s.close_loop {
+            cmd = cmd.subcommand((l.args)(LoopArgs::augment_args(clap::Command::new(s.name).about(l.about))));
+        }
+    }
+    cmd
+}
+
+/// Runs `edgekf loop <system> …` (`m`: the `loop` subcommand's matches); `command_line` goes
+/// into the report's `source`.
+pub fn run(registry: &[SystemEntry], m: &ArgMatches, command_line: &str) -> Result<()> {
+    let Some((name, sub)) = m.subcommand() else { unreachable!("clap requires a subcommand") };
+    let entry = registry
+        .iter()
+        .find(|s| s.name == name)
+        .and_then(|s| s.close_loop.as_ref())
+        .expect("clap only accepts registered names");
+    let args = LoopArgs::from_arg_matches(sub).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let request = LoopRequest {
+        config: args.config.clone(),
+        data: args.data.clone(),
+        options: LoopOptions { max_effects: args.max_effects, progress: !args.quiet, ..LoopOptions::default() },
+    };
+    let mut report = (entry.run)(&request, sub)?;
+    fill_source(&mut report, &args.data, &args.config, command_line)?;
+    print!("{}", summary_table(&report));
+    write_report(&report, &args.report)?;
+    println!("wrote {0}/report.json and {0}/report.html", args.report.display());
+    Ok(())
+}
+
+/// Fills the report's `source`: the files, the data's SHA-256, the command line.
+pub fn fill_source(report: &mut LoopReport, data: &Path, config: &Path, command_line: &str) -> Result<()> {
+    let bytes = std::fs::read(data).with_context(|| format!("{}: cannot read", data.display()))?;
+    report.source.data = Some(data.display().to_string());
+    report.source.data_sha256 = Some(hex(&Sha256::digest(&bytes)));
+    report.source.config = Some(config.display().to_string());
+    report.source.command = Some(command_line.to_string());
+    Ok(())
+}
+
+/// Lower-case hex of `bytes`.
+fn hex(bytes: &[u8]) -> String {
+    bytes.iter().map(|b| format!("{b:02x}")).collect()
+}

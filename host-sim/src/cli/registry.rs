@@ -1,0 +1,68 @@
+//! A row of the systems' registry: what the command line needs to know of a system.
+
+use crate::residual_loop::LoopReport;
+use anyhow::Result;
+use clap::{ArgMatches, FromArgMatches, Subcommand};
+use std::path::Path;
+
+/// One system as the command line sees it.
+#[derive(Clone, Copy)]
+pub struct SystemEntry {
+    /// The subcommand's name (`rotor`): `edgekf rotor …`, `edgekf loop rotor`.
+    pub name: &'static str,
+    /// One line for `edgekf --help`.
+    pub about: &'static str,
+    /// Its subcommands (see [`subcommands`]).
+    pub command: fn() -> clap::Command,
+    /// Runs one of them.
+    pub run: fn(&ArgMatches) -> Result<()>,
+    /// Its residual loop, if it has one.
+    pub close_loop: Option<LoopEntry>,
+    /// Its part of `edgekf demo`, if it has one.
+    pub demo: Option<DemoPart>,
+}
+
+/// `edgekf loop <system>`.
+#[derive(Clone, Copy)]
+pub struct LoopEntry {
+    /// One line for `edgekf loop --help`.
+    pub about: &'static str,
+    /// Adds the system's own flags to the ones every loop has.
+    pub args: fn(clap::Command) -> clap::Command,
+    /// Loads the configuration, reads the data and closes the loop.
+    pub run: fn(&super::looping::LoopRequest, &ArgMatches) -> Result<LoopReport>,
+}
+
+/// A system's part of `edgekf demo`.
+#[derive(Clone, Copy)]
+pub struct DemoPart {
+    /// It closes a residual loop (`--skip-loop` skips it).
+    pub closes_loop: bool,
+    /// Runs it, prints what it found and writes its files under `out` if given.
+    pub run: fn(&super::demo::DemoArgs) -> Result<()>,
+}
+
+/// A clap `Subcommand` enum as a registry's [`SystemEntry::command`]: `subcommands::<C>`.
+pub fn subcommands<C: Subcommand>() -> clap::Command {
+    C::augment_subcommands(clap::Command::new("system")).subcommand_required(true).arg_required_else_help(true)
+}
+
+/// Parses `m` into the system's `Subcommand` and runs it: `|m| dispatch(m, cli::run)`.
+pub fn dispatch<C: FromArgMatches>(m: &ArgMatches, run: fn(C) -> Result<()>) -> Result<()> {
+    run(C::from_arg_matches(m).map_err(|e| anyhow::anyhow!("{e}"))?)
+}
+
+/// Reads `path` as a data file whose channels are `known` (notices to standard error) and
+/// checks that it is sampled at `rate` Hz (within 1 %).
+pub fn read_data(path: &Path, known: &[&str], rate: f64) -> Result<crate::io::data::DataFile> {
+    let (file, notes) = crate::io::data::read(path, known)?;
+    eprintln!("{}: {notes}", path.display());
+    if (notes.timing.sample_rate - rate).abs() > 0.01 * rate {
+        anyhow::bail!(
+            "{}: sampled at {:.3} Hz, the configuration says {rate} Hz",
+            path.display(),
+            notes.timing.sample_rate
+        );
+    }
+    Ok(file)
+}

@@ -1,0 +1,91 @@
+//! What the loop prints and writes: the summary table of the command line, and the report
+//! files (`report.json`, `report.html`) of a report directory.
+
+use crate::residual_loop::search::{Channel, LoopReport, RunSummary};
+use anyhow::{Context, Result};
+use std::path::Path;
+
+/// Writes `dir/report.json` and `dir/report.html`, creating `dir` if needed.
+pub fn write_report(report: &LoopReport, dir: &Path) -> Result<()> {
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let path = dir.join("report.json");
+    std::fs::write(&path, serde_json::to_string_pretty(report)?)
+        .with_context(|| format!("writing {}", path.display()))?;
+    let path = dir.join("report.html");
+    std::fs::write(&path, super::html::render(report)?).with_context(|| format!("writing {}", path.display()))?;
+    Ok(())
+}
+
+/// The summary the CLI prints: effects, then a before/after table.
+pub fn summary_table(r: &LoopReport) -> String {
+    let mut s = String::new();
+    s.push_str(&format!("{}: {} effect(s) added; {}\n", r.system, r.effects_added.len(), r.stopped));
+    for (label, text) in &r.section.lines {
+        s.push_str(&format!("  {label} {text}\n"));
+    }
+    for e in &r.effects_added {
+        let order = e.detail.order.map(|o| format!(" at {o}x")).unwrap_or_default();
+        let what =
+            e.detail.parameter.as_ref().or(e.detail.line.as_ref()).map(|p| format!(" {p}")).unwrap_or_default();
+        s.push_str(&format!(
+            "  + {}{} at {}{}: {} (Δ log-likelihood {:.1}, BIC cost {:.1})\n",
+            e.kind,
+            order,
+            e.location,
+            what,
+            show_value(e.value, &e.unit),
+            e.delta_log_likelihood,
+            e.bic_penalty
+        ));
+    }
+    let row = |name: &str, f: &dyn Fn(&RunSummary) -> String| {
+        format!("  {name:<28} {:>14} {:>14}\n", f(&r.before), f(&r.after))
+    };
+    s.push_str(&format!("  {:<28} {:>14} {:>14}\n", "", "before", "after"));
+    s.push_str(&row("log-likelihood", &|x| format!("{:.1}", x.log_likelihood)));
+    s.push_str(&row("NIS mean / channel", &|x| format!("{:.3}", x.nis_mean)));
+    s.push_str(&row("whiteness p (min)", &|x| format!("{:.2e}", x.whiteness_p)));
+    for k in r.before.innovation_rms.keys() {
+        let (scale, unit) = shown(&r.traces.channels, k);
+        s.push_str(&row(&format!("innovation RMS {k} {unit}"), &|x| readable(x.innovation_rms[k] * scale)));
+    }
+    for k in r.before.error_rms.keys() {
+        let (scale, unit) = shown(&r.traces.rows, k);
+        s.push_str(&row(&format!("error RMS {k} {unit}"), &|x| {
+            x.error_rms.get(k).map_or("-".into(), |v| readable(v * scale))
+        }));
+    }
+    for u in &r.not_identifiable {
+        let what = u.parameter.as_ref().map(|p| format!(" {p}")).unwrap_or_default();
+        s.push_str(&format!("  not identifiable: {} {}{}: {}\n", u.kind, u.location, what, u.reason));
+    }
+    for u in &r.unexplained {
+        s.push_str(&format!("  unexplained: {}: {}\n", u.channel, u.description));
+    }
+    s
+}
+
+/// A value with its unit as people read it: factors as `×1.0500 (+5.00 %)`, metres in µm,
+/// seconds in ms.
+pub fn show_value(v: f64, unit: &str) -> String {
+    match unit {
+        "1" => format!("×{v:.4} ({:+.2} %)", (v - 1.0) * 100.0),
+        "m" => format!("{:.3} µm", v * 1e6),
+        "s" => format!("{:.3} ms", v * 1e3),
+        _ => format!("{v:.4} {unit}"),
+    }
+}
+
+/// The display scale and unit of `name` among `list` (SI, unlabelled, if it is not there).
+pub(crate) fn shown<'a>(list: &'a [Channel], name: &str) -> (f64, &'a str) {
+    list.iter().find(|c| c.name == name).map_or((1.0, ""), |c| (c.display_scale, c.display_unit.as_str()))
+}
+
+/// Three decimals where that keeps three significant digits, else scientific notation.
+fn readable(v: f64) -> String {
+    if (1e-2..1e5).contains(&v.abs()) {
+        format!("{v:.3}")
+    } else {
+        format!("{v:.3e}")
+    }
+}

@@ -1,3 +1,0 @@
-//! Models of the sensors, as seen at their outputs: what a driver reads, before quantisation.
-
-pub mod adxl355;

@@ -1,0 +1,683 @@
+//! Identifiability of two simultaneous clearances (A and B) from the crank angular
+//! acceleration: an ensemble likelihood surface over (cA, cB) and the Fisher information at a
+//! reference point, for the features the estimators use.
+//!
+//! **Verdict: with these features a 10 s recording cannot give both clearances within ±10 %.**
+//! The limit is not that B is invisible (the features flag it, and the surface falls steeply
+//! towards smaller cB) but that the features see mostly one combination of the two clearances,
+//! and the chaotic scatter of 10 s of impacts leaves the other direction at a std of ~0.036 mm.
+//!
+//! Measured (reference A 0.25 + B 0.15 mm; Fisher by central differences over ±0.05 mm at A
+//! and B; 16 runs of 10 s per point; `cargo run --release -p edgekf-sim --example crank_study --
+//! two-clearances 16 10 10 stencil`, 3 min on two cores; ± is a delete-one jackknife over the
+//! runs):
+//!
+//! | features, release | CRB cA | CRB cB | correlation | weakest direction (cA, cB), std | A alone: CRB cA |
+//! |---|---|---|---|---|---|
+//! | fast (10), 30 ± 10° | 12.9 ± 2.2 % | 15.2 ± 2.2 % | −0.61 ± 0.14 | (+0.87, −0.50), 0.036 mm | 7.8 % |
+//! | all (12), 30 ± 10° | 13.1 ± 2.3 % | 15.5 ± 2.4 % | −0.63 ± 0.14 | (+0.86, −0.51), 0.037 mm | 7.8 % |
+//! | spectral `a` (2), 30 ± 10° | ∞ (`I` singular) | ∞ | — | (+0.92, −0.38) | 20 % |
+//! | fast (10), 30 ± 0.01° | 13.0 ± 2.1 % | 18.0 ± 3.0 % | −0.78 ± 0.09 | (+0.79, −0.62), 0.040 mm | 4.3 % |
+//! | all (12), 30 ± 0.01° | 11.5 ± 1.8 % | 17.5 ± 2.8 % | −0.76 ± 0.10 | (+0.75, −0.66), 0.036 mm | 3.1 % |
+//! | spectral `a` (2), 30 ± 0.01° | ∞ (rank one) | ∞ | — | (+0.74, −0.67) | 4.7 % |
+//!
+//! (last three rows: `… two-clearances 16 10 0.01 stencil`, the release angle known). The
+//! information matrix (fast, ±10°) is [[1525, 1314], [1314, 3063]] /mm²: eigenvalues 771 and
+//! 3 820 /mm². The well-seen direction is (+0.50, +0.87), a weighted sum of the clearances; the
+//! weak one trades cA against cB. The single-clearance bound computed the same way, 7.8 %,
+//! agrees with the fast estimator's measured scatter at A (RMS 7.1 %, [`super`]): the bound is
+//! reached there, so the features, not the estimator, are the limit. Knowing the release angle
+//! sharpens one clearance (7.8 → 4.3 %, spectral `a` 20 → 4.7 %: the release window) but not two
+//! (cB 15 → 18 %): the ambiguity between the joints, not the release, limits.
+//!
+//! Surface (fast features, expected `ln L(g) − ln L(ref)` for a 10 s recording of the
+//! reference; grid points above −3.0 are not excluded at 95 %), the 10 s stencil:
+//!
+//! | cA \ cB (mm) | 0.10 | 0.15 | 0.20 |
+//! |---|---|---|---|
+//! | 0.20 | −13.9 | −2.9 | −1.5 |
+//! | 0.25 | −7.1 | 0 | −1.3 |
+//! | 0.30 | −5.1 | −1.0 | −10.1 |
+//!
+//! and the whole grid from 12 runs of 5 s scaled to 10 s (`… two-clearances 12 5 10`, 6 min;
+//! the scaling is an approximation: those runs give CRB 8.9 / 15.2 % but correlation ≈ 0,
+//! so the shape of the information changes with the length of the run, and the 10 s figures
+//! above are the ones to use):
+//!
+//! | cA \ cB (mm) | 0.05 | 0.10 | 0.15 | 0.20 | 0.25 |
+//! |---|---|---|---|---|---|
+//! | 0.15 | −28.9 | −25.0 | −18.5 | −16.6 | −13.6 |
+//! | 0.20 | −18.2 | −12.1 | −7.2 | −5.8 | −2.8 |
+//! | 0.25 | −11.0 | −5.6 | 0 | −0.9 | −1.7 |
+//! | 0.30 | −4.2 | −8.4 | −0.6 | −1.7 | −4.4 |
+//! | 0.35 | −4.7 | −6.5 | −5.2 | −4.5 | −12.3 |
+//!
+//! Six of 25 grid points are not excluded, along a ridge from (0.20, 0.25) through the reference
+//! to (0.30, 0.15) mm: cA −20 … +20 % with cB +67 … 0 %. With the spectral `a` alone, 22 of 25.
+//! A CRB of 15 % for cB means that even an efficient, unbiased estimator puts only about half
+//! of its 10 s estimates of cB within ±10 %; reaching a 10 % std needs ~2.3× the information
+//! (a ~25 s recording if it adds up like independent windows), ±10 % at 2σ ~9× (~90 s), or a
+//! feature that sees the (cA − cB) direction.
+//!
+//! Checked by `crank_identify2` (`cargo test --release -p edgekf-sim --test crank_identify2 --
+//! --nocapture`, 16 s): a coarse design (8 runs of 2 s per point, ±10°, covariance scaled to
+//! 10 s) gives CRB cA 7.7 %, cB 13.8 %, correlation −0.35, single clearance 5.9 %; the test
+//! checks the matrix's symmetry and semidefiniteness, the single-clearance bound against the
+//! fast estimator's scatter, and computes the verdict.
+//!
+//! Method. The dynamics are chaotic, so a feature of one run is a draw from a distribution; the
+//! ensemble of runs at a clearance pair is the measurement model.
+//!
+//! * Runs: [`Design::runs`] per grid point, run `r` released at `30° + spread · u_r`
+//!   (`u_r` uniform in −1…1) with noise seed `seed_base + r`; the **same** `(angle, seed)` list at
+//!   every grid point (common random numbers, so that differences between grid points are
+//!   paired). Adaptive integrator at the configuration's tolerance, the configured sensor noise.
+//! * Features per run ([`FEATURE_NAMES`]): the fast model's ten ([`super::model::feature_vector`],
+//!   window means in logarithms) and the paper's spectral feature `a` ([`crate::systems::crank::feature`])
+//!   in logarithms, of the release window and averaged over the later windows. Three sets are
+//!   analysed ([`FeatureSet`]).
+//! * Covariance `Σ`: pooled within-point covariance of the reference point and its four
+//!   neighbours (the Fisher stencil), `n = 5 (runs − 1)` degrees of freedom; its inverse is
+//!   unbiased by the Wishart factor `(n − p − 1) / n`. Runs shorter than the recording
+//!   ([`Design::record_s`]) have their covariance scaled by `duration / record_s` (features
+//!   are window means: their variance falls as 1 / the number of windows).
+//! * Surface: for each grid point `g`, the expected log-likelihood ratio of a recording from the
+//!   reference, `E ln L(g) − E ln L(ref) = −½ dᵀ Σ⁻¹ d` with `d = μ_g − μ_ref` (a common `Σ`);
+//!   `dᵀ Σ⁻¹ d` is unbiased for the ensembles' own error by subtracting `tr(Σ⁻¹ Cov d̂)`, `Cov d̂`
+//!   from the spread of the paired differences. Points above −3.0 (χ²₂ 95 %: 5.99 / 2) are not
+//!   excluded by a 10 s recording.
+//! * Fisher: `I = Jᵀ Σ⁻¹ J`, `J` the central differences of the ensemble means at the grid
+//!   neighbours (`±` [`Fisher::step`]), unbiased the same way (`E[Jᵢᵀ A Jₖ] = true + tr(A Cov(Jᵢ,
+//!   Jₖ))`); the covariance's own dependence on the clearance (`½ tr(Σ⁻¹∂Σ Σ⁻¹∂Σ)`) is left out.
+//!   Cramér–Rao bounds `√diag I⁻¹`, the correlation of the two estimates from `I⁻¹`, and the
+//!   eigenvector of the smallest eigenvalue of `I`: the direction in (cA, cB) the features do
+//!   not see.
+
+use super::model::feature_vector;
+use crate::systems::crank::config::Method;
+use crate::systems::crank::feature::window_features;
+use crate::systems::crank::{CrankConfig, Mechanism, SimOptions};
+use nalgebra::{DMatrix, DVector};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
+
+/// Number of features per run.
+pub const FEATURES: usize = super::model::FEATURES + 2;
+
+/// The features of a run: the fast model's ten, then `ln a` of the release window and of the
+/// mean over the later windows.
+///
+/// ```
+/// use edgekf_sim::systems::crank::estimate::identify2::FEATURE_NAMES;
+/// assert_eq!((FEATURE_NAMES[0], FEATURE_NAMES[9]), ("ln_rms", "ln_diff_median"));
+/// assert_eq!(&FEATURE_NAMES[10..], ["ln_a_release", "ln_a_later"]);
+/// ```
+pub const FEATURE_NAMES: [&str; FEATURES] = {
+    let mut names = [""; FEATURES];
+    let mut i = 0;
+    while i < super::model::FEATURES {
+        names[i] = super::model::FEATURE_NAMES[i];
+        i += 1;
+    }
+    names[FEATURES - 2] = "ln_a_release";
+    names[FEATURES - 1] = "ln_a_later";
+    names
+};
+
+/// Which features a likelihood or Fisher matrix uses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FeatureSet {
+    /// The fast model's ten.
+    Fast,
+    /// The paper's spectral `a`: release window and later windows.
+    Spectral,
+    /// All twelve.
+    All,
+}
+
+impl FeatureSet {
+    /// The three sets.
+    pub const ALL: [FeatureSet; 3] = [FeatureSet::Fast, FeatureSet::Spectral, FeatureSet::All];
+
+    /// Indices into [`FEATURE_NAMES`].
+    pub fn indices(self) -> Vec<usize> {
+        match self {
+            FeatureSet::Fast => (0..10).collect(),
+            FeatureSet::Spectral => vec![10, 11],
+            FeatureSet::All => (0..FEATURES).collect(),
+        }
+    }
+
+    /// A short name.
+    pub fn name(self) -> &'static str {
+        match self {
+            FeatureSet::Fast => "fast (10)",
+            FeatureSet::Spectral => "spectral a (2)",
+            FeatureSet::All => "all (12)",
+        }
+    }
+}
+
+/// How the ensembles are simulated.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Design {
+    /// Length of each run, s.
+    pub duration: f64,
+    /// The recording the figures are for, s (covariance × `duration / record_s`).
+    pub record_s: f64,
+    /// Runs per grid point.
+    pub runs: usize,
+    /// Release angle of the centre, degrees.
+    pub release_deg: f64,
+    /// Release angles are drawn uniformly within `± release_spread_deg` of the centre.
+    pub release_spread_deg: f64,
+    /// Seed of the angle draws and base of the noise seeds.
+    pub seed_base: u64,
+    /// Threads.
+    pub threads: usize,
+}
+
+impl Default for Design {
+    /// 16 runs of 10 s per point released within 30 ± 10°, for a 10 s recording, 2 threads.
+    fn default() -> Self {
+        Self {
+            duration: 10.0,
+            record_s: 10.0,
+            runs: 16,
+            release_deg: 30.0,
+            release_spread_deg: 10.0,
+            seed_base: 900_000,
+            threads: 2,
+        }
+    }
+}
+
+impl Design {
+    /// `(release angle, noise seed)` of every run (the same at every grid point).
+    pub fn draws(&self) -> Vec<(f64, u64)> {
+        let mut rng = ChaCha8Rng::seed_from_u64(self.seed_base);
+        (0..self.runs)
+            .map(|r| {
+                let u: f64 = rng.gen_range(-1.0..1.0);
+                (self.release_deg + self.release_spread_deg * u, self.seed_base + r as u64)
+            })
+            .collect()
+    }
+}
+
+/// The features of one run ([`FEATURE_NAMES`]) with clearances `clearance` (m), adaptive
+/// integrator.
+pub fn run_features(
+    base: &CrankConfig,
+    clearance: [Option<f64>; 3],
+    release_deg: f64,
+    seed: u64,
+    duration: f64,
+) -> anyhow::Result<[f64; FEATURES]> {
+    let mut cfg = *base;
+    cfg.release.crank_angle_deg = release_deg;
+    cfg.integrator.method = Method::Adaptive;
+    let m = Mechanism::new(&cfg, clearance)?;
+    let rec = m.simulate(&SimOptions { seed, ..SimOptions::from_config(&cfg, duration) })?;
+    let rate = cfg.sensor.sample_rate;
+    let fast = feature_vector(&rec.crank_alpha, rate, 0.25);
+    let a: Vec<f64> =
+        window_features(&rec.crank_alpha, rate, 0.25).iter().map(|f| f.map_or(f64::NAN, |f| f.a)).collect();
+    if a.len() < 2 || a.iter().any(|v| !(v.is_finite() && *v > 0.0)) {
+        anyhow::bail!("run of {duration} s: the spectral feature needs two windows with a fit");
+    }
+    let mut out = [0.0; FEATURES];
+    out[..10].copy_from_slice(&fast.values);
+    out[10] = a[0].ln();
+    out[11] = (a[1..].iter().sum::<f64>() / (a.len() - 1) as f64).ln();
+    Ok(out)
+}
+
+/// The runs of one grid point.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Ensemble {
+    /// Clearances A, B, C, m.
+    pub clearance: [Option<f64>; 3],
+    /// Features of each run, in the order of [`Design::draws`].
+    pub features: Vec<[f64; FEATURES]>,
+}
+
+impl Ensemble {
+    /// Mean of the features `idx`.
+    pub fn mean(&self, idx: &[usize]) -> DVector<f64> {
+        let n = self.features.len() as f64;
+        DVector::from_iterator(idx.len(), idx.iter().map(|&i| self.features.iter().map(|f| f[i]).sum::<f64>() / n))
+    }
+}
+
+/// Simulates every grid point's ensemble on [`Design::threads`] threads; `progress(done, total)`.
+pub fn simulate_ensembles(
+    base: &CrankConfig,
+    points: &[[Option<f64>; 3]],
+    design: &Design,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> anyhow::Result<Vec<Ensemble>> {
+    let draws = design.draws();
+    let jobs: Vec<(usize, usize)> = (0..points.len()).flat_map(|p| (0..draws.len()).map(move |r| (p, r))).collect();
+    let next = AtomicUsize::new(0);
+    let done = AtomicUsize::new(0);
+    let out: Mutex<Vec<Option<anyhow::Result<[f64; FEATURES]>>>> = Mutex::new(jobs.iter().map(|_| None).collect());
+    std::thread::scope(|s| {
+        for _ in 0..design.threads.max(1) {
+            s.spawn(|| loop {
+                let k = next.fetch_add(1, Ordering::Relaxed);
+                let Some(&(p, r)) = jobs.get(k) else { break };
+                let (angle, seed) = draws[r];
+                let f = run_features(base, points[p], angle, seed, design.duration);
+                out.lock().unwrap_or_else(|e| e.into_inner())[k] = Some(f);
+                progress(done.fetch_add(1, Ordering::Relaxed) + 1, jobs.len());
+            });
+        }
+    });
+    let mut feats = out.into_inner().unwrap_or_else(|e| e.into_inner()).into_iter();
+    points
+        .iter()
+        .map(|&clearance| {
+            let features = (0..draws.len())
+                .map(|_| feats.next().flatten().unwrap_or_else(|| Err(anyhow::anyhow!("run not simulated"))))
+                .collect::<anyhow::Result<Vec<_>>>()?;
+            Ok(Ensemble { clearance, features })
+        })
+        .collect()
+}
+
+/// Pooled within-point covariance of the features `idx` over `ensembles`, and its degrees of
+/// freedom.
+pub fn pooled_covariance(ensembles: &[&Ensemble], idx: &[usize]) -> (DMatrix<f64>, usize) {
+    let p = idx.len();
+    let mut s = DMatrix::zeros(p, p);
+    let mut dof = 0;
+    for e in ensembles {
+        let mu = e.mean(idx);
+        for f in &e.features {
+            let x = DVector::from_iterator(p, idx.iter().map(|&i| f[i])) - &mu;
+            s += &x * x.transpose();
+        }
+        dof += e.features.len().saturating_sub(1);
+    }
+    (s / dof.max(1) as f64, dof)
+}
+
+/// Per-run paired differences `(b − a) / h` of the features `idx` (runs in the same order).
+fn paired(a: &Ensemble, b: &Ensemble, idx: &[usize], h: f64) -> Vec<DVector<f64>> {
+    a.features
+        .iter()
+        .zip(&b.features)
+        .map(|(x, y)| DVector::from_iterator(idx.len(), idx.iter().map(|&i| (y[i] - x[i]) / h)))
+        .collect()
+}
+
+/// Mean of vectors and the covariance of that mean.
+fn mean_and_error(v: &[DVector<f64>]) -> (DVector<f64>, DMatrix<f64>) {
+    let n = v.len();
+    let p = v[0].len();
+    let mu = v.iter().fold(DVector::zeros(p), |s, x| s + x) / n as f64;
+    let mut c = DMatrix::zeros(p, p);
+    for x in v {
+        let e = x - &mu;
+        c += &e * e.transpose();
+    }
+    (mu, c / ((n - 1).max(1) * n) as f64)
+}
+
+/// Cross-covariance of the means of two paired lists.
+fn cross_error(a: &[DVector<f64>], b: &[DVector<f64>]) -> DMatrix<f64> {
+    let n = a.len();
+    let (ma, _) = mean_and_error(a);
+    let (mb, _) = mean_and_error(b);
+    let mut c = DMatrix::zeros(ma.len(), ma.len());
+    for (x, y) in a.iter().zip(b) {
+        c += (x - &ma) * (y - &mb).transpose();
+    }
+    c / ((n - 1).max(1) * n) as f64
+}
+
+/// The inverse of the covariance for a `record_s` recording: `Σ` scaled by `duration /
+/// record_s`, inverted, times the Wishart factor `(n − p − 1) / n`. `None` if singular or too
+/// few degrees of freedom.
+pub fn precision(cov: &DMatrix<f64>, dof: usize, design: &Design) -> Option<DMatrix<f64>> {
+    let p = cov.nrows();
+    if dof < p + 2 {
+        return None;
+    }
+    let scaled = cov * (design.duration / design.record_s);
+    let inv = scaled.cholesky()?.inverse();
+    Some(inv * ((dof - p - 1) as f64 / dof as f64))
+}
+
+/// Fisher information over the clearances of a stencil, and what follows from it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Fisher {
+    /// Features used.
+    pub set: FeatureSet,
+    /// True values of the parameters, m.
+    pub truth: Vec<f64>,
+    /// Half-width of the central differences per parameter, m.
+    pub step: Vec<f64>,
+    /// Information matrix, 1/m² (bias-corrected), for a recording of [`Design::record_s`].
+    pub info: DMatrix<f64>,
+    /// The same without the correction for the ensembles' own error.
+    pub info_raw: DMatrix<f64>,
+    /// Degrees of freedom of the pooled covariance.
+    pub dof: usize,
+}
+
+impl Fisher {
+    /// `I⁻¹` (`None` if `I` is not positive definite).
+    pub fn bound_covariance(&self) -> Option<DMatrix<f64>> {
+        let c = self.info.clone().cholesky()?;
+        Some(c.inverse())
+    }
+
+    /// Cramér–Rao bounds relative to the true values (∞ if `I` is not positive definite).
+    pub fn crb_relative(&self) -> Vec<f64> {
+        match self.bound_covariance() {
+            Some(c) => (0..self.truth.len()).map(|i| c[(i, i)].sqrt() / self.truth[i]).collect(),
+            None => vec![f64::INFINITY; self.truth.len()],
+        }
+    }
+
+    /// Correlation of the first two estimates from `I⁻¹` (NaN with one parameter or a singular
+    /// `I`).
+    pub fn correlation(&self) -> f64 {
+        match (self.truth.len(), self.bound_covariance()) {
+            (2.., Some(c)) => c[(0, 1)] / (c[(0, 0)] * c[(1, 1)]).sqrt(),
+            _ => f64::NAN,
+        }
+    }
+
+    /// Eigenvalues of `I` (ascending) and the unit eigenvector of the smallest.
+    pub fn weakest(&self) -> (Vec<f64>, Vec<f64>) {
+        let e = self.info.clone().symmetric_eigen();
+        let mut order: Vec<usize> = (0..e.eigenvalues.len()).collect();
+        order.sort_by(|a, b| e.eigenvalues[*a].total_cmp(&e.eigenvalues[*b]));
+        let mut v: Vec<f64> = e.eigenvectors.column(order[0]).iter().copied().collect();
+        if v[0] < 0.0 {
+            v.iter_mut().for_each(|x| *x = -*x);
+        }
+        (order.iter().map(|&i| e.eigenvalues[i]).collect(), v)
+    }
+
+    /// Largest relative asymmetry `|I − Iᵀ| / max |I|` (0 by construction; a check).
+    pub fn asymmetry(&self) -> f64 {
+        let m = self.info.amax().max(1e-300);
+        (&self.info - self.info.transpose()).amax() / m
+    }
+}
+
+/// Fisher information at `centre` from the neighbour pairs `(minus, plus)` per parameter, whose
+/// half-distances are `step` (m); `truth` the centre's parameters (m). The covariance is pooled
+/// over the centre and every neighbour.
+pub fn fisher(
+    centre: &Ensemble,
+    neighbours: &[(&Ensemble, &Ensemble)],
+    step: &[f64],
+    truth: &[f64],
+    set: FeatureSet,
+    design: &Design,
+) -> Option<Fisher> {
+    let idx = set.indices();
+    let mut all = vec![centre];
+    for (m, p) in neighbours {
+        all.push(m);
+        all.push(p);
+    }
+    let (cov, dof) = pooled_covariance(&all, &idx);
+    let a = precision(&cov, dof, design)?;
+    let diffs: Vec<Vec<DVector<f64>>> =
+        neighbours.iter().zip(step).map(|((m, p), h)| paired(m, p, &idx, 2.0 * h)).collect();
+    let k = neighbours.len();
+    let j: Vec<DVector<f64>> = diffs.iter().map(|d| mean_and_error(d).0).collect();
+    let mut info = DMatrix::zeros(k, k);
+    let mut info_raw = DMatrix::zeros(k, k);
+    for r in 0..k {
+        for c in 0..k {
+            let raw = (j[r].transpose() * &a * &j[c])[(0, 0)];
+            let bias = (&a * cross_error(&diffs[r], &diffs[c])).trace();
+            info_raw[(r, c)] = raw;
+            info[(r, c)] = raw - bias;
+        }
+    }
+    // Symmetrise the rounding (the bias terms are symmetric up to it).
+    let info = (&info + info.transpose()) * 0.5;
+    Some(Fisher { set, truth: truth.to_vec(), step: step.to_vec(), info, info_raw, dof })
+}
+
+/// Expected log-likelihood ratio `E ln L(g) − E ln L(ref)` of a recording from `reference`
+/// against each of `grid` (bias-corrected for the ensembles' error), with the precision `a`
+/// ([`precision`]) of the features `idx`.
+pub fn surface(reference: &Ensemble, grid: &[Ensemble], idx: &[usize], a: &DMatrix<f64>) -> Vec<f64> {
+    grid.iter()
+        .map(|g| {
+            if g.clearance == reference.clearance {
+                return 0.0;
+            }
+            let d = paired(reference, g, idx, 1.0);
+            let (mu, err) = mean_and_error(&d);
+            let q = (mu.transpose() * a * &mu)[(0, 0)] - (a * err).trace();
+            -0.5 * q
+        })
+        .collect()
+}
+
+/// The standard analysis: a grid `ca × cb` (m) with the reference at grid indices
+/// `(ia, ib)`, the Fisher matrices of each feature set over (cA, cB) there, and — when
+/// `single` is given, ensembles at A alone `[cA − h, cA, cA + h]` — the one-parameter Fisher of
+/// the single-clearance case.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Analysis {
+    /// Clearances at A of the grid, m.
+    pub ca: Vec<f64>,
+    /// Clearances at B, m.
+    pub cb: Vec<f64>,
+    /// Reference indices into `ca`, `cb`.
+    pub reference: (usize, usize),
+    /// Ensembles, `ca`-major (`ensembles[i * cb.len() + j]`).
+    pub ensembles: Vec<Ensemble>,
+    /// Single-clearance ensembles at A (`cA − h, cA, cA + h`, B and C tight), if simulated.
+    pub single: Vec<Ensemble>,
+    /// The design.
+    pub design: Design,
+}
+
+impl Analysis {
+    /// Simulates the grid (and the single-clearance stencil if `single`).
+    pub fn simulate(
+        base: &CrankConfig,
+        ca: &[f64],
+        cb: &[f64],
+        reference: (usize, usize),
+        single: bool,
+        design: &Design,
+        progress: &(dyn Fn(usize, usize) + Sync),
+    ) -> anyhow::Result<Self> {
+        let (ia, ib) = reference;
+        if !(1..ca.len().saturating_sub(1)).contains(&ia) || !(1..cb.len().saturating_sub(1)).contains(&ib) {
+            anyhow::bail!("the reference must have a grid neighbour on each side in cA and cB");
+        }
+        let mut points: Vec<[Option<f64>; 3]> =
+            ca.iter().flat_map(|&a| cb.iter().map(move |&b| [Some(a), Some(b), None])).collect();
+        if single {
+            points.extend([ca[ia - 1], ca[ia], ca[ia + 1]].map(|a| [Some(a), None, None]));
+        }
+        let mut ensembles = simulate_ensembles(base, &points, design, progress)?;
+        let single = ensembles.split_off(ca.len() * cb.len());
+        Ok(Self { ca: ca.to_vec(), cb: cb.to_vec(), reference, ensembles, single, design: *design })
+    }
+
+    /// The ensemble at grid indices `(i, j)`.
+    pub fn at(&self, i: usize, j: usize) -> &Ensemble {
+        &self.ensembles[i * self.cb.len() + j]
+    }
+
+    /// Fisher over (cA, cB) at the reference (central differences over the grid neighbours;
+    /// the grid must be evenly spaced there).
+    pub fn fisher2(&self, set: FeatureSet) -> Option<Fisher> {
+        let (i, j) = self.reference;
+        let ha = 0.5 * (self.ca[i + 1] - self.ca[i - 1]);
+        let hb = 0.5 * (self.cb[j + 1] - self.cb[j - 1]);
+        fisher(
+            self.at(i, j),
+            &[(self.at(i - 1, j), self.at(i + 1, j)), (self.at(i, j - 1), self.at(i, j + 1))],
+            &[ha, hb],
+            &[self.ca[i], self.cb[j]],
+            set,
+            &self.design,
+        )
+    }
+
+    /// Fisher over cA alone with A the only clearance (`None` without the single stencil).
+    pub fn fisher_single(&self, set: FeatureSet) -> Option<Fisher> {
+        let [m, c, p] = self.single.as_slice() else { return None };
+        let h = 0.5 * (p.clearance[0]? - m.clearance[0]?);
+        fisher(c, &[(m, p)], &[h], &[c.clearance[0]?], set, &self.design)
+    }
+
+    /// The surface ([`surface`]) of the reference against the grid, `ca`-major, with the
+    /// covariance pooled over the Fisher stencil.
+    pub fn surface(&self, set: FeatureSet) -> Option<Vec<f64>> {
+        let (i, j) = self.reference;
+        let idx = set.indices();
+        let stencil = [self.at(i, j), self.at(i - 1, j), self.at(i + 1, j), self.at(i, j - 1), self.at(i, j + 1)];
+        let (cov, dof) = pooled_covariance(&stencil, &idx);
+        let a = precision(&cov, dof, &self.design)?;
+        Some(surface(self.at(i, j), &self.ensembles, &idx, &a))
+    }
+
+    /// The analysis with the runs `runs` (indices into [`Design::draws`], repeats allowed) at
+    /// every point: a resample (jackknife, bootstrap) that keeps the grid points paired.
+    pub fn resampled(&self, runs: &[usize]) -> Self {
+        let pick =
+            |e: &Ensemble| Ensemble { clearance: e.clearance, features: runs.iter().map(|&r| e.features[r]).collect() };
+        Self {
+            ensembles: self.ensembles.iter().map(pick).collect(),
+            single: self.single.iter().map(pick).collect(),
+            ..self.clone()
+        }
+    }
+
+    /// Delete-one jackknife over the runs (the same run left out at every point): standard
+    /// errors of the relative bounds of cA and cB and of the correlation (NaN when a
+    /// leave-one-out `I` is not positive definite).
+    pub fn jackknife(&self, set: FeatureSet) -> [f64; 3] {
+        let n = self.ensembles.first().map_or(0, |e| e.features.len());
+        let mut v: [Vec<f64>; 3] = Default::default();
+        for leave in 0..n {
+            let runs: Vec<usize> = (0..n).filter(|&r| r != leave).collect();
+            let f = self.resampled(&runs).fisher2(set);
+            let (crb, rho) = f.map_or((vec![f64::NAN; 2], f64::NAN), |f| (f.crb_relative(), f.correlation()));
+            v[0].push(crb[0]);
+            v[1].push(crb[1]);
+            v[2].push(rho);
+        }
+        v.map(|x| {
+            let m = x.iter().sum::<f64>() / x.len() as f64;
+            let se = ((x.len() as f64 - 1.0) / x.len() as f64 * x.iter().map(|y| (y - m).powi(2)).sum::<f64>()).sqrt();
+            if se.is_finite() {
+                se
+            } else {
+                f64::NAN
+            }
+        })
+    }
+
+    /// A text report: per feature set the surface table, the Fisher matrix, the bounds, the
+    /// correlation and the weakest direction; the single-clearance bound.
+    pub fn report(&self) -> String {
+        let mut s = String::new();
+        let (ri, rj) = self.reference;
+        let d = &self.design;
+        s += &format!(
+            "grid cA {:?} mm × cB {:?} mm, reference A {:.2} + B {:.2} mm; {} runs of {} s per point released {}° ± {}°, for a {} s recording\n",
+            self.ca.iter().map(|c| c * 1e3).collect::<Vec<_>>(),
+            self.cb.iter().map(|c| c * 1e3).collect::<Vec<_>>(),
+            self.ca[ri] * 1e3,
+            self.cb[rj] * 1e3,
+            d.runs,
+            d.duration,
+            d.release_deg,
+            d.release_spread_deg,
+            d.record_s
+        );
+        for set in FeatureSet::ALL {
+            s += &format!("\n== features: {} ==\n", set.name());
+            if let Some(sf) = self.surface(set) {
+                s += "expected ln L(grid) − ln L(reference), 10 s recording of the reference (rows cA, columns cB, mm):\n";
+                s += &format!(
+                    "  cA\\cB {}\n",
+                    self.cb.iter().map(|c| format!("{:>8.2}", c * 1e3)).collect::<Vec<_>>().join("")
+                );
+                for (i, a) in self.ca.iter().enumerate() {
+                    s += &format!(
+                        "  {:5.2} {}\n",
+                        a * 1e3,
+                        (0..self.cb.len()).map(|j| format!("{:>8.1}", sf[i * self.cb.len() + j])).collect::<String>()
+                    );
+                }
+                let inside = sf.iter().filter(|v| **v > -3.0).count();
+                s += &format!("  grid points not excluded at 95 % (> −3.0): {inside} of {}\n", sf.len());
+            }
+            match self.fisher2(set) {
+                Some(f) => {
+                    s += &fisher_text(&f);
+                    let [a, b, r] = self.jackknife(set);
+                    s += &format!(
+                        "  jackknife over the runs: ± {:.1} % (cA), ± {:.1} % (cB), ± {:.2} (correlation)\n",
+                        a * 100.0,
+                        b * 100.0,
+                        r
+                    );
+                }
+                None => s += "  (too few runs for this many features)\n",
+            }
+            if let Some(f) = self.fisher_single(set) {
+                let crb = f.crb_relative()[0];
+                s += &format!(
+                    "  single clearance (A {:.2} mm alone, ±{:.2} mm): I = {:.3e} /m² → CRB {:.1} %\n",
+                    f.truth[0] * 1e3,
+                    f.step[0] * 1e3,
+                    f.info[(0, 0)],
+                    crb * 100.0
+                );
+            }
+        }
+        s
+    }
+}
+
+/// The figures of a two-parameter Fisher matrix as text.
+pub fn fisher_text(f: &Fisher) -> String {
+    let crb = f.crb_relative();
+    let (ev, v) = f.weakest();
+    let i = &f.info;
+    let mut s = format!(
+        "  Fisher (1/mm², bias-corrected; raw) [[{:.1}, {:.1}], [{:.1}, {:.1}]]; raw [[{:.1}, {:.1}], [·, {:.1}]]; covariance dof {}\n",
+        i[(0, 0)] * 1e-6,
+        i[(0, 1)] * 1e-6,
+        i[(1, 0)] * 1e-6,
+        i[(1, 1)] * 1e-6,
+        f.info_raw[(0, 0)] * 1e-6,
+        f.info_raw[(0, 1)] * 1e-6,
+        f.info_raw[(1, 1)] * 1e-6,
+        f.dof
+    );
+    s += &format!(
+        "  CRB cA {:.1} %, cB {:.1} %; correlation {:+.3}; eigenvalues {:.2e}, {:.2e} /mm²; weakest direction (cA, cB) = ({:+.3}, {:+.3}), std along it {:.3} mm\n",
+        crb[0] * 100.0,
+        crb[1] * 100.0,
+        f.correlation(),
+        ev[0] * 1e-6,
+        ev[1] * 1e-6,
+        v[0],
+        v[1],
+        if ev[0] > 0.0 { 1e3 / ev[0].sqrt() } else { f64::INFINITY }
+    );
+    s
+}

@@ -1,0 +1,51 @@
+//! One folder per system: its reference simulator, estimators, residual-loop system, command
+//! line, demo part and configuration types. [`REGISTRY`] is the one table that connects them to
+//! the `edgekf` command line; adding a system is its folder plus one row there.
+//!
+//! * [`oscillator`]: a single mode driven by a harmonic force (the demo's first part);
+//! * [`rotor`]: a flexible rotor on bearings (FE reference, phasor AKF virtual sensing, the
+//!   residual loop);
+//! * [`crank`]: a slider-crank with revolute clearance joints (multibody reference, the paper's
+//!   UKF and the fast estimator the node runs).
+
+pub mod crank;
+pub mod oscillator;
+pub mod rotor;
+
+use crate::cli::registry::{dispatch, subcommands, DemoPart, LoopEntry, SystemEntry};
+
+/// Every system of `edgekf`, in the order of `edgekf --help` and of the demo's parts.
+pub const REGISTRY: &[SystemEntry] = &[
+    SystemEntry {
+        name: "oscillator",
+        about: "Single mode driven by a harmonic force: simulate data, estimate the force",
+        command: subcommands::<oscillator::cli::OscillatorCommand>,
+        run: |m| dispatch(m, oscillator::cli::run),
+        close_loop: None,
+        demo: Some(DemoPart { closes_loop: false, run: oscillator::cli::demo }),
+    },
+    SystemEntry {
+        name: "rotor",
+        about: "Flexible rotor (FE model): natural frequencies and whirl, time response, virtual sensing",
+        command: subcommands::<rotor::cli::RotorCommand>,
+        run: |m| dispatch(m, rotor::cli::run),
+        close_loop: Some(LoopEntry {
+            about: "Rotor: run the virtual-sensing filter on a data file, read its innovations, add the effects \
+                    the data asks for (sensor bias, scale or delay; a force at k× the running speed; a wrong disk, \
+                    shaft or bearing parameter; an extra mode; a bearing defect line; an unknown input) and that \
+                    pay for their parameters (BIC) in both halves of the run, and report before/after \
+                    (report.json, report.html)",
+            args: <rotor::cli::RotorLoopArgs as clap::Args>::augment_args,
+            run: rotor::cli::close_loop,
+        }),
+        demo: Some(DemoPart { closes_loop: true, run: rotor::cli::demo }),
+    },
+    SystemEntry {
+        name: "crank",
+        about: "Planar slider-crank with revolute clearance joints: simulate, estimate the clearance",
+        command: subcommands::<crank::cli::CrankCommand>,
+        run: |m| dispatch(m, crank::cli::run),
+        close_loop: None,
+        demo: Some(DemoPart { closes_loop: false, run: crank::cli::demo }),
+    },
+];

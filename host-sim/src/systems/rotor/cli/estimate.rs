@@ -1,0 +1,246 @@
+//! `edgekf rotor estimate` and `edgekf rotor export`: the work behind the commands (the
+//! argument parsing lives with the other rotor commands).
+
+use crate::systems::rotor::estimate::estimate::{discrete, run_with, Estimates, FilterPrecision, RunOptions};
+use crate::systems::rotor::estimate::reduce::{reduce, ForceModel, ReducedRotor, Tuning};
+use crate::io::data::{self, DataFile};
+use crate::systems::rotor::{RotorConfig, RotorModel};
+use anyhow::{bail, Context, Result};
+use edgekf::export::{write_matrix, write_model, write_steady_state};
+use edgekf::filter::solve_riccati;
+use std::path::Path;
+
+/// Options of `edgekf rotor estimate`.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct EstimateOptions {
+    /// The chip's arithmetic.
+    pub f32: bool,
+    /// Modes kept.
+    pub modes: usize,
+    /// The paper's random-walk forces.
+    pub random_walk: bool,
+    /// [`Tuning::robust`] instead of the default tuning.
+    pub robust: bool,
+    /// Switch to the steady-state gain at this time, s.
+    pub steady_after: Option<f64>,
+}
+
+fn load(config: &Path, modes: usize, random_walk: bool) -> Result<(RotorModel, ReducedRotor)> {
+    load_tuned(config, modes, random_walk, false)
+}
+
+fn load_tuned(config: &Path, modes: usize, random_walk: bool, robust: bool) -> Result<(RotorModel, ReducedRotor)> {
+    let cfg = RotorConfig::load(config).with_context(|| format!("{}: cannot load the rotor", config.display()))?;
+    let model = RotorModel::from_config(&cfg)?;
+    let force_model = if random_walk { ForceModel::RandomWalk } else { ForceModel::Phasor };
+    let base = if robust { Tuning::robust() } else { Tuning::default() };
+    let tuning = Tuning { modes, force_model, ..base };
+    let red = reduce(&model, cfg.operation.speed, &tuning)?;
+    Ok((model, red))
+}
+
+/// RMS of `est − truth` over samples with `t ≥ t0` (NaN if none).
+fn rms_error(t: &[f64], est: &[f64], truth: &[f64], t0: f64) -> f64 {
+    let (mut s, mut n) = (0.0, 0usize);
+    for k in 0..t.len().min(est.len()).min(truth.len()) {
+        if t[k] >= t0 && truth[k].is_finite() {
+            s += (est[k] - truth[k]).powi(2);
+            n += 1;
+        }
+    }
+    if n == 0 {
+        f64::NAN
+    } else {
+        (s / n as f64).sqrt()
+    }
+}
+
+/// Runs the virtual-sensing filter over a data file; prints notices and a summary, writes the
+/// estimates if asked.
+pub fn estimate(config: &Path, data_path: &Path, out: Option<&Path>, options: &EstimateOptions) -> Result<()> {
+    let (model, red) = load_tuned(config, options.modes, options.random_walk, options.robust)?;
+    let known: Vec<String> = red.channels.clone();
+    let known_refs: Vec<&str> = known.iter().map(String::as_str).collect();
+    let (file, report) = data::read(data_path, &known_refs)?;
+    eprintln!("{}: {report}", data_path.display());
+    let expected = red.sample_rate;
+    if (report.timing.sample_rate - expected).abs() > 0.01 * expected {
+        bail!(
+            "{}: sampled at {:.3} Hz, the configuration says {expected} Hz ([operation] sample_rate)",
+            data_path.display(),
+            report.timing.sample_rate
+        );
+    }
+    let precision = if options.f32 { FilterPrecision::F32 } else { FilterPrecision::F64 };
+    let est = run_with(&red, &file, precision, &RunOptions { steady_after: options.steady_after })?;
+    print_summary(&model, &red, &file, &est, precision);
+    if let Some(out) = out {
+        write_estimates(out, &est)?;
+        println!("wrote {}", out.display());
+    }
+    Ok(())
+}
+
+fn print_summary(model: &RotorModel, red: &ReducedRotor, file: &DataFile, est: &Estimates, precision: FilterPrecision) {
+    println!(
+        "rotor virtual sensing ({:?}): {} modes ({:.1}–{:.1} Hz), {} states, forces at nodes {:?}, speed {} rad/s",
+        precision,
+        red.frequencies_hz.len(),
+        red.frequencies_hz.first().copied().unwrap_or(0.0),
+        red.frequencies_hz.last().copied().unwrap_or(0.0),
+        red.states(),
+        red.force_nodes,
+        red.speed
+    );
+    println!("samples {}, missing {}, filter repairs {:?}", est.t.len(), est.missing, est.repairs);
+    for (i, name) in red.channels.iter().enumerate() {
+        let v: Vec<f64> = est.innovation[i].iter().copied().filter(|x| x.is_finite()).collect();
+        let rms = (v.iter().map(|x| x * x).sum::<f64>() / v.len().max(1) as f64).sqrt();
+        println!("innovation RMS {name}: {rms:.3e}");
+    }
+    let nis: Vec<f64> = est.nis.iter().copied().filter(|x| x.is_finite()).collect();
+    println!("NIS mean {:.3} (consistent: {})", nis.iter().sum::<f64>() / nis.len().max(1) as f64, red.channels.len());
+    let nodes = model.n_nodes();
+    let mut any_truth = false;
+    for node in 0..nodes {
+        for (d, dir) in ["x", "y"].iter().enumerate() {
+            let Some(truth) = file.column(&format!("truth_n{node}_{dir}")) else { continue };
+            any_truth = true;
+            let e = &est.displacement[2 * node + d];
+            if red.force_nodes.contains(&node) || red.channels.iter().any(|c| c == &format!("n{node}_{dir}")) {
+                println!(
+                    "n{node}_{dir}: RMS error {:.3} µm for t ≥ 1 s ({:.3} µm over the whole run)",
+                    rms_error(&est.t, e, truth, 1.0) * 1e6,
+                    rms_error(&est.t, e, truth, f64::NEG_INFINITY) * 1e6
+                );
+            }
+        }
+    }
+    if !any_truth {
+        println!("(no truth_ columns: errors not computed)");
+    }
+}
+
+fn write_estimates(out: &Path, est: &Estimates) -> Result<()> {
+    let mut names: Vec<&str> = est.displacement_names.iter().map(String::as_str).collect();
+    names.extend(est.force_names.iter().map(String::as_str));
+    let mut cols: Vec<&[f64]> = est.displacement.iter().map(Vec::as_slice).collect();
+    cols.extend(est.force.iter().map(Vec::as_slice));
+    data::write(out, &names, &est.t, &cols)?;
+    Ok(())
+}
+
+/// Writes the discrete reduced model and its steady-state gain as Rust constants
+/// (`ROTOR_A`, `_C`, `_Q`, `_R`, `_GAIN`, `_S`, and `ROTOR_DISK_*` output rows) for the firmware.
+pub fn export(config: &Path, out: &Path, modes: usize) -> Result<()> {
+    let text = export_text(config, modes)?;
+    std::fs::write(out, text).with_context(|| format!("writing {}", out.display()))?;
+    println!(
+        "wrote {}: discrete model (20 states, 4 sensors), steady-state gain, P0, disk and force rows",
+        out.display()
+    );
+    Ok(())
+}
+
+/// The Rust source [`export`] writes (the firmware's `src/generated/rotor.rs` is this text for
+/// `host-sim/configs/rotor_paper.toml`, which a cross-crate test checks).
+pub fn export_text(config: &Path, modes: usize) -> Result<String> {
+    let (_, red) = load(config, modes, false)?;
+    if (red.states(), red.c.nrows()) != (20, 4) {
+        bail!(
+            "the firmware build supports 20 states × 4 sensors; this configuration gives {} × {}",
+            red.states(),
+            red.c.nrows()
+        );
+    }
+    let model = discrete::<20, 4, 40>(&red)?;
+    let ss = solve_riccati(&model, 1e-12, 200_000).map_err(|e| anyhow::anyhow!("no steady-state gain: {e:?}"))?;
+    let mut text = format!(
+        "// Generated by `edgekf rotor export --config {}`: {} modes, forces at nodes {:?}, {} rad/s, {} Hz.\n\
+         // Sensors: {}. Steady-state gain after {} Riccati iterations. Do not edit.\n",
+        config.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default(),
+        modes,
+        red.force_nodes,
+        red.speed,
+        red.sample_rate,
+        red.channels.join(", "),
+        ss.iterations
+    );
+    let err = |_| anyhow::anyhow!("a model value is not finite");
+    write_model(&mut text, "ROTOR", &model).map_err(err)?;
+    write_steady_state(&mut text, "ROTOR", &ss).map_err(err)?;
+    // What the node reports: the disk nodes' x/y displacement (virtual sensors) and the forces.
+    let disks: Vec<usize> = red.force_nodes.clone();
+    if disks.len() != 2 {
+        bail!("the firmware build expects 2 unbalance nodes, found {:?}", disks);
+    }
+    let rows = |m: &nalgebra::DMatrix<f64>, idx: &[usize]| -> nalgebra::SMatrix<f64, 4, 20> {
+        nalgebra::SMatrix::from_fn(|i, j| m[(idx[i], j)])
+    };
+    let disk_rows = [2 * disks[0], 2 * disks[0] + 1, 2 * disks[1], 2 * disks[1] + 1];
+    let p0: nalgebra::SMatrix<f64, 20, 20> = nalgebra::SMatrix::from_fn(|i, j| red.p0[(i, j)]);
+    write_matrix(&mut text, "ROTOR", "P0", "Initial state covariance.", &p0).map_err(err)?;
+    let doc = format!("Displacement rows of the unbalance (disk) nodes {:?}: x, y of each, m.", disks);
+    write_matrix(&mut text, "ROTOR", "DISK", &doc, &rows(&red.displacement, &disk_rows)).map_err(err)?;
+    write_matrix(
+        &mut text,
+        "ROTOR",
+        "FORCE",
+        "Force rows: F_x, F_y of each disk node, N.",
+        &rows(&red.force, &[0, 1, 2, 3]),
+    )
+    .map_err(err)?;
+    Ok(text)
+}
+
+/// Tunes the filter on a simulated training record and reports it on held-out seeds
+/// (`edgekf rotor tune`).
+pub fn tune(config: &Path, likelihood: bool, seed: u64, duration: f64, budget: usize, modes: usize) -> Result<()> {
+    use crate::systems::rotor::estimate::tune::{held_out, tune, Objective, Optimiser};
+    let cfg = RotorConfig::load(config).with_context(|| format!("{}: cannot load the rotor", config.display()))?;
+    let model = RotorModel::from_config(&cfg)?;
+    let speed = cfg.operation.speed;
+    if !(duration.is_finite() && duration >= 0.5) {
+        bail!("--duration must be at least 0.5 s");
+    }
+    if budget < 16 {
+        bail!("--budget must be at least 16 evaluations");
+    }
+    let base = Tuning { modes, ..Tuning::default() };
+    let train = model
+        .simulate(&crate::systems::rotor::SimOptions { duration, seed, ..Default::default() })
+        .with_context(|| format!("{}: cannot simulate the training record", config.display()))?
+        .to_data_file();
+    let (objective, optimiser, label) = if likelihood {
+        (Objective::Likelihood, Optimiser::NelderMead { max_evals: budget }, "maximum likelihood (Nelder–Mead)")
+    } else {
+        let population = 12;
+        (
+            Objective::Compromise,
+            Optimiser::DifferentialEvolution { population, generations: budget / population - 1 },
+            "compromise Σ(1 − |R²|) (differential evolution)",
+        )
+    };
+    let start = std::time::Instant::now();
+    let r = tune(&model, speed, &base, &train, objective, optimiser, seed);
+    let seconds = start.elapsed().as_secs_f64();
+    println!(
+        "{}: {label} on seed {seed} ({duration} s): {} evaluations in {seconds:.1} s, objective {:.6e}",
+        config.display(),
+        r.evaluations,
+        r.value
+    );
+    println!(
+        "force_psd {:.3e} N²/s, modal_psd {:.3e}, measurement scale {:.3} (log10: {:.2}, {:.2}, {:.2})",
+        r.tuning.force_psd, r.tuning.modal_psd, r.tuning.measurement_scale, r.theta[0], r.theta[1], r.theta[2]
+    );
+    let seeds = [seed + 1, seed + 2, seed + 3];
+    let h = held_out(&model, &model, speed, &r.tuning, &seeds, 4.0)?;
+    println!(
+        "held out (seeds {seeds:?}, 4 s): disk-node RMS error {:.3} µm for t ≥ 1 s, NIS mean {:.2} (consistent: {})",
+        h.disk_rms * 1e6,
+        h.nis_mean,
+        cfg.sensors.len()
+    );
+    Ok(())
+}

@@ -1,0 +1,692 @@
+//! The rotor configuration file (TOML): shaft, disks, point masses, bearings, unbalances,
+//! sensors and operating point, with every unit in SI except `phase_deg`.
+//!
+//! Normative keys (what the rotor paper gives) are required; every other key has the default
+//! documented on its field. Unknown keys are refused, so a typo cannot silently fall back to a
+//! default. Numbers are checked after parsing ([`RotorConfig::validate`]) and every message names
+//! the offending entry, e.g. `disk[1].node = 40 is out of range: the shaft has nodes 0..=37`.
+//!
+//! ```
+//! use edgekf_sim::systems::rotor::RotorConfig;
+//! let cfg = RotorConfig::from_toml_str(r#"
+//!     [shaft]
+//!     length = 1.0
+//!     elements = 10
+//!     diameter = 0.02
+//!     young = 2.1e11
+//!     density = 7850.0
+//!     poisson = 0.3
+//!     [[bearing]]
+//!     node = 0
+//!     kxx = 1e8
+//!     kyy = 1e8
+//!     [[bearing]]
+//!     node = 10
+//!     kxx = 1e8
+//!     kyy = 1e8
+//! "#).unwrap();
+//! assert_eq!(cfg.n_nodes(), 11);
+//! assert_eq!(cfg.operation.sample_rate, 1000.0); // default
+//! let err = RotorConfig::from_toml_str("[shaft]\nlenght = 1.0\n").unwrap_err();
+//! assert!(err.to_string().contains("unknown field `lenght`"), "{err}");
+//! ```
+
+use super::bearing_geometry::BearingGeometry;
+use super::RotorError;
+use serde::Deserialize;
+use std::fmt;
+use std::path::Path;
+
+/// Most shaft elements a model may have: the matrices are dense, and the eigen decomposition of
+/// the 8·(elements+1) state matrix costs its size cubed (500 elements: a 4008² matrix, ~1 min).
+pub const MAX_ELEMENTS: usize = 500;
+
+/// A whole rotor and how it is run and measured.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RotorConfig {
+    /// The shaft (`[shaft]`).
+    pub shaft: ShaftConfig,
+    /// Rigid disks (`[[disk]]`).
+    #[serde(default, rename = "disk")]
+    pub disks: Vec<DiskConfig>,
+    /// Point masses (`[[mass]]`), e.g. a coupling.
+    #[serde(default, rename = "mass")]
+    pub masses: Vec<PointMassConfig>,
+    /// Linear bearings (`[[bearing]]`).
+    #[serde(default, rename = "bearing")]
+    pub bearings: Vec<BearingConfig>,
+    /// Unbalances (`[[unbalance]]`).
+    #[serde(default, rename = "unbalance")]
+    pub unbalances: Vec<UnbalanceConfig>,
+    /// Sensors (`[[sensor]]`), in the order of the data file's channels.
+    #[serde(default, rename = "sensor")]
+    pub sensors: Vec<SensorConfig>,
+    /// Operating point (`[operation]`); default: standstill, 1 kHz.
+    #[serde(default)]
+    pub operation: OperationConfig,
+    /// Noise levels of the virtual-sensing filter for this machine (`[filter]`); default: the
+    /// built-in tuning's.
+    #[serde(default)]
+    pub filter: FilterConfig,
+}
+
+/// The virtual-sensing filter's noise levels for a machine (`[filter]`), e.g. from `edgekf
+/// rotor tune` on a healthy recording. They are declared, not fitted by the residual loop: a
+/// filter whose noise is fitted to the data it diagnoses absorbs what it should reveal.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct FilterConfig {
+    /// Spectral density of unmodelled modal acceleration, (m/s²)² kg / s (modal units).
+    pub modal_psd: Option<f64>,
+    /// Spectral density of the force states' random walk, N²/s.
+    pub force_psd: Option<f64>,
+}
+
+/// The shaft: one material, one or more uniform sections laid end to end from z = 0.
+///
+/// In TOML either one uniform shaft (`length`, `elements`, `diameter`, optional
+/// `inner_diameter`) or a list `[[shaft.section]]` of `{length, elements, diameter,
+/// inner_diameter}`; not both.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(try_from = "ShaftToml")]
+pub struct ShaftConfig {
+    /// Uniform sections from z = 0 on; node numbering runs through them without gaps.
+    pub sections: Vec<ShaftSection>,
+    /// Young's modulus E, Pa.
+    pub young: f64,
+    /// Density ρ, kg/m³.
+    pub density: f64,
+    /// Poisson's ratio ν; the shear modulus is `E / (2 (1 + ν))`.
+    pub poisson: f64,
+    /// Shear coefficient κ; default (`None`): Cowper's for the section (as ROSS).
+    pub shear_factor: Option<f64>,
+    /// Include shear deformation (Timoshenko); default true. False gives Rayleigh beams.
+    pub shear_deformation: bool,
+    /// Include the rotary inertia of the cross-section; default true.
+    pub rotary_inertia: bool,
+    /// Include the shaft's gyroscopic matrix; default true.
+    pub gyroscopic: bool,
+    /// Rayleigh damping of the shaft elements, `C_e = α M_e + β K_e`: α in 1/s; default 0.
+    /// Applied as stationary damping (no rotating-damping circulatory terms), as in ROSS.
+    pub damping_alpha: f64,
+    /// Rayleigh damping β in s; default 0.
+    pub damping_beta: f64,
+}
+
+/// One uniform section of the shaft.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ShaftSection {
+    /// Length, m.
+    pub length: f64,
+    /// Number of equal elements.
+    pub elements: usize,
+    /// Outer diameter, m.
+    pub diameter: f64,
+    /// Inner diameter, m; default 0 (solid).
+    #[serde(default)]
+    pub inner_diameter: f64,
+}
+
+/// The shaft as written in TOML (uniform keys or sections), before it is normalised.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ShaftToml {
+    length: Option<f64>,
+    elements: Option<usize>,
+    diameter: Option<f64>,
+    inner_diameter: Option<f64>,
+    #[serde(default, rename = "section")]
+    sections: Vec<ShaftSection>,
+    young: f64,
+    density: f64,
+    poisson: f64,
+    shear_factor: Option<f64>,
+    #[serde(default = "yes")]
+    shear_deformation: bool,
+    #[serde(default = "yes")]
+    rotary_inertia: bool,
+    #[serde(default = "yes")]
+    gyroscopic: bool,
+    #[serde(default)]
+    damping_alpha: f64,
+    #[serde(default)]
+    damping_beta: f64,
+}
+
+fn yes() -> bool {
+    true
+}
+
+impl TryFrom<ShaftToml> for ShaftConfig {
+    type Error = String;
+
+    fn try_from(s: ShaftToml) -> Result<Self, String> {
+        let uniform = [s.length.is_some(), s.elements.is_some(), s.diameter.is_some(), s.inner_diameter.is_some()];
+        let sections = if s.sections.is_empty() {
+            match (s.length, s.elements, s.diameter) {
+                (Some(length), Some(elements), Some(diameter)) => {
+                    vec![ShaftSection { length, elements, diameter, inner_diameter: s.inner_diameter.unwrap_or(0.0) }]
+                }
+                _ => {
+                    let missing: Vec<&str> = [("length", s.length.is_none()), ("elements", s.elements.is_none())]
+                        .into_iter()
+                        .chain([("diameter", s.diameter.is_none())])
+                        .filter(|(_, m)| *m)
+                        .map(|(n, _)| n)
+                        .collect();
+                    return Err(format!(
+                        "shaft: missing {} (give length, elements and diameter, or a list of [[shaft.section]])",
+                        missing.join(", ")
+                    ));
+                }
+            }
+        } else if uniform.iter().any(|&u| u) {
+            return Err("shaft: give either length/elements/diameter or [[shaft.section]], not both".into());
+        } else {
+            s.sections
+        };
+        Ok(Self {
+            sections,
+            young: s.young,
+            density: s.density,
+            poisson: s.poisson,
+            shear_factor: s.shear_factor,
+            shear_deformation: s.shear_deformation,
+            rotary_inertia: s.rotary_inertia,
+            gyroscopic: s.gyroscopic,
+            damping_alpha: s.damping_alpha,
+            damping_beta: s.damping_beta,
+        })
+    }
+}
+
+impl ShaftConfig {
+    /// A uniform solid shaft with the defaults (Timoshenko, Cowper's κ, no damping).
+    pub fn uniform(length: f64, elements: usize, diameter: f64, young: f64, density: f64, poisson: f64) -> Self {
+        Self {
+            sections: vec![ShaftSection { length, elements, diameter, inner_diameter: 0.0 }],
+            young,
+            density,
+            poisson,
+            shear_factor: None,
+            shear_deformation: true,
+            rotary_inertia: true,
+            gyroscopic: true,
+            damping_alpha: 0.0,
+            damping_beta: 0.0,
+        }
+    }
+
+    /// Number of elements over all sections.
+    pub fn elements(&self) -> usize {
+        self.sections.iter().map(|s| s.elements).sum()
+    }
+
+    /// Total length, m.
+    pub fn length(&self) -> f64 {
+        self.sections.iter().map(|s| s.length).sum()
+    }
+}
+
+/// A rigid disk on a node: a solid disk of the given mass, diameter and width, unless its
+/// inertias are given.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DiskConfig {
+    /// Node index.
+    pub node: usize,
+    /// Mass, kg.
+    pub mass: f64,
+    /// Outer diameter, m.
+    pub diameter: f64,
+    /// Axial width, m.
+    pub width: f64,
+    /// Polar moment of inertia, kg·m²; default `m D²/8`.
+    pub ip: Option<f64>,
+    /// Diametral moment of inertia, kg·m²; default `m D²/16 + m w²/12`.
+    pub id: Option<f64>,
+}
+
+/// A point mass with optional inertias on a node (`[[mass]] node, mass, ip, id`).
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PointMassConfig {
+    /// Node index.
+    pub node: usize,
+    /// Mass, kg.
+    pub mass: f64,
+    /// Polar moment of inertia, kg·m²; default 0.
+    #[serde(default)]
+    pub ip: f64,
+    /// Diametral moment of inertia, kg·m²; default 0.
+    #[serde(default)]
+    pub id: f64,
+}
+
+/// A linear bearing on a node. The force on the shaft is `−K [x, y]ᵀ − C [ẋ, ẏ]ᵀ` with
+/// `K = [[kxx, kxy], [kyx, kyy]]`, `C = [[cxx, cxy], [cyx, cyy]]`.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BearingConfig {
+    /// Node index.
+    pub node: usize,
+    /// Direct stiffness in x, N/m.
+    pub kxx: f64,
+    /// Direct stiffness in y, N/m.
+    pub kyy: f64,
+    /// Cross stiffness (force in x per y displacement), N/m; default 0.
+    #[serde(default)]
+    pub kxy: f64,
+    /// Cross stiffness (force in y per x displacement), N/m; default 0.
+    #[serde(default)]
+    pub kyx: f64,
+    /// Direct damping in x, N·s/m; default 0.
+    #[serde(default)]
+    pub cxx: f64,
+    /// Direct damping in y, N·s/m; default 0.
+    #[serde(default)]
+    pub cyy: f64,
+    /// Cross damping, N·s/m; default 0.
+    #[serde(default)]
+    pub cxy: f64,
+    /// Cross damping, N·s/m; default 0.
+    #[serde(default)]
+    pub cyx: f64,
+    /// Rolling-element geometry, if the bearing is one (used to name defect lines in the
+    /// residual loop); default none.
+    #[serde(default)]
+    pub geometry: Option<BearingGeometry>,
+}
+
+/// An unbalance `U = m e` at a node: `F_x = U Ω² cos(Ωt + φ)`, `F_y = U Ω² sin(Ωt + φ)`.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct UnbalanceConfig {
+    /// Node index.
+    pub node: usize,
+    /// `m e`, kg·m.
+    pub magnitude: f64,
+    /// Phase φ, degrees; default 0.
+    #[serde(default)]
+    pub phase_deg: f64,
+}
+
+/// Measuring direction of a sensor.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Direction {
+    /// Along x (horizontal).
+    X,
+    /// Along y (vertical).
+    Y,
+}
+
+impl Direction {
+    /// `"x"` or `"y"`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Direction::X => "x",
+            Direction::Y => "y",
+        }
+    }
+
+    /// The node DOF it measures: 0 (x) or 1 (y).
+    pub fn dof(self) -> usize {
+        match self {
+            Direction::X => 0,
+            Direction::Y => 1,
+        }
+    }
+}
+
+/// What a sensor measures, with its own settings.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SensorKind {
+    /// A proximity probe: displacement plus white noise.
+    Displacement {
+        /// Noise standard deviation per sample, m; default 0.
+        noise_std: f64,
+    },
+    /// An accelerometer: acceleration through a Butterworth low-pass, sampled, plus white noise.
+    Acceleration(AccelerometerConfig),
+}
+
+/// Settings of an accelerometer channel.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AccelerometerConfig {
+    /// White-noise density, m/s²/√Hz; σ per sample is `density · √(sample_rate/2)`. Default 0.
+    pub noise_density: f64,
+    /// −3 dB corner of the Butterworth low-pass, Hz; default `sample_rate / 4` (the ADXL355's).
+    pub lowpass_hz: Option<f64>,
+    /// Order of the low-pass; default 2. 0 means no filter.
+    pub lowpass_order: usize,
+    /// Output in volts: `offset + sensitivity · a`, with sensitivity in V per m/s². Default:
+    /// none (the channel is in m/s²).
+    pub sensitivity: Option<f64>,
+    /// Offset of the volts output, V; default 0 (only with `sensitivity`).
+    pub offset: f64,
+}
+
+/// A sensor on a node.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(try_from = "SensorToml")]
+pub struct SensorConfig {
+    /// Node index.
+    pub node: usize,
+    /// Direction.
+    pub direction: Direction,
+    /// Kind and settings.
+    pub kind: SensorKind,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+enum KindToml {
+    Displacement,
+    Acceleration,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SensorToml {
+    node: usize,
+    direction: Direction,
+    kind: KindToml,
+    noise_std: Option<f64>,
+    noise_density: Option<f64>,
+    lowpass_hz: Option<f64>,
+    lowpass_order: Option<usize>,
+    sensitivity: Option<f64>,
+    offset: Option<f64>,
+}
+
+impl TryFrom<SensorToml> for SensorConfig {
+    type Error = String;
+
+    fn try_from(s: SensorToml) -> Result<Self, String> {
+        let kind = match s.kind {
+            KindToml::Displacement => {
+                let accel_keys = [
+                    ("noise_density", s.noise_density.is_some()),
+                    ("lowpass_hz", s.lowpass_hz.is_some()),
+                    ("lowpass_order", s.lowpass_order.is_some()),
+                    ("sensitivity", s.sensitivity.is_some()),
+                    ("offset", s.offset.is_some()),
+                ];
+                if let Some((k, _)) = accel_keys.iter().find(|(_, set)| *set) {
+                    return Err(format!(
+                        "sensor at node {}: `{k}` applies to acceleration sensors; a displacement sensor takes noise_std",
+                        s.node
+                    ));
+                }
+                SensorKind::Displacement { noise_std: s.noise_std.unwrap_or(0.0) }
+            }
+            KindToml::Acceleration => {
+                if s.noise_std.is_some() {
+                    return Err(format!(
+                        "sensor at node {}: an acceleration sensor takes noise_density (m/s²/√Hz), not noise_std",
+                        s.node
+                    ));
+                }
+                if s.offset.is_some() && s.sensitivity.is_none() {
+                    return Err(format!("sensor at node {}: `offset` needs `sensitivity` (V per m/s²)", s.node));
+                }
+                SensorKind::Acceleration(AccelerometerConfig {
+                    noise_density: s.noise_density.unwrap_or(0.0),
+                    lowpass_hz: s.lowpass_hz,
+                    lowpass_order: s.lowpass_order.unwrap_or(2),
+                    sensitivity: s.sensitivity,
+                    offset: s.offset.unwrap_or(0.0),
+                })
+            }
+        };
+        Ok(Self { node: s.node, direction: s.direction, kind })
+    }
+}
+
+impl SensorConfig {
+    /// The data-file channel name: `n<node>_<dir>` (displacement, m), `n<node>_a<dir>`
+    /// (acceleration, m/s²) or `n<node>_a<dir>_volts` (acceleration in volts).
+    ///
+    /// ```
+    /// use edgekf_sim::systems::rotor::config::{Direction, SensorConfig, SensorKind};
+    /// let s = SensorConfig { node: 5, direction: Direction::X, kind: SensorKind::Displacement { noise_std: 1e-6 } };
+    /// assert_eq!(s.channel_name(), "n5_x");
+    /// ```
+    pub fn channel_name(&self) -> String {
+        let dir = self.direction.as_str();
+        match self.kind {
+            SensorKind::Displacement { .. } => format!("n{}_{dir}", self.node),
+            SensorKind::Acceleration(AccelerometerConfig { sensitivity: Some(_), .. }) => {
+                format!("n{}_a{dir}_volts", self.node)
+            }
+            SensorKind::Acceleration(_) => format!("n{}_a{dir}", self.node),
+        }
+    }
+}
+
+impl AccelerometerConfig {
+    /// The low-pass corner in force for a given sample rate (the default is `sample_rate/4`).
+    pub fn corner_hz(&self, sample_rate: f64) -> f64 {
+        self.lowpass_hz.unwrap_or(sample_rate / 4.0)
+    }
+
+    /// Standard deviation of the white noise in one sample, m/s²: `density · √(rate/2)`.
+    pub fn noise_std(&self, sample_rate: f64) -> f64 {
+        self.noise_density * (sample_rate / 2.0).sqrt()
+    }
+}
+
+/// The operating point.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct OperationConfig {
+    /// Rotor speed Ω, rad/s (positive: rotation from x toward y); default 0.
+    pub speed: f64,
+    /// Output sample rate, Hz; default 1000.
+    pub sample_rate: f64,
+}
+
+impl Default for OperationConfig {
+    fn default() -> Self {
+        Self { speed: 0.0, sample_rate: 1000.0 }
+    }
+}
+
+/// A list entry that failed validation, for messages like `disk[1].mass = -2 must be …`.
+struct At<'a>(&'a str, usize);
+
+impl fmt::Display for At<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}[{}]", self.0, self.1)
+    }
+}
+
+fn positive(what: impl fmt::Display, v: f64) -> Result<(), String> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err(format!("{what} = {v} must be positive"))
+    }
+}
+
+fn non_negative(what: impl fmt::Display, v: f64) -> Result<(), String> {
+    if v.is_finite() && v >= 0.0 {
+        Ok(())
+    } else {
+        Err(format!("{what} = {v} must be zero or positive"))
+    }
+}
+
+fn finite(what: impl fmt::Display, v: f64) -> Result<(), String> {
+    if v.is_finite() {
+        Ok(())
+    } else {
+        Err(format!("{what} = {v} must be a finite number"))
+    }
+}
+
+impl RotorConfig {
+    /// Parses and validates a configuration.
+    pub fn from_toml_str(text: &str) -> Result<Self, RotorError> {
+        let cfg: RotorConfig = toml::from_str(text)
+            .map_err(|e| RotorError::Config { origin: None, message: e.to_string().trim_end().to_owned() })?;
+        cfg.validate()?;
+        Ok(cfg)
+    }
+
+    /// Reads, parses and validates a configuration file; errors name the file.
+    pub fn load(path: &Path) -> Result<Self, RotorError> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| RotorError::Io { path: path.to_owned(), reason: e.to_string() })?;
+        Self::from_toml_str(&text).map_err(|e| e.in_file(path))
+    }
+
+    /// Number of nodes: elements + 1, numbered 0.. from z = 0.
+    pub fn n_nodes(&self) -> usize {
+        self.shaft.elements() + 1
+    }
+
+    /// Nodes that carry an unbalance, in configuration order (the `truth_f<k>_*` columns).
+    pub fn unbalance_nodes(&self) -> Vec<usize> {
+        self.unbalances.iter().map(|u| u.node).collect()
+    }
+
+    /// Checks every figure; the message names the offending entry.
+    pub fn validate(&self) -> Result<(), RotorError> {
+        self.check().map_err(|message| RotorError::Config { origin: None, message })
+    }
+
+    fn check(&self) -> Result<(), String> {
+        let sh = &self.shaft;
+        if sh.sections.is_empty() {
+            return Err("shaft: no sections".into());
+        }
+        for (i, s) in sh.sections.iter().enumerate() {
+            let at = |f: &str| format!("shaft.section[{i}].{f}");
+            positive(at("length"), s.length)?;
+            positive(at("diameter"), s.diameter)?;
+            non_negative(at("inner_diameter"), s.inner_diameter)?;
+            if s.inner_diameter >= s.diameter {
+                return Err(format!(
+                    "{} = {} must be smaller than the diameter {}",
+                    at("inner_diameter"),
+                    s.inner_diameter,
+                    s.diameter
+                ));
+            }
+            if s.elements == 0 {
+                return Err(format!("{} must be at least 1", at("elements")));
+            }
+        }
+        if sh.elements() > MAX_ELEMENTS {
+            return Err(format!(
+                "shaft: {} elements; at most {MAX_ELEMENTS} are supported (dense matrices)",
+                sh.elements()
+            ));
+        }
+        positive("shaft.young", sh.young)?;
+        positive("shaft.density", sh.density)?;
+        if !(sh.poisson > -1.0 && sh.poisson < 0.5) {
+            return Err(format!("shaft.poisson = {} must be in (-1, 0.5)", sh.poisson));
+        }
+        if let Some(k) = sh.shear_factor {
+            positive("shaft.shear_factor", k)?;
+        }
+        non_negative("shaft.damping_alpha", sh.damping_alpha)?;
+        non_negative("shaft.damping_beta", sh.damping_beta)?;
+
+        let last = self.n_nodes() - 1;
+        let node = |what: &At, n: usize| -> Result<(), String> {
+            if n > last {
+                Err(format!("{what}.node = {n} is out of range: the shaft has nodes 0..={last}"))
+            } else {
+                Ok(())
+            }
+        };
+        for (i, d) in self.disks.iter().enumerate() {
+            let at = At("disk", i);
+            node(&at, d.node)?;
+            positive(format!("{at}.mass"), d.mass)?;
+            positive(format!("{at}.diameter"), d.diameter)?;
+            non_negative(format!("{at}.width"), d.width)?;
+            if let Some(ip) = d.ip {
+                non_negative(format!("{at}.ip"), ip)?;
+            }
+            if let Some(id) = d.id {
+                non_negative(format!("{at}.id"), id)?;
+            }
+        }
+        for (i, m) in self.masses.iter().enumerate() {
+            let at = At("mass", i);
+            node(&at, m.node)?;
+            non_negative(format!("{at}.mass"), m.mass)?;
+            non_negative(format!("{at}.ip"), m.ip)?;
+            non_negative(format!("{at}.id"), m.id)?;
+        }
+        for (i, b) in self.bearings.iter().enumerate() {
+            let at = At("bearing", i);
+            node(&at, b.node)?;
+            for (name, v) in [("kxx", b.kxx), ("kyy", b.kyy), ("kxy", b.kxy), ("kyx", b.kyx)] {
+                finite(format!("{at}.{name}"), v)?;
+            }
+            for (name, v) in [("cxx", b.cxx), ("cyy", b.cyy), ("cxy", b.cxy), ("cyx", b.cyx)] {
+                finite(format!("{at}.{name}"), v)?;
+            }
+            non_negative(format!("{at}.kxx"), b.kxx)?;
+            non_negative(format!("{at}.kyy"), b.kyy)?;
+            non_negative(format!("{at}.cxx"), b.cxx)?;
+            non_negative(format!("{at}.cyy"), b.cyy)?;
+            if let Some(g) = &b.geometry {
+                g.validate().map_err(|e| format!("{at}.geometry: {e}"))?;
+            }
+        }
+        for (i, u) in self.unbalances.iter().enumerate() {
+            let at = At("unbalance", i);
+            node(&at, u.node)?;
+            non_negative(format!("{at}.magnitude"), u.magnitude)?;
+            finite(format!("{at}.phase_deg"), u.phase_deg)?;
+        }
+        for (name, v) in [("filter.modal_psd", self.filter.modal_psd), ("filter.force_psd", self.filter.force_psd)] {
+            if let Some(v) = v {
+                positive(name, v)?;
+            }
+        }
+        let op = &self.operation;
+        finite("operation.speed", op.speed)?;
+        positive("operation.sample_rate", op.sample_rate)?;
+        let mut names = std::collections::HashSet::new();
+        for (i, s) in self.sensors.iter().enumerate() {
+            let at = At("sensor", i);
+            node(&at, s.node)?;
+            match s.kind {
+                SensorKind::Displacement { noise_std } => non_negative(format!("{at}.noise_std"), noise_std)?,
+                SensorKind::Acceleration(a) => {
+                    non_negative(format!("{at}.noise_density"), a.noise_density)?;
+                    if let Some(f) = a.lowpass_hz {
+                        positive(format!("{at}.lowpass_hz"), f)?;
+                    }
+                    if a.lowpass_order > 8 {
+                        return Err(format!("{at}.lowpass_order = {} must be 0 (no filter) … 8", a.lowpass_order));
+                    }
+                    if let Some(v) = a.sensitivity {
+                        finite(format!("{at}.sensitivity"), v)?;
+                        if v == 0.0 {
+                            return Err(format!("{at}.sensitivity must not be 0"));
+                        }
+                    }
+                    finite(format!("{at}.offset"), a.offset)?;
+                }
+            }
+            if !names.insert(s.channel_name()) {
+                return Err(format!(
+                    "{at}: a second sensor named `{}` (same node, direction and kind)",
+                    s.channel_name()
+                ));
+            }
+        }
+        Ok(())
+    }
+}

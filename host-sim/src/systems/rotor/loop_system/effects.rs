@@ -1,0 +1,669 @@
+//! The library of effects and the augmented continuous model built from a [`ReducedRotor`] by
+//! composition.
+//!
+//! An effect is a small augmentation of the base model. Some add states the filter estimates
+//! (a bias, a force), some add one scalar the search fits by maximum likelihood (a sensor's scale
+//! or delay, a component parameter, a mode's frequency), some both. Each says which residual
+//! signatures point to it ([`Effect::signature`]).
+
+pub use crate::residual_loop::optimize::ScalarRange;
+use crate::residual_loop::search::EffectKind;
+use crate::systems::rotor::bearing_geometry::BearingLine;
+use crate::linalg::expm;
+use crate::systems::rotor::{dof, RotorConfig, RotorModel, SensorKind};
+use crate::systems::rotor::estimate::ReducedRotor;
+use anyhow::{anyhow, bail, Context, Result};
+use nalgebra::DMatrix;
+
+/// A component of the rotor whose declared parameter may be wrong.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Parameter {
+    /// Mass of disk `i` (configuration order); its inertias scale with it.
+    DiskMass(usize),
+    /// Young's modulus of the shaft (its bending stiffness).
+    ShaftYoung,
+    /// Density of the shaft (its mass).
+    ShaftDensity,
+    /// Direct stiffness `kxx` of bearing `i`.
+    BearingKxx(usize),
+    /// Direct stiffness `kyy` of bearing `i`.
+    BearingKyy(usize),
+    /// Direct damping `cxx` of bearing `i`.
+    BearingCxx(usize),
+    /// Direct damping `cyy` of bearing `i`.
+    BearingCyy(usize),
+}
+
+impl Parameter {
+    /// Every parameter of `cfg` the library can correct (damping only where it is declared
+    /// non-zero: a factor on zero means nothing).
+    pub fn all(cfg: &RotorConfig) -> Vec<Parameter> {
+        let mut out: Vec<Parameter> = (0..cfg.disks.len()).map(Parameter::DiskMass).collect();
+        out.extend([Parameter::ShaftYoung, Parameter::ShaftDensity]);
+        for (i, b) in cfg.bearings.iter().enumerate() {
+            out.extend([Parameter::BearingKxx(i), Parameter::BearingKyy(i)]);
+            if b.cxx > 0.0 {
+                out.push(Parameter::BearingCxx(i));
+            }
+            if b.cyy > 0.0 {
+                out.push(Parameter::BearingCyy(i));
+            }
+        }
+        out
+    }
+
+    /// The parameter's name in the report (`mass`, `young`, `kxx`, …).
+    pub fn name(self) -> &'static str {
+        match self {
+            Parameter::DiskMass(_) => "mass",
+            Parameter::ShaftYoung => "young",
+            Parameter::ShaftDensity => "density",
+            Parameter::BearingKxx(_) => "kxx",
+            Parameter::BearingKyy(_) => "kyy",
+            Parameter::BearingCxx(_) => "cxx",
+            Parameter::BearingCyy(_) => "cyy",
+        }
+    }
+
+    /// The component, as the report names it (`disk 12`, `shaft`, `bearing 4`: by node).
+    pub fn component(self, cfg: &RotorConfig) -> String {
+        let node = |n: Option<usize>| n.map_or("?".to_string(), |n| n.to_string());
+        match self {
+            Parameter::DiskMass(i) => format!("disk {}", node(cfg.disks.get(i).map(|d| d.node))),
+            Parameter::ShaftYoung | Parameter::ShaftDensity => "shaft".to_string(),
+            Parameter::BearingKxx(i)
+            | Parameter::BearingKyy(i)
+            | Parameter::BearingCxx(i)
+            | Parameter::BearingCyy(i) => {
+                format!("bearing {}", node(cfg.bearings.get(i).map(|b| b.node)))
+            }
+        }
+    }
+
+    /// Multiplies the parameter in `cfg` by `factor`.
+    pub fn apply(self, cfg: &mut RotorConfig, factor: f64) -> Result<()> {
+        if !(factor.is_finite() && factor > 0.0) {
+            bail!("a parameter factor must be positive and finite, not {factor}");
+        }
+        let missing = || anyhow!("the configuration has no component for {self:?}");
+        match self {
+            Parameter::DiskMass(i) => {
+                let d = cfg.disks.get_mut(i).ok_or_else(missing)?;
+                // The inertias follow the mass (a solid disk's are proportional to it; declared
+                // ones are scaled alike).
+                d.mass *= factor;
+                d.ip = d.ip.map(|v| v * factor);
+                d.id = d.id.map(|v| v * factor);
+            }
+            Parameter::ShaftYoung => cfg.shaft.young *= factor,
+            Parameter::ShaftDensity => cfg.shaft.density *= factor,
+            Parameter::BearingKxx(i) => cfg.bearings.get_mut(i).ok_or_else(missing)?.kxx *= factor,
+            Parameter::BearingKyy(i) => cfg.bearings.get_mut(i).ok_or_else(missing)?.kyy *= factor,
+            Parameter::BearingCxx(i) => cfg.bearings.get_mut(i).ok_or_else(missing)?.cxx *= factor,
+            Parameter::BearingCyy(i) => cfg.bearings.get_mut(i).ok_or_else(missing)?.cyy *= factor,
+        }
+        Ok(())
+    }
+}
+
+/// One kind of model augmentation, at one place.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Effect {
+    /// A constant offset on a channel: one slow random-walk state on that channel's output row.
+    /// Value in the channel's unit (m for a probe).
+    SensorBias {
+        /// Channel index.
+        channel: usize,
+    },
+    /// A channel reads `s ×` the true signal: its output row is scaled. Value: `s`.
+    SensorScale {
+        /// Channel index.
+        channel: usize,
+    },
+    /// A channel reads the signal `τ` late: its output row becomes `C e^{−Aτ}` (exact for the
+    /// noise-free dynamics, so the rotating phasors carry the phase lag). Value: `τ`, s.
+    SensorDelay {
+        /// Channel index.
+        channel: usize,
+    },
+    /// A force rotating forward at `order ×` the running speed at a node (misalignment at 2×,
+    /// looseness at 3×…): two states rotating at `order·Ω` entering the modal equations through
+    /// the node's mode-shape rows, with the static correction of the truncated modes. Value:
+    /// amplitude, N.
+    HarmonicForce {
+        /// Node.
+        node: usize,
+        /// Order of the running speed.
+        order: u32,
+    },
+    /// An unknown force at a node, `F_x`, `F_y` as fast random walks: the catch-all for an
+    /// input the library has no structure for. Value: RMS magnitude, N.
+    UnknownInput {
+        /// Node.
+        node: usize,
+    },
+    /// A declared component parameter is off by a factor. Value: the factor.
+    Parameter(Parameter),
+    /// A lightly damped mode the model lacks (a housing or foundation resonance), seen on
+    /// every channel with its own amplitude: two states per channel oscillating at the mode's
+    /// frequency, driven by white noise. Value: frequency, Hz (fitted; `seed_mhz` is where the
+    /// spectral peak was).
+    ExtraMode {
+        /// Frequency of the spectral peak that proposed it, mHz.
+        seed_mhz: u32,
+    },
+    /// A defect of a rolling-element bearing: a periodic force along the load direction (`y`)
+    /// at the bearing node, at a defect line's frequency and its first `harmonics` multiples
+    /// (two states each: the impacts of a spall are periodic, not sinusoidal, and a housing
+    /// resonance lifts the upper harmonics). Value: RMS of the force, N.
+    BearingDefect {
+        /// Bearing index (configuration order).
+        bearing: usize,
+        /// The line.
+        line: BearingLine,
+        /// The line's order of the running speed, in thousandths (from the bearing geometry).
+        order_milli: u32,
+        /// Harmonics of the line modelled (1 = the line alone).
+        harmonics: u8,
+    },
+}
+
+impl Effect {
+    /// The kind as written in the report.
+    pub fn kind(&self) -> EffectKind {
+        match self {
+            Effect::SensorBias { .. } => EffectKind::SensorBias,
+            Effect::SensorScale { .. } => EffectKind::SensorScale,
+            Effect::SensorDelay { .. } => EffectKind::SensorDelay,
+            Effect::HarmonicForce { .. } => EffectKind::HarmonicForce,
+            Effect::UnknownInput { .. } => EffectKind::UnknownInput,
+            Effect::Parameter(_) => EffectKind::Parameter,
+            Effect::ExtraMode { .. } => EffectKind::ExtraMode,
+            Effect::BearingDefect { .. } => EffectKind::BearingDefect,
+        }
+    }
+
+    /// What in the innovations points to this kind (for the report and the docs).
+    pub fn signature(&self) -> &'static str {
+        match self {
+            Effect::SensorBias { .. } => "a channel's innovation mean many standard errors from zero",
+            Effect::SensorScale { .. } | Effect::SensorDelay { .. } => {
+                "a 1x (or natural-frequency) line on one channel that the other channels do not share"
+            }
+            Effect::HarmonicForce { .. } => "a line at an integer order of the running speed",
+            Effect::UnknownInput { .. } => "non-white innovations with no line or bias to name",
+            Effect::Parameter(_) => {
+                "lines at the natural frequencies (the free response rings elsewhere) or a 1x residual"
+            }
+            Effect::ExtraMode { .. } => "a line at neither an order nor a natural frequency of the model",
+            Effect::BearingDefect { .. } => {
+                "lines at a bearing defect frequency (BPFO, BPFI, BSF, FTF) and its harmonics"
+            }
+        }
+    }
+
+    /// Number of states the effect adds for a model with `channels` sensor channels.
+    pub fn states(&self, channels: usize) -> usize {
+        match self {
+            Effect::SensorBias { .. } => 1,
+            Effect::HarmonicForce { .. } | Effect::UnknownInput { .. } => 2,
+            Effect::BearingDefect { harmonics, .. } => 2 * (*harmonics).max(1) as usize,
+            Effect::ExtraMode { .. } => 2 * channels,
+            Effect::SensorScale { .. } | Effect::SensorDelay { .. } | Effect::Parameter(_) => 0,
+        }
+    }
+
+    /// The scalar the search fits by maximum likelihood, if the effect has one.
+    pub fn scalar(&self, sample_rate: f64) -> Option<ScalarRange> {
+        match *self {
+            Effect::SensorScale { .. } => {
+                Some(ScalarRange { low: 0.5f64.ln(), high: 2f64.ln(), neutral: 0.0, log: true, tolerance: 1e-5 })
+            }
+            Effect::SensorDelay { .. } => {
+                let t = 10.0 / sample_rate;
+                Some(ScalarRange { low: -t, high: t, neutral: 0.0, log: false, tolerance: 1e-4 / sample_rate })
+            }
+            Effect::Parameter(_) => {
+                Some(ScalarRange { low: 0.25f64.ln(), high: 4f64.ln(), neutral: 0.0, log: true, tolerance: 1e-5 })
+            }
+            Effect::ExtraMode { seed_mhz } => {
+                let f = seed_mhz as f64 * 1e-3;
+                let w = 2.0 * sample_rate / 1024.0;
+                Some(ScalarRange { low: (f - w).max(0.1), high: f + w, neutral: f, log: false, tolerance: 1e-3 })
+            }
+            _ => None,
+        }
+    }
+
+    /// Free parameters the effect costs in the BIC: its states' steady values and its scalar.
+    pub fn parameters(&self, channels: usize) -> usize {
+        match self {
+            Effect::SensorBias { .. } => 1,
+            Effect::ExtraMode { .. } => 2 * channels + 1,
+            Effect::SensorScale { .. } | Effect::SensorDelay { .. } | Effect::Parameter(_) => 1,
+            _ => self.states(channels),
+        }
+    }
+
+    /// Where it acts, for the report: a channel name, `node N`, or a component.
+    pub fn location(&self, channels: &[String], cfg: &RotorConfig) -> String {
+        let channel = |c: usize| channels.get(c).cloned().unwrap_or_else(|| format!("#{c}"));
+        match *self {
+            Effect::SensorBias { channel: c }
+            | Effect::SensorScale { channel: c }
+            | Effect::SensorDelay { channel: c } => channel(c),
+            Effect::HarmonicForce { node, .. } | Effect::UnknownInput { node } => format!("node {node}"),
+            Effect::Parameter(p) => p.component(cfg),
+            Effect::ExtraMode { .. } => "all channels".to_string(),
+            Effect::BearingDefect { bearing, .. } => {
+                format!("bearing {}", cfg.bearings.get(bearing).map_or("?".into(), |b| b.node.to_string()))
+            }
+        }
+    }
+
+    /// Unit of the reported value (`1` for a factor).
+    pub fn unit(&self) -> &'static str {
+        match self {
+            Effect::SensorBias { .. } => "m",
+            Effect::SensorScale { .. } | Effect::Parameter(_) => "1",
+            Effect::SensorDelay { .. } => "s",
+            Effect::HarmonicForce { .. } | Effect::UnknownInput { .. } | Effect::BearingDefect { .. } => "N",
+            Effect::ExtraMode { .. } => "Hz",
+        }
+    }
+
+    /// The order of the running speed it acts at, if any.
+    pub fn order(&self) -> Option<f64> {
+        match *self {
+            Effect::HarmonicForce { order, .. } => Some(order as f64),
+            Effect::BearingDefect { order_milli, .. } => Some(order_milli as f64 * 1e-3),
+            _ => None,
+        }
+    }
+}
+
+/// Noise and priors of the effects' states.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EffectTuning {
+    /// Random-walk density of a bias state, m²/s.
+    pub bias_psd: f64,
+    /// Prior standard deviation of a bias, m.
+    pub bias_std: f64,
+    /// Random-walk density of a harmonic force's (or bearing defect's) states, N²/s.
+    pub force_psd: f64,
+    /// Prior standard deviation of a harmonic force's states, N.
+    pub force_std: f64,
+    /// Random-walk density of an unknown input, N²/s (fast: it may follow anything).
+    pub unknown_psd: f64,
+    /// Damping ratio of an extra mode.
+    pub mode_damping: f64,
+    /// Stationary standard deviation of an extra mode's response, as a multiple of the
+    /// channel's noise standard deviation.
+    pub mode_std: f64,
+}
+
+impl Default for EffectTuning {
+    fn default() -> Self {
+        Self {
+            bias_psd: 1e-16,
+            bias_std: 1e-3,
+            force_psd: 1e-3,
+            force_std: 10.0,
+            unknown_psd: 1e2,
+            mode_damping: 0.01,
+            mode_std: 10.0,
+        }
+    }
+}
+
+/// The base model plus effects: `ẋ = A x + w`, `y = C x + v`, and the virtual outputs.
+#[derive(Debug, Clone)]
+pub struct AugmentedModel {
+    /// Continuous system matrix.
+    pub a: DMatrix<f64>,
+    /// Continuous process-noise density.
+    pub qc: DMatrix<f64>,
+    /// Sensor rows.
+    pub c: DMatrix<f64>,
+    /// Measurement-noise covariance per sample.
+    pub r: DMatrix<f64>,
+    /// Initial covariance.
+    pub p0: DMatrix<f64>,
+    /// Displacement rows of every node (node-major `n0_x, n0_y, …`), effects included.
+    pub displacement: DMatrix<f64>,
+    /// The effects with their scalar, and the index of their first state.
+    pub effects: Vec<(Effect, f64, usize)>,
+}
+
+/// What [`augment`] needs besides the reduced model: the static stiffness of the FE model (for
+/// the truncated modes' static correction of new forces).
+#[derive(Debug, Clone)]
+pub struct Flexibility {
+    k: DMatrix<f64>,
+}
+
+impl Flexibility {
+    /// The stiffness of `model` at `speed`.
+    pub fn new(model: &RotorModel, speed: f64) -> Self {
+        let sys = model.assemble(speed);
+        let k = DMatrix::from_fn(sys.k.nrows(), sys.k.ncols(), |i, j| sys.k[(i, j)]);
+        Self { k }
+    }
+}
+
+/// The matrices a new force is written into.
+struct Target<'a> {
+    a: &'a mut DMatrix<f64>,
+    c: &'a mut DMatrix<f64>,
+    displacement: &'a mut DMatrix<f64>,
+}
+
+/// A force at `node` whose `x` component is state `sx` and `y` component state `sy` (either
+/// may be absent): modal input `Φᵀ` at the node's DOFs, and the static correction of the
+/// truncated modes (`K⁻¹ S − Φ Λ⁻¹ Φᵀ S`) on every displacement and sensor row.
+fn add_force(
+    t: Target<'_>,
+    red: &ReducedRotor,
+    model: &RotorModel,
+    flex: &Flexibility,
+    node: usize,
+    states: [Option<usize>; 2],
+) -> Result<()> {
+    let r = red.frequencies_hz.len();
+    let nodes = red.displacement.nrows() / 2;
+    if node >= nodes {
+        bail!("no node {node}");
+    }
+    let lambda: Vec<f64> = red.frequencies_hz.iter().map(|f| (2.0 * std::f64::consts::PI * f).powi(2)).collect();
+    let ndof = flex.k.nrows();
+    let mut sf = DMatrix::<f64>::zeros(ndof, 2);
+    sf[(dof(node, 0), 0)] = 1.0;
+    sf[(dof(node, 1), 1)] = 1.0;
+    let k_inv_sf = flex.k.clone().lu().solve(&sf).context("the stiffness matrix is singular")?;
+    let corr = |dof_row: usize, out_row: usize, col: usize| {
+        let modal: f64 =
+            (0..r).map(|m| red.displacement[(out_row, m)] * red.displacement[(2 * node + col, m)] / lambda[m]).sum();
+        k_inv_sf[(dof_row, col)] - modal
+    };
+    for (col, s) in states.iter().enumerate() {
+        let Some(s) = *s else { continue };
+        for i in 0..r {
+            t.a[(r + i, s)] = red.displacement[(2 * node + col, i)];
+        }
+        for q in 0..nodes {
+            for d in 0..2 {
+                t.displacement[(2 * q + d, s)] = corr(dof(q, d), 2 * q + d, col);
+            }
+        }
+        // Probes read the displacement; accelerometer rows are extended in `augment` once
+        // every state is in place.
+        for (i, sensor) in model.config().sensors.iter().enumerate() {
+            if matches!(sensor.kind, SensorKind::Displacement { .. }) {
+                let d = sensor.direction.dof();
+                t.c[(i, s)] = corr(dof(sensor.node, d), 2 * sensor.node + d, col);
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Builds `red` plus `effects`, each with its scalar (ignored by effects without one; a
+/// `Parameter` effect must already be applied to the configuration `red` was reduced from).
+///
+/// `red`, `model` and `flex` describe the same configuration. A new force reaches a probe through
+/// the displacement rows and an accelerometer through its low-pass input (the acceleration of
+/// the measured DOF, modal part and static correction alike).
+pub fn augment(
+    red: &ReducedRotor,
+    model: &RotorModel,
+    flex: &Flexibility,
+    effects: &[(Effect, f64)],
+    tuning: &EffectTuning,
+) -> Result<AugmentedModel> {
+    let n0 = red.states();
+    let m = red.c.nrows();
+    let extra: usize = effects.iter().map(|(e, _)| e.states(m)).sum();
+    let ns = n0 + extra;
+    let grow = |mat: &DMatrix<f64>, rows: usize| {
+        let mut out = DMatrix::<f64>::zeros(rows, ns);
+        out.view_mut((0, 0), (mat.nrows(), mat.ncols())).copy_from(mat);
+        out
+    };
+    let mut a = grow(&red.a, ns);
+    let mut qc = grow(&red.qc, ns);
+    let mut p0 = grow(&red.p0, ns);
+    let mut c = grow(&red.c, m);
+    let mut displacement = grow(&red.displacement, red.displacement.nrows());
+    let channel_ok = |ch: usize| if ch < m { Ok(()) } else { Err(anyhow!("no channel #{ch}")) };
+    let rotating = |a: &mut DMatrix<f64>, s: usize, w: f64| {
+        a[(s, s + 1)] = -w;
+        a[(s + 1, s)] = w;
+    };
+    let mut next = n0;
+    let mut placed = Vec::new();
+    for &(e, theta) in effects {
+        let s = next;
+        match e {
+            Effect::SensorBias { channel } => {
+                channel_ok(channel)?;
+                c[(channel, s)] = 1.0;
+                qc[(s, s)] = tuning.bias_psd;
+                p0[(s, s)] = tuning.bias_std.powi(2);
+            }
+            Effect::SensorScale { channel } | Effect::SensorDelay { channel } => channel_ok(channel)?,
+            Effect::HarmonicForce { node, order } => {
+                rotating(&mut a, s, order as f64 * red.speed);
+                let t = Target { a: &mut a, c: &mut c, displacement: &mut displacement };
+                add_force(t, red, model, flex, node, [Some(s), Some(s + 1)])?;
+                for d in 0..2 {
+                    qc[(s + d, s + d)] = tuning.force_psd;
+                    p0[(s + d, s + d)] = tuning.force_std.powi(2);
+                }
+            }
+            Effect::UnknownInput { node } => {
+                let t = Target { a: &mut a, c: &mut c, displacement: &mut displacement };
+                add_force(t, red, model, flex, node, [Some(s), Some(s + 1)])?;
+                for d in 0..2 {
+                    qc[(s + d, s + d)] = tuning.unknown_psd;
+                    p0[(s + d, s + d)] = tuning.force_std.powi(2);
+                }
+            }
+            Effect::BearingDefect { bearing, order_milli, harmonics, .. } => {
+                let node = model
+                    .config()
+                    .bearings
+                    .get(bearing)
+                    .map(|b| b.node)
+                    .ok_or_else(|| anyhow!("no bearing #{bearing}"))?;
+                for h in 0..harmonics.max(1) as usize {
+                    let sh = s + 2 * h;
+                    rotating(&mut a, sh, (h + 1) as f64 * order_milli as f64 * 1e-3 * red.speed);
+                    let t = Target { a: &mut a, c: &mut c, displacement: &mut displacement };
+                    add_force(t, red, model, flex, node, [None, Some(sh)])?;
+                    for d in 0..2 {
+                        qc[(sh + d, sh + d)] = tuning.force_psd;
+                        p0[(sh + d, sh + d)] = tuning.force_std.powi(2);
+                    }
+                }
+            }
+            Effect::ExtraMode { .. } => {
+                if !(theta.is_finite() && theta > 0.0) {
+                    bail!("an extra mode needs a positive frequency, not {theta}");
+                }
+                let w = 2.0 * std::f64::consts::PI * theta;
+                let zeta = tuning.mode_damping;
+                for ch in 0..m {
+                    let (q, v) = (s + 2 * ch, s + 2 * ch + 1);
+                    a[(q, v)] = 1.0;
+                    a[(v, q)] = -w * w;
+                    a[(v, v)] = -2.0 * zeta * w;
+                    c[(ch, q)] = 1.0;
+                    // White acceleration of density psd gives a stationary displacement
+                    // variance psd / (4 ζ ω³).
+                    let var = tuning.mode_std.powi(2) * red.r[(ch, ch)];
+                    qc[(v, v)] = var * 4.0 * zeta * w.powi(3);
+                    p0[(q, q)] = var;
+                    p0[(v, v)] = var * w * w;
+                }
+            }
+            Effect::Parameter(_) => {}
+        }
+        placed.push((e, theta, s));
+        next += e.states(m);
+    }
+    // Accelerometers: the new states' share of each measured DOF's acceleration (the
+    // displacement row twice through the dynamics) enters the low-pass input (or the output).
+    let accel: Vec<(usize, Option<usize>, f64, DMatrix<f64>)> =
+        red.accel_inputs.iter().map(|i| (i.channel, i.state, i.gain, displacement.rows(i.row, 1) * &a * &a)).collect();
+    for (channel, state, gain, row) in accel {
+        for j in n0..ns {
+            match state {
+                Some(y) => a[(y, j)] += gain * row[(0, j)],
+                None => c[(channel, j)] += gain * row[(0, j)],
+            }
+        }
+    }
+    // Output-side effects last, over the complete dynamics.
+    for &(e, theta) in effects {
+        match e {
+            Effect::SensorScale { channel } => {
+                let f = theta.exp();
+                c.row_mut(channel).iter_mut().for_each(|v| *v *= f);
+            }
+            Effect::SensorDelay { channel } if theta != 0.0 => {
+                let back = delay_matrix(&a, theta)?;
+                let row = c.row(channel) * back;
+                c.row_mut(channel).copy_from(&row);
+            }
+            _ => {}
+        }
+    }
+    Ok(AugmentedModel { a, qc, c, r: red.r.clone(), p0, displacement, effects: placed })
+}
+
+/// `e^{−Aτ}`: maps the state now to the state `τ` ago along the noise-free dynamics.
+fn delay_matrix(a: &DMatrix<f64>, tau: f64) -> Result<DMatrix<f64>> {
+    let n = a.nrows();
+    let m = faer::Mat::<f64>::from_fn(n, n, |i, j| -a[(i, j)] * tau);
+    let e = expm(m.as_ref()).map_err(|e| anyhow!("cannot form the delay: {e}"))?;
+    Ok(DMatrix::from_fn(n, n, |i, j| e[(i, j)]))
+}
+
+/// The configuration with the `Parameter` effects of `effects` applied (their scalar is the
+/// log of the factor).
+pub fn apply_parameters(cfg: &RotorConfig, effects: &[(Effect, f64)]) -> Result<RotorConfig> {
+    let mut out = cfg.clone();
+    for &(e, theta) in effects {
+        if let Effect::Parameter(p) = e {
+            p.apply(&mut out, theta.exp())?;
+        }
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::systems::rotor::estimate::{reduce, Tuning};
+
+    fn paper() -> RotorModel {
+        let cfg = RotorConfig::from_toml_str(include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/configs/rotor_paper.toml"))).unwrap();
+        RotorModel::from_config(&cfg).unwrap()
+    }
+
+    #[test]
+    fn every_kind_builds_with_its_states() {
+        let model = paper();
+        let speed = model.config().operation.speed;
+        let red = reduce(&model, speed, &Tuning::default()).unwrap();
+        let flex = Flexibility::new(&model, speed);
+        let kinds = [
+            (Effect::SensorBias { channel: 1 }, 0.0),
+            (Effect::SensorScale { channel: 2 }, 0.1f64.ln_1p()),
+            (Effect::SensorDelay { channel: 0 }, 1e-3),
+            (Effect::HarmonicForce { node: 12, order: 2 }, 0.0),
+            (Effect::UnknownInput { node: 20 }, 0.0),
+            (Effect::ExtraMode { seed_mhz: 55_000 }, 55.0),
+            (Effect::BearingDefect { bearing: 0, line: BearingLine::Bpfo, order_milli: 3585, harmonics: 2 }, 0.0),
+        ];
+        let m = augment(&red, &model, &flex, &kinds, &EffectTuning::default()).unwrap();
+        let added: usize = kinds.iter().map(|(e, _)| e.states(4)).sum();
+        assert_eq!(added, 1 + 2 + 2 + 8 + 4);
+        assert_eq!(m.a.nrows(), red.states() + added);
+        // The scale multiplies row 2 of the base model's C.
+        let base = &red.c;
+        for j in 0..red.states() {
+            assert!((m.c[(2, j)] - 1.1 * base[(2, j)]).abs() <= 1e-12 * base[(2, j)].abs().max(1e-30));
+        }
+        // The delayed row differs from the base row; the others (but the bias column) do not.
+        assert!((0..red.states()).any(|j| (m.c[(0, j)] - base[(0, j)]).abs() > 1e-3 * base[(0, j)].abs()));
+        assert_eq!(m.c[(1, red.states())], 1.0);
+        // The 2x force's states rotate at 2 Ω.
+        let s = red.states() + 1;
+        assert!((m.a[(s + 1, s)] - 2.0 * speed).abs() < 1e-12);
+        // The bearing defect's force acts along y only: its x state has no modal input.
+        let b = red.states() + 1 + 2 + 2 + 8;
+        let r = red.frequencies_hz.len();
+        assert!((0..r).all(|i| m.a[(r + i, b + 1)] == 0.0 && m.a[(r + i, b + 3)] == 0.0));
+        assert!((0..r).any(|i| m.a[(r + i, b)] != 0.0));
+        // Its second harmonic rotates at twice the line's frequency.
+        assert!((m.a[(b + 3, b + 2)] - 2.0 * 3.585 * speed).abs() < 1e-9);
+    }
+
+    /// On the accelerometer rotor, a 1× force added as an effect at disk node 12 must enter the
+    /// model exactly as the reduction's own unbalance phasor there does: same modal input,
+    /// displacement rows, low-pass inputs and sensor rows.
+    #[test]
+    fn a_force_effect_reaches_accelerometers_like_the_unbalance_does() {
+        let cfg = RotorConfig::from_toml_str(include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/configs/rotor_paper_accel.toml"))).unwrap();
+        let model = RotorModel::from_config(&cfg).unwrap();
+        let speed = cfg.operation.speed;
+        let red = reduce(&model, speed, &Tuning::default()).unwrap();
+        assert_eq!(red.accel_inputs.len(), 4);
+        let flex = Flexibility::new(&model, speed);
+        let e = [(Effect::HarmonicForce { node: 12, order: 1 }, 0.0)];
+        let m = augment(&red, &model, &flex, &e, &EffectTuning::default()).unwrap();
+        let r = red.frequencies_hz.len();
+        let j = cfg.unbalances.iter().position(|u| u.node == 12).unwrap();
+        let (base, new) = (2 * r + 2 * j, red.states());
+        let close = |x: f64, y: f64| (x - y).abs() <= 1e-9 * x.abs().max(y.abs()).max(1e-300);
+        for k in 0..2 {
+            // Every row but the force states' own (their rotation is in their own rows).
+            for i in (0..2 * r).chain(red.lowpass_start..red.states()) {
+                assert!(
+                    close(m.a[(i, base + k)], m.a[(i, new + k)]),
+                    "A[{i}, {k}]: {} vs {}",
+                    m.a[(i, base + k)],
+                    m.a[(i, new + k)]
+                );
+            }
+            for i in 0..m.displacement.nrows() {
+                assert!(close(m.displacement[(i, base + k)], m.displacement[(i, new + k)]), "displacement row {i}");
+            }
+            for i in 0..4 {
+                assert!(close(m.c[(i, base + k)], m.c[(i, new + k)]), "C[{i}]");
+            }
+        }
+        // And it does reach the low-pass states.
+        assert!((red.lowpass_start..red.states()).any(|y| m.a[(y, new)] != 0.0));
+    }
+
+    #[test]
+    fn a_parameter_factor_changes_the_configuration() {
+        let model = paper();
+        let cfg = model.config();
+        let e = [
+            (Effect::Parameter(Parameter::DiskMass(0)), 1.1f64.ln()),
+            (Effect::Parameter(Parameter::BearingKxx(1)), 0.5f64.ln()),
+        ];
+        let out = apply_parameters(cfg, &e).unwrap();
+        assert!((out.disks[0].mass / cfg.disks[0].mass - 1.1).abs() < 1e-12);
+        assert!((out.bearings[1].kxx / cfg.bearings[1].kxx - 0.5).abs() < 1e-12);
+        assert_eq!(out.disks[1], cfg.disks[1]);
+        assert_eq!(Parameter::BearingKxx(1).component(cfg), "bearing 33");
+        assert_eq!(Parameter::DiskMass(0).component(cfg), "disk 12");
+        assert!(Parameter::DiskMass(0).apply(&mut cfg.clone(), f64::NAN).is_err());
+        // The paper rotor: 2 disk masses, Young, density, and kxx, kyy, cxx, cyy of both bearings.
+        assert_eq!(Parameter::all(cfg).len(), 2 + 2 + 8);
+    }
+}

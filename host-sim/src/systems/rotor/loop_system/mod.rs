@@ -1,0 +1,458 @@
+//! The rotor as a [`LoopSystem`]: the reduced virtual-sensing filter of
+//! [`rotor_akf`](crate::systems::rotor::estimate) with the effect library of [`effects`], on a data file
+//! with the configured sensors' channels.
+
+//!
+//! * [`effects`]: the rotor's effect library (`sensor_bias`, `sensor_scale`, `sensor_delay`,
+//!   `harmonic_force`, `unknown_input`, `parameter`, `extra_mode`, `bearing_defect`) composed
+//!   onto the reduced rotor's public matrices;
+//! * [`speed`]: the running speed read from the data;
+//! * [`inject`]: undeclared effects added to simulated data; [`cases`]: the ones the tests and
+//!   the README use.
+
+pub mod cases;
+pub mod effects;
+pub mod inject;
+pub mod speed;
+
+use crate::residual_loop::filter::{run_state_space, Run, StateSpace};
+use nalgebra::DMatrix;
+use self::effects::{apply_parameters, augment, AugmentedModel, Effect, EffectTuning, Flexibility, Parameter};
+use crate::residual_loop::optimize::ScalarRange;
+use crate::residual_loop::search::{
+    search, EffectDetail, EffectLabel, LoopOptions, LoopReport, LoopSystem, RunSummary, SystemSection, Traces,
+};
+use crate::residual_loop::signature::{summarise, Channel, NamedLine, ReferenceLines, SummaryContext, LINE_HARMONICS};
+use self::speed::{estimate_speed, RunningSpeed};
+use crate::io::data::DataFile;
+use crate::systems::rotor::bearing_geometry::BearingLine;
+use crate::systems::rotor::estimate::Tuning;
+use crate::systems::rotor::{RotorConfig, RotorModel};
+use crate::systems::rotor::estimate::{reduce, ReducedRotor};
+use anyhow::{anyhow, Result};
+use std::f64::consts::TAU;
+
+/// The rotor's own settings of the loop: its filter's tuning, its effects' noise and priors,
+/// and whether the running speed is read from the data.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct RotorLoopOptions {
+    /// The base filter's tuning (the configuration's `[filter]` section is put in place).
+    pub tuning: Tuning,
+    /// The effects' noise and priors.
+    pub effects: EffectTuning,
+    /// Estimate the running speed from the data within this fraction of the configured
+    /// (nominal) speed, instead of taking the configured speed as exact.
+    pub speed_band: Option<f64>,
+}
+
+/// A rotor, its data and the loop's options: what [`close_loop`] searches.
+pub struct RotorSystem<'a> {
+    cfg: &'a RotorConfig,
+    model: &'a RotorModel,
+    red: ReducedRotor,
+    flex: Flexibility,
+    /// Sensor channels with their offsets removed.
+    columns: Vec<Vec<f64>>,
+    data: &'a DataFile,
+    /// Displacement rows estimated (both directions at every force site).
+    rows: Vec<usize>,
+    row_names: Vec<String>,
+    /// Nodes where forces are tried (disks and unbalances).
+    force_sites: Vec<usize>,
+    /// Bearing lines as orders: (bearing index, line, order), in the order of
+    /// `reference.named`.
+    lines: Vec<(usize, BearingLine, f64)>,
+    /// Where the innovations' lines are placed.
+    reference: ReferenceLines,
+    /// The sensor channels with their units.
+    channel_info: Vec<Channel>,
+    /// The virtual-sensing rows (displacements, m).
+    row_info: Vec<Channel>,
+    /// The running speed used and where it came from.
+    speed: RunningSpeed,
+    options: LoopOptions,
+    rotor: RotorLoopOptions,
+}
+
+impl<'a> RotorSystem<'a> {
+    /// The rotor `model` (its configured sensors, unbalance nodes, bearings and operating
+    /// speed) on `data`, which must have every sensor's channel.
+    pub fn new(
+        model: &'a RotorModel,
+        data: &'a DataFile,
+        options: &LoopOptions,
+        rotor: &RotorLoopOptions,
+    ) -> Result<Self> {
+        let hz = model.config().operation.speed / TAU;
+        Self::at_speed(model, data, options, rotor, RunningSpeed { hz, declared_hz: hz, source: "config", spectral_hz: None })
+    }
+
+    /// As [`RotorSystem::new`], running at `speed` instead of the configured speed.
+    ///
+    /// The base filter's noise levels are those of `rotor.tuning` with the configuration's
+    /// `[filter]` section put in place.
+    pub fn at_speed(
+        model: &'a RotorModel,
+        data: &'a DataFile,
+        options: &LoopOptions,
+        rotor: &RotorLoopOptions,
+        running: RunningSpeed,
+    ) -> Result<Self> {
+        let cfg = model.config();
+        let speed = running.hz * TAU;
+        let rotor = &RotorLoopOptions { tuning: rotor.tuning.with_filter(&cfg.filter), ..*rotor };
+        let red = reduce(model, speed, &rotor.tuning)?;
+        let columns: Vec<Vec<f64>> = red
+            .channels
+            .iter()
+            .zip(&red.offsets)
+            .map(|(name, off)| {
+                data.column(name)
+                    .map(|c| c.iter().map(|v| v - off).collect())
+                    .ok_or_else(|| anyhow!("the data file has no channel {name}"))
+            })
+            .collect::<Result<_>>()?;
+        let mut force_sites: Vec<usize> =
+            cfg.disks.iter().map(|d| d.node).chain(red.force_nodes.iter().copied()).collect();
+        force_sites.sort_unstable();
+        force_sites.dedup();
+        let rows = force_sites.iter().flat_map(|&n| [2 * n, 2 * n + 1]).collect();
+        let row_names: Vec<String> = force_sites.iter().flat_map(|&n| [format!("n{n}_x"), format!("n{n}_y")]).collect();
+        let lines: Vec<(usize, BearingLine, f64)> = cfg
+            .bearings
+            .iter()
+            .enumerate()
+            .filter_map(|(i, b)| b.geometry.map(|g| (i, g)))
+            .flat_map(|(i, g)| BearingLine::ALL.map(|l| (i, l, g.order(l))))
+            .collect();
+        let reference = ReferenceLines {
+            speed,
+            naturals: red.frequencies_hz.clone(),
+            named: lines
+                .iter()
+                .map(|&(b, l, order)| NamedLine {
+                    name: l.name().to_string(),
+                    location: format!("bearing #{b}"),
+                    hz: order * speed / TAU,
+                })
+                .collect(),
+        };
+        let channel_info = red.channels.iter().map(|n| channel(n)).collect();
+        let row_info = row_names.iter().map(|n| Channel::new(n.clone(), "m").shown_in(1e6, "µm")).collect();
+        Ok(Self {
+            cfg,
+            model,
+            flex: Flexibility::new(model, speed),
+            red,
+            columns,
+            data,
+            rows,
+            row_names,
+            force_sites,
+            lines,
+            reference,
+            channel_info,
+            row_info,
+            speed: running,
+            options: *options,
+            rotor: *rotor,
+        })
+    }
+
+    fn channels(&self) -> usize {
+        self.red.channels.len()
+    }
+
+    /// The sensor channels as the filter reads them (offsets removed), `[channel][k]`.
+    pub fn columns(&self) -> &[Vec<f64>] {
+        &self.columns
+    }
+
+    /// The highest harmonic (up to [`LINE_HARMONICS`]) of a line at `order` that some channel's
+    /// spectrum has a peak at, whatever else that peak was named (a harmonic of a defect line
+    /// can sit on an order or a natural frequency too).
+    fn line_harmonics(&self, s: &RunSummary, order: f64) -> u8 {
+        let f = order * self.red.speed / TAU;
+        let tol = 1.2 * s.bin_width_hz;
+        let peaks = || s.channels.iter().flat_map(|c| c.peaks.iter());
+        (1..=LINE_HARMONICS)
+            .filter(|&h| peaks().any(|p| (p.frequency_hz - h as f64 * f).abs() <= tol))
+            .max()
+            .unwrap_or(1)
+    }
+
+    /// The base model's log-likelihood on the data (no effects).
+    pub fn base_log_likelihood(&self) -> Result<f64> {
+        Ok(self.run(&[])?.1.log_likelihood())
+    }
+}
+
+impl LoopSystem for RotorSystem<'_> {
+    type Effect = Effect;
+    type Model = AugmentedModel;
+
+    fn name(&self) -> &str {
+        "rotor"
+    }
+
+    /// Composes the augmented model (re-reducing the rotor when a component parameter is
+    /// changed) and runs the filter over the data.
+    fn run(&self, effects: &[(Effect, f64)]) -> Result<(AugmentedModel, Run)> {
+        let cols: Vec<&[f64]> = self.columns.iter().map(Vec::as_slice).collect();
+        let dt = 1.0 / self.red.sample_rate;
+        let tuning = &self.rotor.effects;
+        let m = if effects.iter().any(|(e, _)| matches!(e, Effect::Parameter(_))) {
+            let cfg = apply_parameters(self.cfg, effects)?;
+            let model = RotorModel::from_config(&cfg)?;
+            let red = reduce(&model, self.red.speed, &self.rotor.tuning)?;
+            let flex = Flexibility::new(&model, self.red.speed);
+            augment(&red, &model, &flex, effects, tuning)?
+        } else {
+            augment(&self.red, self.model, &self.flex, effects, tuning)?
+        };
+        let run = run_filter(&m, dt, &cols, &self.rows)?;
+        Ok((m, run))
+    }
+
+    fn summarise(&self, run: &Run) -> RunSummary {
+        let truth: Vec<Option<&[f64]>> =
+            self.row_names.iter().map(|n| self.data.column(&format!("truth_{n}"))).collect();
+        let ctx = SummaryContext {
+            t: &self.data.t,
+            channels: &self.channel_info,
+            rows: &self.row_info,
+            truth: &truth,
+            lines: &self.reference,
+            sample_rate: self.red.sample_rate,
+        };
+        summarise(run, &ctx, &self.options.signatures)
+    }
+
+    /// Candidates named directly by a signature (a bias, a line at an order, a bearing line or
+    /// elsewhere), then the structural ones (scales, delays, parameters, 1× forces off the
+    /// unbalance nodes) when the innovations carry lines or colour; the catch-all
+    /// (`unknown_input` at each force site) in a tier of its own.
+    fn candidates(&self, s: &RunSummary, effects: &[(Effect, f64)]) -> Vec<Vec<Effect>> {
+        let mut named = Vec::new();
+        let mut biased: Vec<(f64, usize)> = s
+            .channels
+            .iter()
+            .enumerate()
+            .filter(|(_, c)| c.z.abs() >= self.options.signatures.bias_z)
+            .map(|(i, c)| (c.z.abs(), i))
+            .collect();
+        biased.sort_by(|a, b| b.0.total_cmp(&a.0));
+        named.extend(biased.into_iter().map(|(_, channel)| Effect::SensorBias { channel }));
+        let mut structural = false;
+        let mut modes: Vec<u32> = Vec::new();
+        let mut orders: Vec<(f64, u32)> = Vec::new();
+        // Bearing lines seen, with the highest harmonic seen.
+        let mut defects: Vec<(usize, BearingLine, u8)> = Vec::new();
+        for c in &s.channels {
+            if c.whiteness_p < self.options.signatures.alpha || !c.peaks.is_empty() {
+                structural = true;
+            }
+            for p in &c.peaks {
+                if let Some((i, h)) = p.line {
+                    let (bearing, line, _) = self.lines[i];
+                    match defects.iter_mut().find(|(b, l, _)| *b == bearing && *l == line) {
+                        Some(d) => d.2 = d.2.max(h),
+                        None => defects.push((bearing, line, h)),
+                    }
+                } else if let Some(k) = p.order {
+                    match orders.iter_mut().find(|(_, o)| *o == k) {
+                        Some(e) => e.0 = e.0.max(p.prominence_db),
+                        None => orders.push((p.prominence_db, k)),
+                    }
+                } else if p.class == "unexplained" {
+                    let mhz = (p.frequency_hz * 1e3).round() as u32;
+                    let near = |m: &u32| (*m as f64 - mhz as f64).abs() * 1e-3 < 2.0 * s.bin_width_hz;
+                    if !modes.iter().any(near) {
+                        modes.push(mhz);
+                    }
+                }
+            }
+        }
+        // A line already modelled is not proposed again with another number of harmonics.
+        let modelled = |b: usize, l: BearingLine| {
+            effects
+                .iter()
+                .any(|(e, _)| matches!(e, Effect::BearingDefect { bearing, line, .. } if *bearing == b && *line == l))
+        };
+        for (bearing, line, seen) in defects.into_iter().filter(|&(b, l, _)| !modelled(b, l)) {
+            if let Some(&(_, _, order)) = self.lines.iter().find(|(b, l, _)| *b == bearing && *l == line) {
+                let harmonics = self.line_harmonics(s, order).max(seen);
+                let order_milli = (order * 1e3).round() as u32;
+                named.push(Effect::BearingDefect { bearing, line, order_milli, harmonics });
+            }
+        }
+        orders.sort_by(|a, b| b.0.total_cmp(&a.0));
+        for (_, order) in orders {
+            for &node in &self.force_sites {
+                if order == 1 && self.red.force_nodes.contains(&node) {
+                    continue;
+                }
+                named.push(Effect::HarmonicForce { node, order });
+            }
+        }
+        named.extend(modes.into_iter().map(|seed_mhz| Effect::ExtraMode { seed_mhz }));
+        if structural || !s.nis_consistent {
+            for channel in 0..self.channels() {
+                named.push(Effect::SensorScale { channel });
+                named.push(Effect::SensorDelay { channel });
+            }
+            named.extend(Parameter::all(self.cfg).into_iter().map(Effect::Parameter));
+        }
+        let catch_all = self.force_sites.iter().map(|&node| Effect::UnknownInput { node }).collect();
+        vec![named, catch_all]
+    }
+
+    fn label(&self, e: &Effect) -> EffectLabel {
+        let detail = EffectDetail {
+            order: e.order(),
+            parameter: match e {
+                Effect::Parameter(p) => Some(p.name().to_string()),
+                _ => None,
+            },
+            line: match e {
+                Effect::BearingDefect { line, .. } => Some(line.name().to_string()),
+                _ => None,
+            },
+            ..EffectDetail::default()
+        };
+        EffectLabel {
+            kind: e.kind(),
+            location: e.location(&self.red.channels, self.cfg),
+            detail,
+            unit: match e {
+                // A bias is in its channel's unit.
+                Effect::SensorBias { channel } => {
+                    self.channel_info.get(*channel).map_or_else(|| e.unit().to_string(), |c| c.unit.clone())
+                }
+                _ => e.unit().to_string(),
+            },
+        }
+    }
+
+    fn parameters(&self, e: &Effect) -> usize {
+        e.parameters(self.channels())
+    }
+
+    /// Parameters get a finer grid: a stiffness factor's log-likelihood has side lobes where a
+    /// natural frequency crosses a line.
+    fn scalar(&self, e: &Effect) -> Option<(ScalarRange, usize)> {
+        let grid = if matches!(e, Effect::Parameter(_)) { 7 } else { 4 };
+        e.scalar(self.red.sample_rate).map(|r| (r, grid))
+    }
+
+    /// The fitted scalar (a factor as `exp θ`), or the effect states' size over the second
+    /// half of the run.
+    fn value(&self, model: &AugmentedModel, run: &Run, effect: &Effect, theta: f64) -> f64 {
+        let Some(pos) = model.effects.iter().position(|(e, _, _)| e == effect) else { return f64::NAN };
+        let m = self.channels();
+        let offset: usize = model.effects[..pos].iter().map(|(e, _, _)| e.states(m)).sum();
+        let n = self.data.t.len();
+        let half = n / 2;
+        let avg = |f: &dyn Fn(usize) -> f64| (half..n).map(f).sum::<f64>() / (n - half).max(1) as f64;
+        let s = &run.effect_states;
+        match effect {
+            Effect::SensorBias { .. } => avg(&|k| s[offset][k]),
+            Effect::HarmonicForce { .. } => avg(&|k| s[offset][k].hypot(s[offset + 1][k])),
+            Effect::BearingDefect { harmonics, .. } => {
+                let power =
+                    |k: usize| (0..2 * (*harmonics).max(1) as usize).map(|j| s[offset + j][k].powi(2)).sum::<f64>();
+                (avg(&power) / 2.0).sqrt()
+            }
+            Effect::UnknownInput { .. } => avg(&|k| s[offset][k].powi(2) + s[offset + 1][k].powi(2)).sqrt(),
+            Effect::SensorScale { .. } | Effect::Parameter(_) => theta.exp(),
+            Effect::SensorDelay { .. } | Effect::ExtraMode { .. } => theta,
+        }
+    }
+
+    /// Every component parameter, halved and doubled.
+    fn screened(&self) -> Vec<(Effect, Vec<f64>)> {
+        Parameter::all(self.cfg).into_iter().map(|p| (Effect::Parameter(p), vec![0.5f64.ln(), 2f64.ln()])).collect()
+    }
+
+    fn traces(&self) -> Traces {
+        Traces {
+            t: self.data.t.clone(),
+            channels: self.channel_info.clone(),
+            rows: self.row_info.clone(),
+            truth: self
+                .row_names
+                .iter()
+                .map(|n| self.data.column(&format!("truth_{n}")).map(<[f64]>::to_vec))
+                .collect(),
+            ..Traces::default()
+        }
+    }
+
+    /// `running_speed`: the speed the loop used and where it came from.
+    fn section(&self) -> SystemSection {
+        let mut section = SystemSection::default();
+        if let Ok(v) = serde_json::to_value(self.speed) {
+            section.fields.insert("running_speed".into(), v);
+        }
+        section.lines.push(("running speed".into(), self.speed.describe()));
+        section
+    }
+}
+
+/// A sensor channel of the rotor with its unit: displacement probes in m (shown in µm),
+/// accelerometers in m/s², raw accelerometer outputs in V.
+fn channel(name: &str) -> Channel {
+    if name.ends_with("_volts") {
+        Channel::new(name, "V")
+    } else if name.ends_with("_ax") || name.ends_with("_ay") {
+        Channel::new(name, "m/s^2").shown_in(1.0, "m/s²")
+    } else {
+        Channel::new(name, "m").shown_in(1e6, "µm")
+    }
+}
+
+/// Closes the loop on `data` with the rotor `model` (its configured sensors, unbalance nodes,
+/// bearings and operating speed): runs the base filter, then adds effects while the
+/// innovations are not consistent and an effect pays for its parameters (BIC) in both halves of
+/// the run.
+///
+/// With [`RotorLoopOptions::speed_band`] the running speed is first estimated from the data
+/// ([`estimate_speed`]); the report says which speed was used and where it came from.
+pub fn close_loop(
+    model: &RotorModel,
+    data: &DataFile,
+    options: &LoopOptions,
+    rotor: &RotorLoopOptions,
+) -> Result<LoopReport> {
+    let declared_hz = model.config().operation.speed / TAU;
+    let speed = match rotor.speed_band {
+        Some(band) => {
+            if options.progress {
+                eprintln!("loop: estimating the running speed within ±{:.0} % of {declared_hz:.3} Hz", band * 100.0);
+            }
+            let s = estimate_speed(model, data, options, rotor, band)?;
+            if options.progress {
+                eprintln!(
+                    "loop: running speed {:.4} Hz ({:+.2} % from the configured speed; spectral line at {:.4} Hz)",
+                    s.hz,
+                    (s.hz / declared_hz - 1.0) * 100.0,
+                    s.spectral_hz.unwrap_or(f64::NAN)
+                );
+            }
+            s
+        }
+        None => RunningSpeed { hz: declared_hz, declared_hz, source: "config", spectral_hz: None },
+    };
+    search(&RotorSystem::at_speed(model, data, options, rotor, speed)?, options)
+}
+
+/// Runs the filter of `model` over `columns` (`[channel][k]`, offsets removed) at `dt`, and
+/// reports the displacement rows `rows` of the model.
+fn run_filter(model: &AugmentedModel, dt: f64, columns: &[&[f64]], rows: &[usize]) -> Result<Run> {
+    let n = model.a.nrows();
+    let m = model.c.nrows();
+    let out_rows = DMatrix::from_fn(rows.len(), n, |i, j| model.displacement[(rows[i], j)]);
+    let effect_idx: Vec<usize> = model.effects.iter().flat_map(|(e, _, s)| *s..*s + e.states(m)).collect();
+    let ss = StateSpace { a: &model.a, qc: &model.qc, c: &model.c, r: &model.r, p0: &model.p0 };
+    run_state_space(&ss, dt, columns, &out_rows, &effect_idx)
+}
