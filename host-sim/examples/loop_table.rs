@@ -3,10 +3,10 @@
 //!
 //! `cargo run --release -p edgekf-sim --example loop_table`
 
-use edgekf_sim::systems::rotor::loop_system::cases::Case;
 use edgekf_sim::report::text::show_value;
-use edgekf_sim::systems::rotor::loop_system::close_loop;
 use edgekf_sim::residual_loop::{LoopOptions, LoopReport};
+use edgekf_sim::systems::rotor::loop_system::cases::Case;
+use edgekf_sim::systems::rotor::loop_system::close_loop;
 
 /// The seeds `host-sim/tests/residual_loop.rs` uses.
 fn seed(case: Case) -> u64 {
@@ -48,7 +48,8 @@ fn main() -> anyhow::Result<()> {
             .effects_added
             .iter()
             .map(|e| {
-                let what = e.detail.parameter.as_ref().or(e.detail.line.as_ref()).map(|p| format!(" {p}")).unwrap_or_default();
+                let what =
+                    e.detail.parameter.as_ref().or(e.detail.line.as_ref()).map(|p| format!(" {p}")).unwrap_or_default();
                 let order = e.detail.order.map(|o| format!(" {o}×")).unwrap_or_default();
                 format!("`{}`{order} at {}{what} = {}", e.kind, e.location, show_value(e.value, &e.unit))
             })

@@ -207,3 +207,57 @@ fn engine_adds_nothing_to_clean_data_of_another_system() {
         assert!(r.effects_added.is_empty(), "seed {seed}: {:?}", r.effects_added);
     }
 }
+
+/// `edgekf loop toy`: the toy's configuration declares nothing the test varies (the model is
+/// fixed above); its data are the probe `q` and the truth `truth_q`.
+fn toy_loop(
+    request: &edgekf_sim::cli::looping::LoopRequest,
+    _: &clap::ArgMatches,
+) -> anyhow::Result<edgekf_sim::residual_loop::LoopReport> {
+    let text = std::fs::read_to_string(&request.config)?;
+    let cfg: toml::Table = text.parse()?;
+    anyhow::ensure!(cfg.get("frequency_hz").and_then(|v| v.as_float()) == Some(FREQ_HZ), "a 20 Hz toy only");
+    let data = edgekf_sim::cli::registry::read_data(&request.data, &["q"], RATE)?;
+    let column = |name: &str| data.column(name).map(<[f64]>::to_vec).ok_or_else(|| anyhow::anyhow!("no {name}"));
+    let sys = Oscillator { t: data.t.clone(), y: column("q")?, truth: column("truth_q")? };
+    search(&sys, &request.options)
+}
+
+/// A new system joins through one registry row: `edgekf loop toy` runs end to end through the
+/// command line's dispatcher and writes report.json (with its source) and report.html.
+#[test]
+fn a_toy_system_runs_through_the_registry_end_to_end() {
+    use edgekf_sim::cli::{DemoPart, LoopEntry, SystemEntry};
+    let mut registry = edgekf_sim::systems::REGISTRY.to_vec();
+    registry.push(SystemEntry {
+        name: "toy",
+        about: "a one-degree-of-freedom oscillator",
+        command: || clap::Command::new("toy").subcommand(clap::Command::new("hello")),
+        run: |_| Ok(()),
+        close_loop: Some(LoopEntry { about: "the toy's loop", args: |c| c, run: toy_loop }),
+        demo: None::<DemoPart>,
+    });
+    let dir = std::env::temp_dir().join(format!("edgekf-toy-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (t, y, truth) = record(1.0, 3e-5, 4.0, 3);
+    let data = dir.join("toy.csv");
+    edgekf_sim::io::data::write(&data, &["q", "truth_q"], &t, &[&y, &truth]).unwrap();
+    let config = dir.join("toy.toml");
+    std::fs::write(&config, "frequency_hz = 20.0\n").unwrap();
+    let report = dir.join("report");
+    let arg = |p: &std::path::Path| p.display().to_string();
+    let args = ["edgekf", "loop", "toy", "--config", &arg(&config), "--data", &arg(&data), "--report", &arg(&report)];
+    edgekf_sim::cli::run_with(&registry, args.iter().copied().chain(["--quiet"])).unwrap();
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(report.join("report.json")).unwrap()).unwrap();
+    assert_eq!(json["system"], "oscillator");
+    assert_eq!(json["schema_version"], 2);
+    assert_eq!(json["effects_added"][0]["kind"], "sensor_bias");
+    let value = json["effects_added"][0]["value"].as_f64().unwrap();
+    assert!((value / 3e-5 - 1.0).abs() < 0.05, "{value}");
+    assert_eq!(json["source"]["data_sha256"].as_str().map(str::len), Some(64));
+    assert!(json["source"]["command"].as_str().unwrap().starts_with("edgekf loop toy --config"));
+    let html = std::fs::read_to_string(report.join("report.html")).unwrap();
+    assert!(html.contains("sensor_bias") && html.matches("<svg").count() >= 4, "the page names the effect and plots");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -3,10 +3,10 @@
 //! what the library cannot represent as unexplained. The cases are `residual_loop::cases`,
 //! which also make the README's table.
 
-use edgekf_sim::systems::rotor::loop_system::cases::Case;
 use edgekf_sim::report::text::summary_table;
-use edgekf_sim::systems::rotor::loop_system::close_loop;
 use edgekf_sim::residual_loop::{AddedEffect, LoopOptions, LoopReport};
+use edgekf_sim::systems::rotor::loop_system::cases::Case;
+use edgekf_sim::systems::rotor::loop_system::close_loop;
 
 /// Largest disk-node RMS error over the whole run (x, y of nodes 12 and 23), m.
 fn disk_error(r: &LoopReport, after: bool) -> f64 {
@@ -95,7 +95,10 @@ fn a_5_percent_scale_error_is_found() {
 fn a_heavier_disk_is_found() {
     let r = found(Case::DiskMass, 17);
     let e = only(&r);
-    assert_eq!((e.kind.as_str(), e.location.as_str(), e.detail.parameter.as_deref()), ("parameter", "disk 12", Some("mass")));
+    assert_eq!(
+        (e.kind.as_str(), e.location.as_str(), e.detail.parameter.as_deref()),
+        ("parameter", "disk 12", Some("mass"))
+    );
     assert!((e.value - 1.10).abs() < 0.2 * 0.10, "factor {:.4}", e.value);
     // It was tripling the error (and far more): the loop cuts it by well over 3×.
     assert!(disk_error(&r, false) > 3.0 * disk_error(&r, true));
@@ -105,7 +108,10 @@ fn a_heavier_disk_is_found() {
 fn a_softer_shaft_is_found() {
     let r = found(Case::ShaftYoung, 19);
     let e = only(&r);
-    assert_eq!((e.kind.as_str(), e.location.as_str(), e.detail.parameter.as_deref()), ("parameter", "shaft", Some("young")));
+    assert_eq!(
+        (e.kind.as_str(), e.location.as_str(), e.detail.parameter.as_deref()),
+        ("parameter", "shaft", Some("young"))
+    );
     assert!((e.value - 0.95).abs() < 0.2 * 0.05, "factor {:.4}", e.value);
 }
 

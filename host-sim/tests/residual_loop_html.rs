@@ -1,11 +1,11 @@
 //! `report.html` of the residual loop, from a real loop: the paper rotor with an undeclared
 //! 20 µm bias on `n5_x`.
 
-use edgekf_sim::systems::rotor::loop_system::cases::Case;
 use edgekf_sim::report::html::render;
-use edgekf_sim::systems::rotor::loop_system::inject::inject_bias;
-use edgekf_sim::systems::rotor::loop_system::close_loop;
 use edgekf_sim::residual_loop::{LoopOptions, LoopReport};
+use edgekf_sim::systems::rotor::loop_system::cases::Case;
+use edgekf_sim::systems::rotor::loop_system::close_loop;
+use edgekf_sim::systems::rotor::loop_system::inject::inject_bias;
 use edgekf_sim::systems::rotor::{RotorConfig, RotorModel, SimOptions};
 
 fn biased_report() -> LoopReport {
@@ -14,7 +14,8 @@ fn biased_report() -> LoopReport {
     let mut data =
         model.simulate(&SimOptions { duration: 3.0, seed: 3, ..SimOptions::default() }).unwrap().to_data_file();
     inject_bias(&mut data, "n5_x", 20e-6).unwrap();
-    close_loop(&model, &data, &LoopOptions { screen_parameters: false, ..LoopOptions::default() }, &Default::default()).unwrap()
+    close_loop(&model, &data, &LoopOptions { screen_parameters: false, ..LoopOptions::default() }, &Default::default())
+        .unwrap()
 }
 
 /// Writes `html` to `$EDGEKF_HTML_OUT/name` when that is set (to look at the page).

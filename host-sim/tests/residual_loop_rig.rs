@@ -5,10 +5,10 @@
 //! synthetic model). Nothing in the configuration declares the defect or the slip.
 
 use edgekf_sim::io::data::DataFile;
-use edgekf_sim::systems::rotor::loop_system::inject::{inject_bearing_defect, DefectSignal};
-use edgekf_sim::systems::rotor::loop_system::{close_loop, RotorLoopOptions};
 use edgekf_sim::residual_loop::{LoopOptions, LoopReport};
 use edgekf_sim::systems::rotor::bearing_geometry::BearingLine;
+use edgekf_sim::systems::rotor::loop_system::inject::{inject_bearing_defect, DefectSignal};
+use edgekf_sim::systems::rotor::loop_system::{close_loop, RotorLoopOptions};
 use edgekf_sim::systems::rotor::{RotorConfig, RotorModel, SimOptions};
 use std::f64::consts::TAU;
 

@@ -1,8 +1,8 @@
 //! Virtual sensing on the paper rotor: data from the reference FE simulation (never from the
 //! reduced model), estimates from the reduced phasor AKF.
 
-use edgekf_sim::systems::rotor::{Recording, RotorConfig, RotorModel, SimOptions};
 use edgekf_sim::systems::rotor::estimate::{reduce, run, Estimates, FilterPrecision, ForceModel, Tuning};
+use edgekf_sim::systems::rotor::{Recording, RotorConfig, RotorModel, SimOptions};
 
 fn paper() -> RotorModel {
     let cfg = RotorConfig::from_toml_str(include_str!("../configs/rotor_paper.toml")).unwrap();

@@ -2,8 +2,8 @@
 //! (2nd-order Butterworth low-pass at 250 Hz, 5.5 mm/s² noise per sample at 1 kHz), data from the
 //! reference FE simulation, the low-pass inside the filter's model.
 
-use edgekf_sim::systems::rotor::{Recording, RotorConfig, RotorModel, SimOptions};
 use edgekf_sim::systems::rotor::estimate::{reduce, run, Estimates, FilterPrecision, ForceModel, Tuning};
+use edgekf_sim::systems::rotor::{Recording, RotorConfig, RotorModel, SimOptions};
 
 fn config() -> RotorConfig {
     RotorConfig::from_toml_str(include_str!("../configs/rotor_paper_accel.toml")).unwrap()

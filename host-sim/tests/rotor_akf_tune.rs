@@ -2,9 +2,9 @@
 //! differential evolution against the innovations' maximum likelihood, compared on held-out
 //! reference simulations.
 
-use edgekf_sim::systems::rotor::{RotorConfig, RotorModel, SimOptions};
 use edgekf_sim::systems::rotor::estimate::tune::{held_out, tune, Objective, Optimiser};
 use edgekf_sim::systems::rotor::estimate::Tuning;
+use edgekf_sim::systems::rotor::{RotorConfig, RotorModel, SimOptions};
 
 #[test]
 fn likelihood_tuning_is_at_least_as_good_as_the_papers_objective() {

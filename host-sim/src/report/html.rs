@@ -1,4 +1,4 @@
-//! `report.html` of `edgekf loop rotor`: one self-contained page (inline CSS and SVG; no
+//! `report.html` of `edgekf loop <system>`: one self-contained page (inline CSS and SVG; no
 //! scripts, external styles, fonts or images) for people to read what the residual loop found:
 //! why it stopped, the effects it added, the innovation statistics before and after, plots of
 //! the normalised innovations, their spectra, the NIS and the virtual-sensing estimates
@@ -17,8 +17,8 @@
 //! # }
 //! ```
 
-use crate::residual_loop::filter::Run;
 use super::text::shown;
+use crate::residual_loop::filter::Run;
 use crate::residual_loop::search::{AddedEffect, LoopReport, NotIdentifiable, RunSummary, Traces, Trial};
 use crate::residual_loop::signature::{ChannelSignature, Signature};
 use anyhow::Result;
@@ -271,7 +271,7 @@ fn verdict(out: &mut String, r: &LoopReport) {
     out.push_str(&format!("<p><strong>Why the loop stopped:</strong> {}.</p>\n", esc(&r.stopped)));
 }
 
-/// Parameter, bearing line and order of an effect, where present.
+/// Parameter, defect line and order of an effect, where present.
 fn effect_detail(e: &AddedEffect) -> String {
     let d = &e.detail;
     let parts: Vec<String> = [d.parameter.clone(), d.line.clone(), d.order.map(order)].into_iter().flatten().collect();

@@ -21,4 +21,4 @@ pub mod signature;
 pub use search::{
     search, AddedEffect, EffectLabel, LoopOptions, LoopReport, LoopSystem, NotIdentifiable, RunSummary, Traces,
 };
-pub use signature::{Signature, SignatureOptions};
+pub use signature::{Channel, Signature, SignatureOptions};

@@ -5,7 +5,7 @@
 //!
 //! A system supplies the filter runs, the summaries and the candidates; the engine owns the
 //! acceptance rule, the identifiability verdicts and the report, so they read the same for a
-//! rotor, a mechanism or a vehicle.
+//! machine, a mechanism or a vehicle.
 
 use super::filter::Run;
 use super::optimize::{maximise, ScalarRange};
@@ -199,7 +199,7 @@ pub struct Source {
     pub version: String,
 }
 
-/// A system's own part of a report, beside the engine's fields (a rotor's running speed).
+/// A system's own part of a report, beside the engine's fields (a running speed, say).
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct SystemSection {
     /// Fields written at the top level of `report.json`.
@@ -280,7 +280,7 @@ pub struct Traces {
 pub struct LoopReport {
     /// [`SCHEMA_VERSION`].
     pub schema_version: u32,
-    /// The system (`rotor`, …).
+    /// The system (its registry name).
     pub system: String,
     /// Where the report came from.
     pub source: Source,
@@ -301,7 +301,7 @@ pub struct LoopReport {
     pub trials: Vec<Trial>,
     /// Why the loop stopped.
     pub stopped: String,
-    /// The system's own fields (`running_speed` for rotors), at the top level of the JSON.
+    /// The system's own fields (a running speed, say), at the top level of the JSON.
     #[serde(flatten)]
     pub section: SystemSection,
     /// The series behind the plots.
@@ -334,7 +334,7 @@ pub trait LoopSystem {
     type Effect: Copy + PartialEq + Debug;
     /// What a run was made with (the system reads effect values from it).
     type Model;
-    /// The system's name in the report (`rotor`).
+    /// The system's name in the report.
     fn name(&self) -> &str;
     /// Runs the filter with `effects` over the whole recording.
     fn run(&self, effects: &[(Self::Effect, f64)]) -> Result<(Self::Model, Run)>;

@@ -21,7 +21,13 @@ pub const REGISTRY: &[SystemEntry] = &[
         about: "Single mode driven by a harmonic force: simulate data, estimate the force",
         command: subcommands::<oscillator::cli::OscillatorCommand>,
         run: |m| dispatch(m, oscillator::cli::run),
-        close_loop: None,
+        close_loop: Some(LoopEntry {
+            about: "Oscillator: run the harmonic-force filter on `ax`, add what the innovations ask for (a bias or \
+                    scale error of the sensor, a force at 2× or 3× the drive, a wrong natural frequency or damping) \
+                    and report before/after (report.json, report.html)",
+            args: |c| c,
+            run: oscillator::cli::close_loop,
+        }),
         demo: Some(DemoPart { closes_loop: false, run: oscillator::cli::demo }),
     },
     SystemEntry {

@@ -16,8 +16,8 @@
 use cortex_m_rt::entry;
 use defmt_semihosting as _;
 use edgekf::filter::{KalmanFilter, MerweSigmaPoints, SteadyState, SteadyStateFilter, UnscentedKalmanFilter};
-use edgekf::systems::oscillator::{HarmonicForceEstimator, HarmonicForceParams};
 use edgekf::models::synthetic::{dense_model, CubicModel, Lcg};
+use edgekf::systems::oscillator::{HarmonicForceEstimator, HarmonicForceParams};
 use edgekf_firmware::semihost::exit;
 use nalgebra::{SMatrix, SVector};
 

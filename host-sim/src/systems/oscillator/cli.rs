@@ -148,3 +148,14 @@ pub fn demo(args: &DemoArgs) -> anyhow::Result<()> {
     }
     Ok(())
 }
+
+/// `edgekf loop oscillator`: the scenario file's model (mode, drive, sensor, filter tuning) on
+/// the data's `ax` channel.
+pub fn close_loop(
+    request: &crate::cli::looping::LoopRequest,
+    _: &clap::ArgMatches,
+) -> anyhow::Result<crate::residual_loop::LoopReport> {
+    let s = Scenario::load(&request.config)?;
+    let file = crate::cli::registry::read_data(&request.data, &KNOWN_CHANNELS, s.sensor.odr_hz)?;
+    super::loop_system::close_loop(&s, &file, &request.options)
+}

@@ -9,8 +9,8 @@
 //! assert!(demo.summary().to_string().contains("force amplitude, mean 1.5–3 s [N]"));
 //! ```
 
-use crate::systems::oscillator::estimate::{self, EstimateOptions, Estimates};
 use crate::io::data::DataFile;
+use crate::systems::oscillator::estimate::{self, EstimateOptions, Estimates};
 use crate::systems::oscillator::report::{steady_windows, Summary};
 use crate::systems::oscillator::scenario::{Gain, Recording, Scenario};
 use anyhow::Context as _;

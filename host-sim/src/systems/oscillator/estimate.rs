@@ -22,8 +22,8 @@
 //! ```
 
 use crate::io::data::{self, DataError, DataFile};
-use edgekf::systems::oscillator::{EstimatorCounters, HarmonicForceEstimator, HarmonicForceParams};
 use edgekf::residual::{NisBounds, RunningStats};
+use edgekf::systems::oscillator::{EstimatorCounters, HarmonicForceEstimator, HarmonicForceParams};
 use edgekf::Real;
 use std::path::Path;
 

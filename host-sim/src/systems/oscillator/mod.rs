@@ -9,12 +9,14 @@
 //! * [`estimate`]: the harmonic-force estimator (`edgekf::systems::oscillator`) over a data
 //!   file, judged against the truth; [`report`]: its summary;
 //! * [`export`]: the model and steady-state gain as Rust constants for the firmware;
+//! * [`loop_system`]: the oscillator as a system of the residual loop (`edgekf loop oscillator`);
 //! * [`demo`]: the demo's first part; [`cli`]: `edgekf oscillator …`.
 
 pub mod cli;
 pub mod demo;
 pub mod estimate;
 pub mod export;
+pub mod loop_system;
 pub mod report;
 pub mod scenario;
 pub mod sensor;

@@ -5,8 +5,8 @@
 //! against the sensor noise, the NIS against its 99 % band, and every counter, so a failing run
 //! is visible at a glance rather than averaged away.
 
-use crate::systems::oscillator::estimate::{window_mean, Estimates};
 use crate::io::data::DataFile;
+use crate::systems::oscillator::estimate::{window_mean, Estimates};
 use crate::systems::oscillator::sim::ForceConfig;
 use std::fmt::{self, Write as _};
 

@@ -7,10 +7,10 @@
 //! assert_eq!(demo.report.effects_added[0].location, "disk 12");
 //! ```
 
-use super::loop_system::effects::Parameter;
 use super::loop_system::close_loop;
-use crate::residual_loop::search::{LoopOptions, LoopReport};
+use super::loop_system::effects::Parameter;
 use crate::io::data::DataFile;
+use crate::residual_loop::search::{LoopOptions, LoopReport};
 use crate::systems::rotor::{RotorConfig, RotorModel, SimOptions};
 use anyhow::Result;
 
@@ -34,14 +34,16 @@ impl LoopDemo {
     /// Simulates the paper rotor with disk 12 `MASS_FACTOR`× heavier and closes the loop on the
     /// declared model (`progress`: print each candidate to standard error).
     pub fn run(progress: bool) -> Result<Self> {
-        let declared = RotorConfig::from_toml_str(include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/configs/rotor_paper.toml")))?;
+        let declared =
+            RotorConfig::from_toml_str(include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/configs/rotor_paper.toml")))?;
         let mut actual = declared.clone();
         Parameter::DiskMass(0).apply(&mut actual, MASS_FACTOR)?;
         let data = RotorModel::from_config(&actual)?
             .simulate(&SimOptions { duration: DURATION, seed: SEED, ..SimOptions::default() })?
             .to_data_file();
         let model = RotorModel::from_config(&declared)?;
-        let report = close_loop(&model, &data, &LoopOptions { progress, ..LoopOptions::default() }, &Default::default())?;
+        let report =
+            close_loop(&model, &data, &LoopOptions { progress, ..LoopOptions::default() }, &Default::default())?;
         Ok(Self { data, report })
     }
 

@@ -15,8 +15,8 @@
 //! rad/s) with only five or six correct digits.
 
 use super::assembly::RotorModel;
-use crate::linalg::{balance, solve};
 use super::{dof, RotorError};
+use crate::linalg::{balance, solve};
 use faer::{c64, Mat};
 use std::f64::consts::PI;
 use std::fmt;

@@ -35,10 +35,10 @@
 
 use super::assembly::RotorModel;
 use super::config::{SensorConfig, SensorKind};
-use crate::linalg::{expm, mul, solve};
 use super::sensor::{butterworth, Section};
 use super::{dof, RotorError};
 use crate::io::data::{self, DataError, DataFile};
+use crate::linalg::{expm, mul, solve};
 use faer::{Accum, Mat, Par};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -292,7 +292,9 @@ impl RotorModel {
     fn transition(&self, aug: &Augmented, dt: f64, speed: f64, method: Method) -> Result<Mat<f64>, RotorError> {
         let size = aug.f.nrows();
         match method {
-            Method::Exact => expm(Mat::from_fn(size, size, |i, j| aug.f[(i, j)] * dt).as_ref()).map_err(RotorError::from),
+            Method::Exact => {
+                expm(Mat::from_fn(size, size, |i, j| aug.f[(i, j)] * dt).as_ref()).map_err(RotorError::from)
+            }
             Method::Trapezoidal { substeps } => {
                 let substeps = substeps.max(1);
                 let h = dt / substeps as f64;

@@ -74,7 +74,11 @@ impl Fault {
         vec![
             Fault::NackBurst { t: 0.25 * d, transactions: 3 },
             Fault::Stuck { t_start: 0.4 * d, t_end: 0.4 * d + 0.05 },
-            Fault::Saturation { t_start: 0.75 * d, t_end: 0.75 * d + 0.02, accel: 3.0 * crate::systems::oscillator::sensor::G },
+            Fault::Saturation {
+                t_start: 0.75 * d,
+                t_end: 0.75 * d + 0.02,
+                accel: 3.0 * crate::systems::oscillator::sensor::G,
+            },
         ]
     }
 

@@ -18,13 +18,13 @@
 mod fault;
 mod recording;
 
-pub use crate::systems::oscillator::sim::{ExtraHarmonic, ForceChange, ForceConfig, ModeConfig};
 pub use crate::systems::oscillator::sensor::Adxl355Config as SensorConfig;
+pub use crate::systems::oscillator::sim::{ExtraHarmonic, ForceChange, ForceConfig, ModeConfig};
 pub use fault::{Fault, TIME_TOLERANCE};
 pub use recording::Recording;
 
-use crate::systems::oscillator::sim::{Oscillator, DEFAULT_SUBSTEPS};
 use crate::systems::oscillator::sensor::Adxl355;
+use crate::systems::oscillator::sim::{Oscillator, DEFAULT_SUBSTEPS};
 use anyhow::Context as _;
 use edgekf::systems::oscillator::{GainMode, HarmonicForceParams};
 use serde::Deserialize;

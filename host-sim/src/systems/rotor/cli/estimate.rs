@@ -1,9 +1,9 @@
 //! `edgekf rotor estimate` and `edgekf rotor export`: the work behind the commands (the
 //! argument parsing lives with the other rotor commands).
 
+use crate::io::data::{self, DataFile};
 use crate::systems::rotor::estimate::estimate::{discrete, run_with, Estimates, FilterPrecision, RunOptions};
 use crate::systems::rotor::estimate::reduce::{reduce, ForceModel, ReducedRotor, Tuning};
-use crate::io::data::{self, DataFile};
 use crate::systems::rotor::{RotorConfig, RotorModel};
 use anyhow::{bail, Context, Result};
 use edgekf::export::{write_matrix, write_model, write_steady_state};

@@ -8,8 +8,8 @@
 //! assert!(Case::Scale.describe().contains("5 %"));
 //! ```
 
-use super::inject::{inject_bias, inject_delay, inject_harmonic_force, inject_scale};
 use super::effects::Parameter;
+use super::inject::{inject_bias, inject_delay, inject_harmonic_force, inject_scale};
 use crate::io::data::DataFile;
 use crate::systems::rotor::{RotorConfig, RotorModel, SimOptions};
 use anyhow::Result;
@@ -79,7 +79,8 @@ impl Case {
 
     /// The declared rotor (what the loop is given).
     pub fn declared() -> Result<RotorModel> {
-        let cfg = RotorConfig::from_toml_str(include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/configs/rotor_paper.toml")))?;
+        let cfg =
+            RotorConfig::from_toml_str(include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/configs/rotor_paper.toml")))?;
         Ok(RotorModel::from_config(&cfg)?)
     }
 

@@ -6,12 +6,12 @@
 //! or delay, a component parameter, a mode's frequency), some both. Each says which residual
 //! signatures point to it ([`Effect::signature`]).
 
+use crate::linalg::expm;
 pub use crate::residual_loop::optimize::ScalarRange;
 use crate::residual_loop::search::EffectKind;
 use crate::systems::rotor::bearing_geometry::BearingLine;
-use crate::linalg::expm;
-use crate::systems::rotor::{dof, RotorConfig, RotorModel, SensorKind};
 use crate::systems::rotor::estimate::ReducedRotor;
+use crate::systems::rotor::{dof, RotorConfig, RotorModel, SensorKind};
 use anyhow::{anyhow, bail, Context, Result};
 use nalgebra::DMatrix;
 
@@ -567,7 +567,9 @@ mod tests {
     use crate::systems::rotor::estimate::{reduce, Tuning};
 
     fn paper() -> RotorModel {
-        let cfg = RotorConfig::from_toml_str(include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/configs/rotor_paper.toml"))).unwrap();
+        let cfg =
+            RotorConfig::from_toml_str(include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/configs/rotor_paper.toml")))
+                .unwrap();
         RotorModel::from_config(&cfg).unwrap()
     }
 
@@ -615,7 +617,11 @@ mod tests {
     /// displacement rows, low-pass inputs and sensor rows.
     #[test]
     fn a_force_effect_reaches_accelerometers_like_the_unbalance_does() {
-        let cfg = RotorConfig::from_toml_str(include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/configs/rotor_paper_accel.toml"))).unwrap();
+        let cfg = RotorConfig::from_toml_str(include_str!(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/configs/rotor_paper_accel.toml"
+        )))
+        .unwrap();
         let model = RotorModel::from_config(&cfg).unwrap();
         let speed = cfg.operation.speed;
         let red = reduce(&model, speed, &Tuning::default()).unwrap();

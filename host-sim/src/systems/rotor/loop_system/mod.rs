@@ -15,21 +15,21 @@ pub mod effects;
 pub mod inject;
 pub mod speed;
 
-use crate::residual_loop::filter::{run_state_space, Run, StateSpace};
-use nalgebra::DMatrix;
 use self::effects::{apply_parameters, augment, AugmentedModel, Effect, EffectTuning, Flexibility, Parameter};
+use self::speed::{estimate_speed, RunningSpeed};
+use crate::io::data::DataFile;
+use crate::residual_loop::filter::{run_state_space, Run, StateSpace};
 use crate::residual_loop::optimize::ScalarRange;
 use crate::residual_loop::search::{
     search, EffectDetail, EffectLabel, LoopOptions, LoopReport, LoopSystem, RunSummary, SystemSection, Traces,
 };
 use crate::residual_loop::signature::{summarise, Channel, NamedLine, ReferenceLines, SummaryContext, LINE_HARMONICS};
-use self::speed::{estimate_speed, RunningSpeed};
-use crate::io::data::DataFile;
 use crate::systems::rotor::bearing_geometry::BearingLine;
 use crate::systems::rotor::estimate::Tuning;
-use crate::systems::rotor::{RotorConfig, RotorModel};
 use crate::systems::rotor::estimate::{reduce, ReducedRotor};
+use crate::systems::rotor::{RotorConfig, RotorModel};
 use anyhow::{anyhow, Result};
+use nalgebra::DMatrix;
 use std::f64::consts::TAU;
 
 /// The rotor's own settings of the loop: its filter's tuning, its effects' noise and priors,
@@ -84,7 +84,13 @@ impl<'a> RotorSystem<'a> {
         rotor: &RotorLoopOptions,
     ) -> Result<Self> {
         let hz = model.config().operation.speed / TAU;
-        Self::at_speed(model, data, options, rotor, RunningSpeed { hz, declared_hz: hz, source: "config", spectral_hz: None })
+        Self::at_speed(
+            model,
+            data,
+            options,
+            rotor,
+            RunningSpeed { hz, declared_hz: hz, source: "config", spectral_hz: None },
+        )
     }
 
     /// As [`RotorSystem::new`], running at `speed` instead of the configured speed.

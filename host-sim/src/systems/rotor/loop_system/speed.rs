@@ -8,10 +8,10 @@
 //! phasor of the filter only stays locked to the data at the right speed), refined by Brent's
 //! method within a resolution cell of the spectral estimate.
 
-use crate::residual_loop::optimize::maximise;
 use super::{RotorLoopOptions, RotorSystem};
-use crate::residual_loop::search::LoopOptions;
 use crate::io::data::DataFile;
+use crate::residual_loop::optimize::maximise;
+use crate::residual_loop::search::LoopOptions;
 use crate::systems::rotor::RotorModel;
 use anyhow::{bail, Result};
 use serde::Serialize;
@@ -140,11 +140,10 @@ pub fn estimate_speed(
         .ok_or_else(|| anyhow::anyhow!("no spectrum to read the speed from (too few samples?)"))?;
     let span = data.t.len() as f64 / rate;
     let cell = 1.0 / span;
-    let log_likelihood =
-        |hz: f64| {
-            let at = RunningSpeed { hz, declared_hz: nominal_hz, source: "estimated", spectral_hz: None };
-            RotorSystem::at_speed(model, data, options, rotor, at).and_then(|s| s.base_log_likelihood()).ok()
-        };
+    let log_likelihood = |hz: f64| {
+        let at = RunningSpeed { hz, declared_hz: nominal_hz, source: "estimated", spectral_hz: None };
+        RotorSystem::at_speed(model, data, options, rotor, at).and_then(|s| s.base_log_likelihood()).ok()
+    };
     let best = maximise(log_likelihood, spectral - cell, spectral + cell, 4, 1e-5 * nominal_hz)
         .ok_or_else(|| anyhow::anyhow!("no speed near {spectral:.3} Hz gives a usable filter"))?;
     Ok(RunningSpeed { hz: best.x, declared_hz: nominal_hz, source: "estimated", spectral_hz: Some(spectral) })
