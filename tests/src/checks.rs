@@ -2,7 +2,7 @@
 //! run by the same numbers.
 
 use crate::report::RunReport;
-use edgekf_sim::scenario::{Fault, Recording, Scenario};
+use edgekf_sim::systems::oscillator::scenario::{Fault, Recording, Scenario};
 
 /// Samples per block for `NodeConfig::default()` (48 FIFO entries / 3 axes).
 pub const BLOCK_SAMPLES: usize = 16;

@@ -4,7 +4,7 @@
 use anyhow::{anyhow, bail, Result};
 use edgekf_firmware::line_feed::ChannelReader;
 use edgekf_firmware::rotor::{RotorEstimator, RotorReport, CHANNELS, DISK_NODES};
-use edgekf_sim::rotor::Recording;
+use edgekf_sim::systems::rotor::Recording;
 
 /// Runs the firmware's [`RotorEstimator`] over CSV text exactly as `edgekf-rotor-qemu` does.
 pub fn run_host(csv: &[u8]) -> Result<Vec<RotorReport>> {

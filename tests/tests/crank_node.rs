@@ -5,10 +5,10 @@
 //! with `--features hil` (run by `cargo xtask test`, which sets `EDGEKF_CRANK_ELF`), the image
 //! in QEMU reports bit for bit what the node's code reports on the host.
 
-use edgekf_sim::crank::estimate::model::{feature_vector, FastModel, FEATURES, FEATURE_NAMES};
-use edgekf_sim::crank::estimate::train::Run;
-use edgekf_sim::crank::estimate::Recording;
-use edgekf_sim::crank::{CrankConfig, Joint};
+use edgekf_sim::systems::crank::estimate::model::{feature_vector, FastModel, FEATURES, FEATURE_NAMES};
+use edgekf_sim::systems::crank::estimate::train::Run;
+use edgekf_sim::systems::crank::estimate::Recording;
+use edgekf_sim::systems::crank::{CrankConfig, Joint};
 use edgekf_tests::crank::{csv, reference_features, run_host};
 
 /// Agreement required between the node (`f32`) and the host (`f64`) on the clearance of the

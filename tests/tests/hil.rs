@@ -5,7 +5,7 @@
 //! `EDGEKF_FW_ELF`.
 #![cfg(feature = "hil")]
 
-use edgekf_sim::scenario::Scenario;
+use edgekf_sim::systems::oscillator::scenario::Scenario;
 use edgekf_tests::checks::{fault_scenario, recovery_mismatch, worst_amplitude_error, FAULTS_CLEAR_AT};
 use edgekf_tests::report::RunReport;
 use edgekf_tests::{first_difference, host, qemu};
@@ -85,7 +85,7 @@ fn a_failing_firmware_run_fails_with_a_readable_message() {
 
 #[test]
 fn rotor_virtual_sensing_in_qemu_matches_the_host_bit_for_bit() {
-    use edgekf_sim::rotor::{RotorConfig, RotorModel, SimOptions};
+    use edgekf_sim::systems::rotor::{RotorConfig, RotorModel, SimOptions};
     let cfg = RotorConfig::from_toml_str(include_str!("../../host-sim/configs/rotor_paper.toml")).unwrap();
     let rec = RotorModel::from_config(&cfg)
         .unwrap()

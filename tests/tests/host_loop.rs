@@ -1,7 +1,7 @@
 //! The firmware's driver and main loop, run on the host on reference-simulator data: the same
 //! checks the QEMU runs make, without QEMU, in every `cargo test`.
 
-use edgekf_sim::scenario::Scenario;
+use edgekf_sim::systems::oscillator::scenario::Scenario;
 use edgekf_tests::checks::{fault_scenario, recovery_mismatch, worst_amplitude_error, FAULTS_CLEAR_AT};
 use edgekf_tests::host;
 

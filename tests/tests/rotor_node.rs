@@ -2,7 +2,7 @@
 //! computes for the paper rotor, and it meets the virtual-sensing target on reference data.
 
 use edgekf_firmware::rotor::{RotorEstimator, SAMPLE_RATE_HZ, STEADY_AFTER};
-use edgekf_sim::rotor::{RotorConfig, RotorModel, SimOptions};
+use edgekf_sim::systems::rotor::{RotorConfig, RotorModel, SimOptions};
 use edgekf_tests::rotor::{disk_rms_error, run_host, run_host_with};
 use std::path::Path;
 
@@ -10,7 +10,7 @@ const CONFIG: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../host-sim/configs/r
 
 #[test]
 fn compiled_constants_are_current() {
-    let text = edgekf_sim::rotor_akf::cli::export_text(Path::new(CONFIG), 8).unwrap();
+    let text = edgekf_sim::systems::rotor::cli::estimate::export_text(Path::new(CONFIG), 8).unwrap();
     let committed = include_str!("../../firmware/src/generated/rotor.rs");
     assert!(
         text == committed,

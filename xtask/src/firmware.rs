@@ -115,7 +115,7 @@ pub fn print_footprint(image: Image, elf: &Path) -> Result<()> {
 pub fn run_and_print(elf: &Path, data: Option<&Path>) -> Result<()> {
     let input = match data {
         Some(p) => std::fs::read(p).with_context(|| format!("reading {}", p.display()))?,
-        None => edgekf_sim::scenario::Scenario::default().simulate().to_csv_string().into_bytes(),
+        None => edgekf_sim::systems::oscillator::scenario::Scenario::default().simulate().to_csv_string().into_bytes(),
     };
     let run = edgekf_tests::qemu::run(elf, &input, Duration::from_secs(120))?;
     for line in &run.lines {

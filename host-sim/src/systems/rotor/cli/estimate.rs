@@ -2,7 +2,7 @@
 //! argument parsing lives with the other rotor commands).
 
 use crate::io::data::{self, DataFile};
-use crate::systems::rotor::estimate::estimate::{discrete, run_with, Estimates, FilterPrecision, RunOptions};
+use crate::systems::rotor::estimate::filter::{discrete, run_with, Estimates, FilterPrecision, RunOptions};
 use crate::systems::rotor::estimate::reduce::{reduce, ForceModel, ReducedRotor, Tuning};
 use crate::systems::rotor::{RotorConfig, RotorModel};
 use anyhow::{bail, Context, Result};

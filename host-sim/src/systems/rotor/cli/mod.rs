@@ -10,7 +10,7 @@ use crate::systems::rotor::config::{Direction, RotorConfig, SensorKind};
 use crate::systems::rotor::modal::ModalAnalysis;
 use crate::systems::rotor::simulate::{Method, Progress, SimOptions};
 use crate::systems::rotor::{Mode, RotorModel, Whirl};
-mod estimate;
+pub mod estimate;
 
 use anyhow::Context as _;
 use clap::{Subcommand, ValueEnum};

@@ -6,7 +6,7 @@
 //!   bearings), with static correction for the truncated modes, into a continuous state-space
 //!   model; one forward-rotating phasor per unbalance node (or, for comparison, the paper's
 //!   random-walk forces).
-//! * [`estimate`]: discretisation (exact, Van Loan), the filter run over a data file, and the
+//! * [`filter`]: discretisation (exact, Van Loan), the filter run over a data file, and the
 //!   virtual-sensing outputs.
 //! * [`tune`]: the noise parameters from data, by the paper's compromise objective under
 //!   differential evolution or by the innovations' maximum likelihood.
@@ -18,9 +18,9 @@
 //! what the model lacks stays visible in the innovations. The paper's free random-walk forces
 //! (two per node, `F_x` and `F_y`) soak up almost any model error instead.
 
-pub mod estimate;
+pub mod filter;
 pub mod reduce;
 pub mod tune;
 
-pub use estimate::{run, run_with, Estimates, FilterPrecision, RunOptions};
+pub use filter::{run, run_with, Estimates, FilterPrecision, RunOptions};
 pub use reduce::{reduce, ForceModel, ReducedRotor, Tuning};

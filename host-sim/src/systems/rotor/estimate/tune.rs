@@ -17,7 +17,7 @@
 //! Optimisers, both written here (a few dozen lines each; no crate needed): differential
 //! evolution (DE/rand/1/bin, bounds by reflection) and Nelder–Mead (bounds by clamping).
 
-use super::estimate::{run, Estimates, FilterPrecision};
+use super::filter::{run, Estimates, FilterPrecision};
 use super::reduce::{reduce, ReducedRotor, Tuning};
 use crate::io::data::DataFile;
 use crate::systems::rotor::{RotorModel, SimOptions};
