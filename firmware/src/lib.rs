@@ -1,24 +1,34 @@
 #![no_std]
 #![deny(missing_docs)]
 //! edgekf sensor-node firmware, as a library that builds for the Cortex-M4F node and is tested
-//! on the host.
+//! on the host. Hardware stays at the edges (the driver, the binaries); the loop and the
+//! estimators in between are plain code that the host tests and the HIL runs share.
 //!
-//! * [`adxl355`]: driver for the Analog Devices ADXL355 accelerometer over I2C or SPI;
-//! * [`virtual_adxl355`]: a software ADXL355 on a virtual I2C bus, fed with samples, so the
+//! * [`adxl355`]: driver for the Analog Devices ADXL355 over I²C or SPI, the only place that
+//!   knows its registers;
+//! * [`virtual_adxl355`]: a software ADXL355 on a virtual I²C bus, fed with samples, so the
 //!   real driver and main loop run unchanged in QEMU and in host tests;
-//! * [`crank`]: slider-crank joint clearance from the crank angular acceleration (the host's fast
-//!   estimator, streaming in `f32`, model compiled in).
+//! * [`line_feed`]: CSV lines from a byte stream (a host file over semihosting, or a slice);
+//! * [`source`]: the node's sample sources, the ADXL355 through either bus interface or named
+//!   channels of a HIL file;
+//! * [`node`]: the main loop, generic over the source and the estimator, with its counters;
+//! * [`systems`]: each system's estimator on the node, its report frames and its HIL image;
+//! * [`frame`]: report frames defined once, for the defmt emitter and the host's parser alike;
+//! * [`hil`]: the HIL images' run, shared by the QEMU entry point and the host reference runs;
+//! * `semihost` (QEMU images only): host files, exit codes, the QEMU entry skeleton;
+//! * `stack` (chip only): stack high-water marks by painting.
 
 pub mod adxl355;
-pub mod crank;
+pub mod frame;
+pub mod hil;
 pub mod line_feed;
-pub mod model;
 pub mod node;
-pub mod rotor;
 #[cfg(all(target_os = "none", feature = "qemu"))]
 pub mod semihost;
+pub mod source;
 #[cfg(target_os = "none")]
 pub mod stack;
+pub mod systems;
 pub mod virtual_adxl355;
 
 #[cfg(test)]

@@ -1,8 +1,18 @@
-//! Host file access and exit codes through ARM semihosting (handled by QEMU). Test equipment
-//! only: semihosting calls stop the core while the host serves them.
+//! Host file access, exit codes and the QEMU images' entry skeleton, through ARM semihosting
+//! (handled by QEMU). Test equipment only: semihosting calls stop the core while the host
+//! serves them.
+//!
+//! Every QEMU image is [`qemu_image!`](crate::qemu_image!) over its system's
+//! [`HilImage`]: paint the stack, open `hil_input.csv`, start, measure start-up's stack and
+//! repaint, run ([`crate::hil::run`]), then the `stack` and `done` frames and exit 0. Exit
+//! codes: 2 no input file, 3 no usable header, 4 the sensor or estimator did not start, 101
+//! panic, 102 HardFault.
 
-use crate::line_feed::{ByteSource, ChannelReader};
-use cortex_m_semihosting::{nr, syscall, syscall1};
+use crate::frame::{Defmt, Done, FrameSink, StackFrame};
+use crate::hil::{HilError, HilImage};
+use crate::line_feed::ByteSource;
+use crate::stack;
+use cortex_m_semihosting::{heprint, heprintln, nr, syscall, syscall1};
 
 /// An open host file.
 pub struct HostFile(usize);
@@ -49,26 +59,71 @@ pub fn exit(code: u32) -> ! {
     }
 }
 
-/// Opens the HIL input `hil_input.csv` in QEMU's working directory and locates `channels` in
-/// its header, or ends QEMU with exit code 2 (no file) or 3 (no usable header), naming `image`
-/// and the channels it needs.
-pub fn open_channels<const M: usize>(image: &str, channels: [&'static str; M]) -> ChannelReader<HostFile, M> {
-    let Some(file) = HostFile::open("hil_input.csv\0") else {
-        cortex_m_semihosting::heprintln!("{}: cannot open hil_input.csv in QEMU's working directory", image);
+/// The HIL input, in QEMU's working directory.
+const INPUT: &str = "hil_input.csv\0";
+
+/// A QEMU image's whole run (see the module docs); never returns.
+pub fn run_image<I: HilImage>() -> !
+where
+    I::StartError: defmt::Format,
+{
+    stack::paint();
+    let Some(file) = HostFile::open(INPUT) else {
+        heprintln!("{}: cannot open hil_input.csv in QEMU's working directory", I::NAME);
+        defmt::error!("no input file");
         exit(2)
     };
-    match ChannelReader::new(file, channels) {
-        Ok(r) => r,
-        Err(e) => {
-            cortex_m_semihosting::heprint!("{}: hil_input.csv has no usable header (need", image);
-            for c in channels {
-                cortex_m_semihosting::heprint!(" {}", c);
+    let mut storage = I::storage();
+    // Matched by reference: the node stays where `start` built it (moving it out of the
+    // `Result` would put a second copy of it, several KB for the rotor, on this frame).
+    let mut started = I::start(file, &mut storage);
+    let node = match &mut started {
+        Ok(node) => node,
+        Err(HilError::Header(e)) => {
+            heprint!("{}: hil_input.csv has no usable header (need", I::NAME);
+            for c in I::COLUMNS {
+                heprint!(" {}", c);
             }
-            cortex_m_semihosting::heprintln!(")");
+            heprintln!(")");
             defmt::error!("bad header: {}", e);
             exit(3)
         }
-    }
+        Err(HilError::Start(e)) => {
+            heprintln!("{}: the node did not start", I::NAME);
+            defmt::error!("start failed: {}", e);
+            exit(4)
+        }
+    };
+    I::started(node, &mut Defmt);
+    // Start-up (the compiled-in model's set-up, the header) is measured on its own, then the
+    // stack is repainted so that the end-of-run figure is the main loop's own.
+    let (boot, _) = stack::high_water();
+    stack::paint();
+    crate::hil::run::<I, _>(node, &mut Defmt);
+    let (used, total) = stack::high_water();
+    Defmt.frame(&StackFrame { boot, used, total });
+    Defmt.frame(&Done {});
+    exit(0)
+}
+
+/// Defines a QEMU image: its entry point ([`run_image`] over the [`HilImage`] `$image`) and its
+/// fault handlers. The binary must depend on `cortex-m`, `cortex-m-rt`,
+/// `cortex-m-semihosting` and a defmt logger (the `qemu` feature brings them).
+///
+/// ```ignore
+/// use defmt_semihosting as _;
+/// edgekf_firmware::qemu_image!(edgekf_firmware::systems::rotor::RotorImage);
+/// ```
+#[macro_export]
+macro_rules! qemu_image {
+    ($image:ty) => {
+        #[::cortex_m_rt::entry]
+        fn main() -> ! {
+            $crate::semihost::run_image::<$image>()
+        }
+
+        $crate::semihost_fault_handlers!(<$image as $crate::hil::HilImage>::NAME);
+    };
 }
 
 /// Defines a QEMU image's panic and HardFault handlers: each prints the image's `name` and the
@@ -77,21 +132,21 @@ pub fn open_channels<const M: usize>(image: &str, channels: [&'static str; M]) -
 /// `cortex-m`, `cortex-m-rt` and `cortex-m-semihosting` (the `qemu` feature brings them).
 ///
 /// ```ignore
-/// edgekf_firmware::semihost_fault_handlers!("edgekf-rotor-qemu");
+/// edgekf_firmware::semihost_fault_handlers!("edgekf-bench");
 /// ```
 #[macro_export]
 macro_rules! semihost_fault_handlers {
-    ($name:literal) => {
+    ($name:expr) => {
         #[panic_handler]
         fn panic(info: &core::panic::PanicInfo) -> ! {
             ::cortex_m::interrupt::disable();
-            ::cortex_m_semihosting::heprintln!(concat!($name, " panicked: {}"), info);
+            ::cortex_m_semihosting::heprintln!("{} panicked: {}", $name, info);
             $crate::semihost::exit(101)
         }
 
         #[::cortex_m_rt::exception]
         unsafe fn HardFault(frame: &::cortex_m_rt::ExceptionFrame) -> ! {
-            ::cortex_m_semihosting::heprintln!(concat!($name, " HardFault: {:?}"), frame);
+            ::cortex_m_semihosting::heprintln!("{} HardFault: {:?}", $name, frame);
             $crate::semihost::exit(102)
         }
     };

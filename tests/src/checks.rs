@@ -43,7 +43,7 @@ pub fn worst_amplitude_error(run: &RunReport, rec: &Recording, t0: f64, t1: f64)
 /// After `from` seconds: the RMS difference between two runs' estimates of each quantity, as a
 /// fraction of the RMS of that quantity in `reference`; returns the worst quantity and value.
 pub fn recovery_mismatch(reference: &RunReport, other: &RunReport, from: f64, dt: f64) -> (&'static str, f64) {
-    type Pick = fn(&edgekf_firmware::node::BlockReport) -> f32;
+    type Pick = fn(&edgekf_firmware::systems::oscillator::BlockReport) -> f32;
     let pick: [(&'static str, Pick); 4] = [
         ("displacement", |b| b.displacement),
         ("velocity", |b| b.velocity),

@@ -1,11 +1,11 @@
-//! Slider-crank joint clearance on the node: the firmware's estimator run on the host over the
-//! same CSV text the QEMU image reads, the parsing of the image's output, and the original
-//! two-pass host features as an oracle for the streaming ones.
+//! Slider-crank joint clearance on the node: the firmware's crank image run on the host over the
+//! same CSV text the QEMU image reads, the parsing of its output (the image's or the host
+//! run's), and the original two-pass host features as an oracle for the streaming ones.
 
+use crate::report::frames;
 use anyhow::{anyhow, bail, Result};
 use edgekf::systems::crank::{ClearanceEstimate, FEATURES};
-use edgekf_firmware::crank::{CrankNode, Storage, WindowReport, CHANNELS, NO_RELEASE_LAW, WINDOW};
-use edgekf_firmware::line_feed::ChannelReader;
+use edgekf_firmware::systems::crank::{CrankEnd, CrankImage, FeaturesFrame, WindowFrame, WindowReport};
 
 /// What a run of the node's estimator reports: every window's estimate, then the whole
 /// recording's.
@@ -23,81 +23,27 @@ pub struct CrankRun {
     pub skipped: u32,
 }
 
-/// Runs the firmware's [`CrankNode`] over CSV text exactly as `edgekf-crank-qemu` does.
+/// Runs the firmware's crank image over CSV text exactly as `edgekf-crank-qemu` does.
 pub fn run_host(csv: &[u8]) -> Result<CrankRun> {
-    let mut reader = ChannelReader::new(csv, CHANNELS).map_err(|e| anyhow!("header: {e:?}"))?;
-    let mut storage: Storage = [0.0; WINDOW - 1];
-    let mut node = CrankNode::new(&mut storage).map_err(|e| anyhow!("start: {e:?}"))?;
-    let mut windows = Vec::new();
-    while let Some(line) = reader.next_values() {
-        windows.extend(node.step(line.ok().map(|[a]| a)));
-    }
-    Ok(CrankRun {
-        windows,
-        features: node.features(),
-        estimate: node.estimate(),
-        samples: node.samples(),
-        skipped: node.skipped(),
-    })
+    parse(&crate::host::lines::<CrankImage>(csv)?)
 }
 
-/// The `win`, `feat` and `crank` lines of a decoded `edgekf-crank-qemu` log.
+/// The `win`, `feat` and `crank` frames of a run's lines.
 pub fn parse(lines: &[String]) -> Result<CrankRun> {
-    let fields = |line: &str, n: usize| -> Result<Vec<String>> {
-        let v: Vec<String> = line.split_whitespace().skip(1).map(String::from).collect();
-        if v.len() != n {
-            bail!("malformed line {line:?}");
-        }
-        Ok(v)
-    };
-    let f32_of = |s: &str| s.parse::<f32>().map_err(|_| anyhow!("bad value {s:?}"));
-    let u32_of = |s: &str| s.parse::<u32>().map_err(|_| anyhow!("bad value {s:?}"));
-    // joint, clearance, three scores, three per-joint clearances, the release law.
-    let estimate_of = |v: &[String]| -> Result<ClearanceEstimate<f32>> {
-        let joint = v[0].parse::<usize>().ok().filter(|&j| j < 3).ok_or_else(|| anyhow!("bad joint {:?}", v[0]))?;
-        let f: Vec<f32> = v[1..8].iter().map(|s| f32_of(s)).collect::<Result<_>>()?;
-        let law = v[8].parse::<u8>().map_err(|_| anyhow!("bad release law {:?}", v[8]))?;
-        let release = (law != NO_RELEASE_LAW).then_some(usize::from(law));
-        Ok(ClearanceEstimate {
-            joint,
-            clearance: f[0],
-            scores: [f[1], f[2], f[3]],
-            per_joint: [f[4], f[5], f[6]],
-            release,
-        })
-    };
-    let (mut windows, mut features, mut end) = (Vec::new(), None, None);
-    for line in lines {
-        if line.starts_with("win ") {
-            let v = fields(line, 11)?;
-            windows.push(WindowReport {
-                window: u32_of(&v[0])?,
-                samples: u32_of(&v[1])?,
-                estimate: estimate_of(&v[2..])?,
-            });
-        } else if line.starts_with("feat ") {
-            let v = fields(line, FEATURES)?;
-            let mut f = [0.0f32; FEATURES];
-            for (a, s) in f.iter_mut().zip(&v) {
-                *a = f32_of(s)?;
-            }
-            features = Some(f);
-        } else if line.starts_with("crank ") {
-            end = Some(fields(line, 13)?);
-        }
-    }
-    let end = end.ok_or_else(|| anyhow!("no `crank` line: the run did not finish"))?;
-    let features = features.ok_or_else(|| anyhow!("no `feat` line"))?;
-    let windows_done = u32_of(&end[9])?;
-    if windows_done as usize != windows.len() {
-        bail!("{} window lines but the end line says {windows_done}", windows.len());
+    let joint = || anyhow!("a joint other than 0, 1, 2");
+    let windows: Vec<WindowReport> =
+        frames::<WindowFrame>(lines)?.iter().map(|w| w.report().ok_or_else(joint)).collect::<Result<_>>()?;
+    let features = frames::<FeaturesFrame>(lines)?.pop().ok_or_else(|| anyhow!("no `feat` line"))?;
+    let end = frames::<CrankEnd>(lines)?.pop().ok_or_else(|| anyhow!("no `crank` line: the run did not finish"))?;
+    if end.windows as usize != windows.len() {
+        bail!("{} window lines but the end line says {}", windows.len(), end.windows);
     }
     Ok(CrankRun {
         windows,
-        features,
-        estimate: estimate_of(&end[..9])?,
-        samples: u32_of(&end[10])?,
-        skipped: u32_of(&end[11])?,
+        features: features.values(),
+        estimate: end.estimate().ok_or_else(joint)?,
+        samples: end.samples,
+        skipped: end.skipped,
     })
 }
 

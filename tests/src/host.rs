@@ -1,29 +1,50 @@
-//! The node's driver and main loop run on the host over the same input a firmware run gets:
-//! the reference a QEMU run is compared with, bit for bit.
+//! The HIL images run on the host over the same input a firmware run gets, through the same
+//! [`edgekf_firmware::hil::run`]: the reference a QEMU run is compared with, bit for bit. The
+//! host run's frames are written as lines and parsed like the decoded defmt log, so both runs
+//! go through the same parser.
 
 use crate::report::RunReport;
 use anyhow::{anyhow, Result};
-use edgekf_firmware::line_feed::LineFeed;
-use edgekf_firmware::node::{Node, NodeConfig};
-use edgekf_firmware::virtual_adxl355::VirtualAdxl355;
+use edgekf_firmware::frame::{Done, Frame, FrameSink};
+use edgekf_firmware::hil::{self, HilImage, HilNode};
+use edgekf_firmware::systems::oscillator::OscillatorImage;
 
-/// Runs `NodeConfig::default()` over CSV text exactly as `edgekf-qemu` does.
-pub fn run(csv: &[u8]) -> Result<RunReport> {
-    let feed = LineFeed::new(csv).map_err(|e| anyhow!("input header: {e:?}"))?;
-    let mut node = Node::start(VirtualAdxl355::new(feed), NodeConfig::default())
-        .map_err(|(e, _)| anyhow!("node start failed: {e:?}"))?;
-    let mut report = RunReport::default();
-    // One watermark period per poll, until the data has run out and the FIFO is drained.
-    while node.bus_mut().advance_period() > 0 || !node.bus().is_exhausted() {
-        report.blocks.push(node.poll());
+/// Frames collected as the lines a decoded defmt log would hold.
+#[derive(Debug, Default, Clone)]
+pub struct Lines(pub Vec<String>);
+
+impl FrameSink for Lines {
+    fn frame<F: Frame>(&mut self, frame: &F) {
+        let mut line = String::new();
+        // Writing to a String cannot fail.
+        let _ = frame.write_line(&mut line);
+        self.0.push(line);
     }
-    report.health = node.health();
-    let e = node.estimator_counters();
-    report.estimator = [e.steps, e.missing, e.gated, e.filter.covariance_resets, e.filter.refused_updates];
-    let bus = node.bus();
-    report.feed = [bus.feed().lines(), bus.feed().bad_lines(), bus.feed().columns().ignored() as u32];
-    let v = bus.counters();
-    report.virtual_device = [v.samples_loaded, v.nacks_sent, v.overrun_entries];
-    report.done = true;
-    Ok(report)
+}
+
+/// Runs image `I` over CSV text exactly as its QEMU binary does (without the `stack` frame);
+/// returns the frames as lines.
+pub fn lines<I: HilImage>(csv: &[u8]) -> Result<Vec<String>> {
+    let mut storage = I::storage();
+    let mut node = I::start(csv, &mut storage).map_err(|e| anyhow!("{} did not start: {e:?}", I::NAME))?;
+    let mut sink = Lines::default();
+    I::started(&node, &mut sink);
+    finish::<I>(&mut node, sink)
+}
+
+/// Runs an already started `node` of image `I` to its end and returns the frames as lines.
+pub fn run_node<I: HilImage>(node: &mut HilNode<'_, I, &[u8]>) -> Result<Vec<String>> {
+    finish::<I>(node, Lines::default())
+}
+
+fn finish<I: HilImage>(node: &mut HilNode<'_, I, &[u8]>, mut sink: Lines) -> Result<Vec<String>> {
+    hil::run::<I, _>(node, &mut sink);
+    sink.frame(&Done {});
+    Ok(sink.0)
+}
+
+/// Runs the oscillator image (`NodeConfig::default()`) over CSV text exactly as `edgekf-qemu`
+/// does.
+pub fn run(csv: &[u8]) -> Result<RunReport> {
+    RunReport::parse(lines::<OscillatorImage>(csv)?.iter().map(String::as_str))
 }

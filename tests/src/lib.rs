@@ -2,11 +2,12 @@
 //!
 //! * [`qemu`] runs the firmware image under `qemu-system-arm` on a data file and decodes its
 //!   defmt stream;
-//! * [`report`] turns the decoded lines into numbers (block estimates, health counters, stack);
-//! * [`crank`] runs the node's slider-crank clearance estimator on the host and parses the
-//!   QEMU image's output;
-//! * [`host`] runs the very same driver + main loop on the host over the same data, which is what
-//!   a firmware run is compared with.
+//! * [`report`] turns the decoded lines into numbers with the frames' own parsers (block
+//!   estimates, health counters, stack);
+//! * [`host`] runs the very same image (driver, main loop, estimator, frames) on the host over
+//!   the same data, which is what a firmware run is compared with;
+//! * [`rotor`] and [`crank`] do the same for the rotor and slider-crank images;
+//! * [`checks`] holds the scenarios and acceptance measures the host and HIL tests share.
 #![deny(missing_docs)]
 
 pub mod checks;

@@ -1,26 +1,37 @@
-//! The numbers a node run reports, parsed from the firmware's decoded defmt lines.
-//!
-//! The line formats are the ones `firmware/src/bin/qemu/main.rs` emits: `blk`, `health`,
-//! `estimator`, `feed`, `virtual`, `stack`, `done`, each followed by its values in a fixed order.
+//! The numbers a node run reports, parsed from decoded defmt lines (a firmware run's, or a host
+//! run's written the same way) with the frames' own parsers ([`edgekf_firmware::frame`]).
 
-use anyhow::{anyhow, bail, Context, Result};
-use edgekf_firmware::node::{BlockReport, Health};
+use anyhow::{anyhow, Result};
+use edgekf_firmware::frame::{Done, Frame, StackFrame};
+use edgekf_firmware::node::Health;
+use edgekf_firmware::systems::oscillator::{BlockReport, EstimatorFrame, FeedFrame, VirtualFrame};
 
-/// Everything one run reported.
+/// `line` as a frame of kind `F`: `None` if it is of another kind, an error if it is of this
+/// kind but malformed.
+pub fn frame<F: Frame>(line: &str) -> Result<Option<F>> {
+    F::parse(line).transpose().map_err(|e| anyhow!("{e} in {line:?}"))
+}
+
+/// Every frame of kind `F` in `lines`, in order.
+pub fn frames<F: Frame>(lines: &[String]) -> Result<Vec<F>> {
+    lines.iter().filter_map(|l| frame::<F>(l).transpose()).collect()
+}
+
+/// Everything one oscillator run reported.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct RunReport {
     /// One entry per poll.
     pub blocks: Vec<BlockReport>,
     /// Health counters at the end.
     pub health: Health,
-    /// Estimator counters at the end: steps, missing, gated, covariance resets, refused updates.
-    pub estimator: [u32; 5],
+    /// Estimator counters at the end.
+    pub estimator: EstimatorFrame,
     /// Input lines read, bad lines, ignored columns.
-    pub feed: [u32; 3],
+    pub feed: FeedFrame,
     /// Virtual device: samples loaded, NACKs sent, FIFO entries overwritten.
-    pub virtual_device: [u32; 3],
+    pub virtual_device: VirtualFrame,
     /// Stack bytes used by start-up, by the main loop, and available (firmware runs only).
-    pub stack: Option<[u32; 3]>,
+    pub stack: Option<StackFrame>,
     /// Whether the run reached its end.
     pub done: bool,
 }
@@ -38,64 +49,26 @@ pub fn block_values(b: &BlockReport) -> [(&'static str, f32); 7] {
     ]
 }
 
-fn numbers<T: std::str::FromStr>(fields: &[&str], n: usize, line: &str) -> Result<Vec<T>> {
-    if fields.len() != n {
-        bail!("expected {n} values in {line:?}, found {}", fields.len());
-    }
-    fields.iter().map(|f| f.parse::<T>().map_err(|_| anyhow!("bad value {f:?} in {line:?}"))).collect()
-}
-
 impl RunReport {
     /// Parses decoded defmt messages (one per line). Lines of other kinds (start, errors) are
     /// skipped; malformed lines of a known kind are an error.
     pub fn parse<'a>(lines: impl IntoIterator<Item = &'a str>) -> Result<Self> {
         let mut r = RunReport::default();
         for line in lines {
-            let mut it = line.split_whitespace();
-            let Some(kind) = it.next() else { continue };
-            let rest: Vec<&str> = it.collect();
-            match kind {
-                "blk" => {
-                    let ints = numbers::<u32>(&rest[..3.min(rest.len())], 3, line)?;
-                    let f = numbers::<f32>(rest.get(3..).unwrap_or(&[]), 7, line)?;
-                    r.blocks.push(BlockReport {
-                        block: ints[0],
-                        read: ints[1] as u16,
-                        missing: ints[2] as u16,
-                        displacement: f[0],
-                        velocity: f[1],
-                        force_cos: f[2],
-                        force_sin: f[3],
-                        force_amplitude: f[4],
-                        innovation_rms: f[5],
-                        nis_mean: f[6],
-                    });
-                }
-                "health" => {
-                    let v = numbers::<u32>(&rest, 11, line)?;
-                    r.health = Health {
-                        blocks: v[0],
-                        samples: v[1],
-                        bus_errors: v[2],
-                        nacks: v[3],
-                        recovered: v[4],
-                        failed_polls: v[5],
-                        fifo_overruns: v[6],
-                        skipped_entries: v[7],
-                        saturated: v[8],
-                        stuck: v[9],
-                        bridged: v[10],
-                    };
-                }
-                "estimator" => r.estimator = numbers::<u32>(&rest, 5, line)?.try_into().expect("5 values"),
-                "feed" => r.feed = numbers::<u32>(&rest, 3, line)?.try_into().expect("3 values"),
-                "virtual" => r.virtual_device = numbers::<u32>(&rest, 3, line)?.try_into().expect("3 values"),
-                "stack" => {
-                    let v = numbers::<u32>(&rest, 3, line).context("stack line")?;
-                    r.stack = Some([v[0], v[1], v[2]]);
-                }
-                "done" => r.done = true,
-                _ => {}
+            if let Some(b) = frame::<BlockReport>(line)? {
+                r.blocks.push(b);
+            } else if let Some(h) = frame::<Health>(line)? {
+                r.health = h;
+            } else if let Some(e) = frame::<EstimatorFrame>(line)? {
+                r.estimator = e;
+            } else if let Some(f) = frame::<FeedFrame>(line)? {
+                r.feed = f;
+            } else if let Some(v) = frame::<VirtualFrame>(line)? {
+                r.virtual_device = v;
+            } else if let Some(s) = frame::<StackFrame>(line)? {
+                r.stack = Some(s);
+            } else if frame::<Done>(line)?.is_some() {
+                r.done = true;
             }
         }
         Ok(r)
@@ -128,7 +101,8 @@ mod tests {
         assert_eq!(r.blocks[0].missing, 1);
         assert_eq!(r.blocks[0].force_amplitude, 5.0311);
         assert_eq!(r.health.stuck, 1);
-        assert_eq!(r.stack, Some([9000, 1200, 131000]));
+        assert_eq!(r.feed.ignored_columns, 5);
+        assert_eq!(r.stack, Some(StackFrame { boot: 9000, used: 1200, total: 131000 }));
         assert!(r.done);
         assert!(RunReport::parse(["blk 1 2 3 0.5"]).is_err());
     }

@@ -1,40 +1,34 @@
-//! Rotor virtual sensing: the firmware's estimator run on the host over a data file, the
-//! parsing of the QEMU image's output, and the accuracy measure shared by the tests.
+//! Rotor virtual sensing: the firmware's rotor image run on the host over a data file, the
+//! parsing of its output (the image's or the host run's), and the accuracy measure shared by
+//! the tests.
 
-use anyhow::{anyhow, bail, Result};
+use crate::report::frames;
+use anyhow::{anyhow, Result};
 use edgekf_firmware::line_feed::ChannelReader;
-use edgekf_firmware::rotor::{RotorEstimator, RotorReport, CHANNELS, DISK_NODES};
+use edgekf_firmware::node::Node;
+use edgekf_firmware::source::ChannelSource;
+use edgekf_firmware::systems::rotor::{
+    RotorEstimator, RotorFrame, RotorImage, RotorNode, RotorReport, CHANNELS, DISK_NODES,
+};
 use edgekf_sim::systems::rotor::Recording;
 
-/// Runs the firmware's [`RotorEstimator`] over CSV text exactly as `edgekf-rotor-qemu` does.
+/// Runs the firmware's rotor image over CSV text exactly as `edgekf-rotor-qemu` does.
 pub fn run_host(csv: &[u8]) -> Result<Vec<RotorReport>> {
-    run_host_with(csv, RotorEstimator::new())
+    parse(&crate::host::lines::<RotorImage>(csv)?)
 }
 
-/// Runs `est` over CSV text (for example [`RotorEstimator::with_switch_at`]`(None)`, the
-/// time-varying filter throughout, to compare the node's switch against).
-pub fn run_host_with(csv: &[u8], mut est: RotorEstimator) -> Result<Vec<RotorReport>> {
-    let mut reader = ChannelReader::new(csv, CHANNELS).map_err(|e| anyhow!("header: {e:?}"))?;
-    let mut out = Vec::new();
-    while let Some(line) = reader.next_values() {
-        out.push(est.step(line.ok()));
-    }
-    Ok(out)
+/// Runs `est` over CSV text in the image's node (for example
+/// [`RotorEstimator::with_switch_at`]`(None)`, the time-varying filter throughout, to compare
+/// the node's switch against).
+pub fn run_host_with(csv: &[u8], est: RotorEstimator) -> Result<Vec<RotorReport>> {
+    let reader = ChannelReader::new(csv, CHANNELS).map_err(|e| anyhow!("header: {e:?}"))?;
+    let mut node = Node::new(ChannelSource::new(reader), RotorNode::new(est), Default::default());
+    parse(&crate::host::run_node::<RotorImage>(&mut node)?)
 }
 
-/// The `rot` lines of a decoded firmware log.
+/// The `rot` frames of a run's lines, as reports.
 pub fn parse(lines: &[String]) -> Result<Vec<RotorReport>> {
-    let mut out = Vec::new();
-    for line in lines {
-        let Some(rest) = line.strip_prefix("rot ") else { continue };
-        let v: Vec<&str> = rest.split_whitespace().collect();
-        if v.len() != 10 {
-            bail!("malformed line {line:?}");
-        }
-        let f = |i: usize| v[i].parse::<f32>().map_err(|_| anyhow!("bad value in {line:?}"));
-        out.push(RotorReport { disk: [f(1)?, f(2)?, f(3)?, f(4)?], force: [f(5)?, f(6)?, f(7)?, f(8)?], nis: f(9)? });
-    }
-    Ok(out)
+    Ok(frames::<RotorFrame>(lines)?.iter().map(RotorFrame::report).collect())
 }
 
 /// Worst RMS error over the disk nodes' x and y for samples with `t ≥ t0`, m.

@@ -1,4 +1,4 @@
-//! Slider-crank joint clearance on the node (`edgekf-crank-qemu`, `edgekf_firmware::crank`):
+//! Slider-crank joint clearance on the node (`edgekf-crank-qemu`, `edgekf_firmware::systems::crank`):
 //! the compiled-in model is the host's built-in one; the streaming features (the shared crate's,
 //! which the host uses too) equal the original two-pass host computation; the node's `f32`
 //! estimate agrees with the host's `f64` `FastModel`; bad samples are skipped and counted; and,
@@ -29,8 +29,8 @@ fn compiled_model_is_current() {
     );
     // And what the firmware compiles is that model, rounded to f32.
     let m = FastModel::builtin().to_shared();
-    assert_eq!(edgekf_firmware::crank::MODEL_F64, m);
-    assert_eq!(edgekf_firmware::crank::MODEL.regression[1][7], m.regression[1][7] as f32);
+    assert_eq!(edgekf_firmware::systems::crank::MODEL_F64, m);
+    assert_eq!(edgekf_firmware::systems::crank::MODEL.regression[1][7], m.regression[1][7] as f32);
 }
 
 /// The streaming features in `f64` against the original two-pass host code, on a clearance run
@@ -145,10 +145,13 @@ mod hil {
             assert_eq!((chip.samples as usize, chip.skipped), (rec.t.len(), 0));
             let f64_est = model.estimate(&rec).unwrap();
             let rel = chip.estimate.clearance as f64 / f64_est.clearance[f64_est.joint.index()] - 1.0;
-            let stack = run.lines.iter().find(|l| l.starts_with("stack ")).cloned().unwrap_or_default();
+            let stack = edgekf_tests::report::frames::<edgekf_firmware::frame::StackFrame>(&run.lines)
+                .unwrap()
+                .pop()
+                .expect("stack line");
             eprintln!(
                 "HIL crank {joint} {:.3} mm: chip names {} {:.5} mm after {} windows, bit-identical to the node's code on the host; \
-                 host f64 {} {:.5} mm ({rel:+.2e}); {stack}",
+                 host f64 {} {:.5} mm ({rel:+.2e}); {stack:?}",
                 c * 1e3,
                 Joint::ALL[chip.estimate.joint],
                 chip.estimate.clearance * 1e3,

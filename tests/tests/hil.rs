@@ -5,6 +5,7 @@
 //! `EDGEKF_FW_ELF`.
 #![cfg(feature = "hil")]
 
+use edgekf_firmware::frame::StackFrame;
 use edgekf_sim::systems::oscillator::scenario::Scenario;
 use edgekf_tests::checks::{fault_scenario, recovery_mismatch, worst_amplitude_error, FAULTS_CLEAR_AT};
 use edgekf_tests::report::RunReport;
@@ -37,14 +38,14 @@ fn clean_run_matches_the_host_bit_for_bit() {
         panic!("firmware and host disagree: {diff}");
     }
     let err = worst_amplitude_error(&fw, &rec, 1.0, 6.0).max(worst_amplitude_error(&fw, &rec, 7.0, 12.0));
-    let [boot, used, total] = fw.stack.expect("stack line");
+    let edgekf_firmware::frame::StackFrame { boot, used, total } = fw.stack.expect("stack line");
     eprintln!(
         "HIL clean: {} samples in {} blocks, bit-identical to the host (0 ulp); worst force error {:.3} %; \
          stack high-water {boot} B at start-up, {used} B in the loop, of {total} B; input columns ignored by the device: {}",
         fw.health.samples,
         fw.blocks.len(),
         err * 100.0,
-        fw.feed[2]
+        fw.feed.ignored_columns
     );
     assert!(err < 0.01);
     assert!(boot < 24 * 1024 && used < 8 * 1024, "stack use {boot} B at start-up, {used} B in the loop");
@@ -62,7 +63,7 @@ fn injected_i2c_faults_are_survived_counted_and_recovered_from() {
     let h = fw.health;
     eprintln!(
         "HIL faults: {h:?}; virtual device: loaded {}, NACKs {}, overwritten entries {}",
-        fw.virtual_device[0], fw.virtual_device[1], fw.virtual_device[2]
+        fw.virtual_device.samples_loaded, fw.virtual_device.nacks_sent, fw.virtual_device.overrun_entries
     );
     assert!(h.nacks >= 17 && h.recovered >= 1 && h.failed_polls >= 2, "{h:?}");
     assert!(h.stuck >= 195 && h.saturated == 50 && h.bridged > 0, "{h:?}");
@@ -101,15 +102,15 @@ fn rotor_virtual_sensing_in_qemu_matches_the_host_bit_for_bit() {
     let host = edgekf_tests::rotor::run_host(csv.as_bytes()).unwrap();
     assert_eq!(fw.len(), rec.t.len(), "firmware reported {} of {} samples", fw.len(), rec.t.len());
     for (k, (a, b)) in fw.iter().zip(&host).enumerate() {
-        let bits = |r: &edgekf_firmware::rotor::RotorReport| {
-            r.disk.iter().chain(&r.force).map(|v| v.to_bits()).collect::<Vec<_>>()
+        let bits = |r: &edgekf_firmware::systems::rotor::RotorReport| {
+            r.disk.iter().chain(&r.force).chain([&r.nis]).map(|v| v.to_bits()).collect::<Vec<_>>()
         };
         assert_eq!(bits(a), bits(b), "sample {k}: firmware {a:?} host {b:?}");
     }
     let err = edgekf_tests::rotor::disk_rms_error(&fw, &rec, 1.0);
-    let stack = run.lines.iter().find(|l| l.starts_with("stack ")).cloned().unwrap_or_default();
+    let stack = edgekf_tests::report::frames::<StackFrame>(&run.lines).unwrap().pop().expect("stack line");
     eprintln!(
-        "HIL rotor: {} samples bit-identical to the host; disk RMS error {:.3} µm for t ≥ 1 s; {stack}",
+        "HIL rotor: {} samples bit-identical to the host; disk RMS error {:.3} µm for t ≥ 1 s; {stack:?}",
         fw.len(),
         err * 1e6
     );

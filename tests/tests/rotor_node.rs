@@ -1,7 +1,7 @@
 //! The firmware's rotor estimator on the host: its compiled-in constants are what the host
 //! computes for the paper rotor, and it meets the virtual-sensing target on reference data.
 
-use edgekf_firmware::rotor::{RotorEstimator, SAMPLE_RATE_HZ, STEADY_AFTER};
+use edgekf_firmware::systems::rotor::{RotorEstimator, SAMPLE_RATE_HZ, STEADY_AFTER};
 use edgekf_sim::systems::rotor::{RotorConfig, RotorModel, SimOptions};
 use edgekf_tests::rotor::{disk_rms_error, run_host, run_host_with};
 use std::path::Path;
@@ -57,7 +57,7 @@ fn steady_state_switch_matches_the_time_varying_filter() {
     assert_eq!(node[..k0], tv[..k0]);
     assert_ne!(node[k0].disk, tv[k0].disk, "the gain changes at sample {k0}");
     let (e_node, e_tv) = (disk_rms_error(&node, &rec, 1.0), disk_rms_error(&tv, &rec, 1.0));
-    let from_1s = |r: &[edgekf_firmware::rotor::RotorReport]| {
+    let from_1s = |r: &[edgekf_firmware::systems::rotor::RotorReport]| {
         let v: Vec<f64> = r.iter().zip(&rec.t).filter(|(_, &t)| t >= 1.0).map(|(r, _)| r.nis as f64).collect();
         v.iter().sum::<f64>() / v.len() as f64
     };

@@ -1,27 +1,12 @@
 //! `cargo xtask bench`: per-step instruction counts of the filters on the Cortex-M4F under
-//! QEMU, with the targets. (Host timings: `cargo bench -p edgekf`.)
+//! QEMU, checked against the budgets of the image table ([`crate::images`]). (Host timings:
+//! `cargo bench -p edgekf`.)
 
-use crate::firmware::{self, Image};
+use crate::{firmware, images};
 use anyhow::{bail, Context, Result};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Duration;
-
-/// Budgets on the chip, in instructions per step (label, n, m, budget). The rotor node's
-/// steady-state step must fit a 1 kHz sample at 84 MHz with room for the I/O and the loop:
-/// 20 000 instructions is under a quarter of the 84 000 cycles. The slider-crank clearance
-/// estimator samples at 10 kHz (8 400 cycles a sample at 84 MHz): an ordinary sample within 200
-/// instructions, and a whole 0.25 s window (2 500 samples, the median and the model at its end
-/// included) within 300 per sample on average, under 4 % of the core; a sample of the first
-/// 0.1 s, while the release detector looks for the first contact, within 600.
-const TARGETS: [(&str, usize, usize, u64); 6] = [
-    ("harmonic_step", 4, 1, 5_000),
-    ("kalman_joseph", 24, 4, 150_000),
-    ("rotor_node_steady", 20, 4, 20_000),
-    ("crank_sample", 2500, 1, 200),
-    ("crank_window", 2500, 1, 750_000),
-    ("crank_release_sample", 2500, 1, 600),
-];
 
 /// Compiles the instruction-counting TCG plugin with the host C compiler.
 fn plugin(root: &Path) -> Result<PathBuf> {
@@ -55,7 +40,7 @@ fn symbol(elf: &Path, name: &str) -> Result<String> {
 /// Builds and runs the benchmark image; prints and returns `(label, n, m, instructions)`.
 pub fn run(root: &Path) -> Result<Vec<(String, usize, usize, u64)>> {
     let lib = plugin(root)?;
-    let elf = firmware::build(Image::Bench)?;
+    let elf = firmware::build(images::bench_image())?;
     let (start, end) = (symbol(&elf, "bench_start")?, symbol(&elf, "bench_end")?);
     let arg = format!("{},start={start},end={end}", lib.display());
     let run = edgekf_tests::qemu::run_with(&elf, b"", Duration::from_secs(300), &["-plugin", &arg, "-d", "plugin"])?;
@@ -85,7 +70,7 @@ pub fn run(root: &Path) -> Result<Vec<(String, usize, usize, u64)>> {
     let mut rows = Vec::new();
     let mut missed = Vec::new();
     for ((label, n, m), count) in labels.into_iter().zip(counts) {
-        let target = TARGETS.iter().find(|t| t.0 == label && t.1 == n && t.2 == m).map(|t| t.3);
+        let target = images::budgets().find(|t| t.0 == label && t.1 == n && t.2 == m).map(|t| t.3);
         let verdict = match target {
             Some(t) if count <= t => format!("≤ {t}: met"),
             Some(t) => {
@@ -96,6 +81,11 @@ pub fn run(root: &Path) -> Result<Vec<(String, usize, usize, u64)>> {
         };
         println!("{label:<20} {n:>3} {m:>3} {count:>13}  {verdict}");
         rows.push((label, n, m, count));
+    }
+    for (label, n, m, _) in images::budgets() {
+        if !rows.iter().any(|r| (r.0.as_str(), r.1, r.2) == (*label, *n, *m)) {
+            missed.push(format!("{label} n={n} m={m}: not measured by the bench image"));
+        }
     }
     if !missed.is_empty() {
         bail!("instruction budgets missed: {}", missed.join("; "));

@@ -1,43 +1,11 @@
 //! Cross-building the firmware images and reporting their footprint.
 
+use crate::images::Image;
 use crate::provision::DEBIAN_CARGO;
 use anyhow::{bail, Context, Result};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Duration;
-
-/// Which image.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Image {
-    /// `edgekf-qemu`: virtual ADXL355 over semihosting, for `qemu-system-arm -M netduinoplus2`.
-    Qemu,
-    /// `edgekf-board`: STM32F411 with an ADXL355 on I2C1, defmt over RTT.
-    Board,
-    /// `edgekf-bench`: per-step instruction counts under QEMU.
-    Bench,
-    /// `edgekf-rotor-qemu`: rotor virtual sensing fed from a host CSV.
-    RotorQemu,
-    /// `edgekf-crank-qemu`: slider-crank joint clearance fed from a host CSV.
-    CrankQemu,
-}
-
-impl Image {
-    fn bin(self) -> &'static str {
-        match self {
-            Image::Qemu => "edgekf-qemu",
-            Image::Board => "edgekf-board",
-            Image::Bench => "edgekf-bench",
-            Image::RotorQemu => "edgekf-rotor-qemu",
-            Image::CrankQemu => "edgekf-crank-qemu",
-        }
-    }
-    fn feature(self) -> &'static str {
-        match self {
-            Image::Qemu | Image::Bench | Image::RotorQemu | Image::CrankQemu => "qemu",
-            Image::Board => "board",
-        }
-    }
-}
 
 const TARGET: &str = "thumbv7em-none-eabihf";
 const PROFILE: &str = "firmware";
@@ -47,12 +15,12 @@ pub fn workspace_root() -> PathBuf {
 }
 
 /// Builds `image` with Debian's cargo (`-Zbuild-std=core`) and returns the ELF path.
-pub fn build(image: Image) -> Result<PathBuf> {
+pub fn build(image: &Image) -> Result<PathBuf> {
     let root = workspace_root();
     let path = std::env::var("PATH").unwrap_or_default();
     let mut cmd = Command::new(DEBIAN_CARGO);
     cmd.current_dir(&root)
-        .args(["build", "-p", "edgekf-firmware", "--bin", image.bin(), "--features", image.feature()])
+        .args(["build", "-p", "edgekf-firmware", "--bin", image.bin, "--features", image.features])
         .args(["--target", TARGET, "--profile", PROFILE, "-Zbuild-std=core"])
         .env("PATH", format!("/usr/bin:{path}"))
         .env("RUSTC_BOOTSTRAP", "1");
@@ -63,10 +31,10 @@ pub fn build(image: Image) -> Result<PathBuf> {
     }
     let st = cmd.status().context("running Debian's cargo for the cross build")?;
     if !st.success() {
-        bail!("firmware build of {} failed ({st})", image.bin());
+        bail!("firmware build of {} failed ({st})", image.bin);
     }
     let target_dir = std::env::var_os("CARGO_TARGET_DIR").map(PathBuf::from).unwrap_or_else(|| root.join("target"));
-    let elf = target_dir.join(TARGET).join(PROFILE).join(image.bin());
+    let elf = target_dir.join(TARGET).join(PROFILE).join(image.bin);
     if !elf.is_file() {
         bail!("build succeeded but {} is missing", elf.display());
     }
@@ -97,11 +65,11 @@ pub fn footprint(elf: &Path) -> Result<(u64, u64)> {
 }
 
 /// Prints the footprint line the README quotes.
-pub fn print_footprint(image: Image, elf: &Path) -> Result<()> {
+pub fn print_footprint(image: &Image, elf: &Path) -> Result<()> {
     let (flash, ram) = footprint(elf)?;
     println!(
         "footprint {}: flash {} B ({:.1} KiB of 512 KiB), static RAM {} B ({:.1} KiB of 128 KiB) — {}",
-        image.bin(),
+        image.bin,
         flash,
         flash as f64 / 1024.0,
         ram,
@@ -128,8 +96,11 @@ pub fn run_and_print(elf: &Path, data: Option<&Path>) -> Result<()> {
         bail!(msg);
     }
     let report = edgekf_tests::report::RunReport::parse(run.lines.iter().map(String::as_str))?;
-    if let Some([boot, used, total]) = report.stack {
-        println!("stack high-water: {boot} B during start-up, {used} B in the main loop, {total} B available");
+    if let Some(s) = report.stack {
+        println!(
+            "stack high-water: {} B during start-up, {} B in the main loop, {} B available",
+            s.boot, s.used, s.total
+        );
     }
     Ok(())
 }

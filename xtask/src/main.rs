@@ -2,17 +2,22 @@
 //!
 //! * `cargo xtask test [--long]` — everything: provisioning, host tests, firmware cross-builds
 //!   (QEMU and board images) with their footprint, then the hardware-in-the-loop tests in QEMU.
-//! * `cargo xtask fw [--board | --rotor | --crank]` — cross-build an image (`edgekf-qemu`,
-//!   `edgekf-board`, `edgekf-rotor-qemu` or `edgekf-crank-qemu`) and print its flash/RAM use.
+//! * `cargo xtask fw [--board | --rotor | --crank | --bench]` — cross-build an image
+//!   (`edgekf-qemu` without a flag) and print its flash/RAM use.
 //! * `cargo xtask run [--data FILE.csv]` — run the QEMU image on a data file (default: the demo
 //!   scenario) and print the decoded defmt log, the stack high-water mark included.
 //! * `cargo xtask bench` — per-step instruction counts of the filters on the Cortex-M4F under
 //!   QEMU (an instruction-counting TCG plugin), checked against the budgets.
 //! * `cargo xtask provision` — install what a fresh Debian machine lacks (as root), or say what.
+//!
+//! The images, their flags, HIL tests and instruction budgets are one table, [`images::IMAGES`].
 
 mod bench;
 mod firmware;
+mod images;
 mod provision;
+
+use images::{Role, IMAGES};
 
 use anyhow::{bail, Context, Result};
 use std::process::Command;
@@ -31,22 +36,14 @@ fn run() -> Result<()> {
         Some("test") => test(flag("--long")),
         Some("fw") => {
             provision::ensure()?;
-            let image = if flag("--board") {
-                firmware::Image::Board
-            } else if flag("--rotor") {
-                firmware::Image::RotorQemu
-            } else if flag("--crank") {
-                firmware::Image::CrankQemu
-            } else {
-                firmware::Image::Qemu
-            };
+            let image = images::select(&args);
             let elf = firmware::build(image)?;
             firmware::print_footprint(image, &elf)
         }
         Some("run") => {
             provision::ensure()?;
             let data = args.iter().position(|a| a == "--data").and_then(|i| args.get(i + 1));
-            let elf = firmware::build(firmware::Image::Qemu)?;
+            let elf = firmware::build(images::default_image())?;
             firmware::run_and_print(&elf, data.map(std::path::Path::new))
         }
         Some("provision") => provision::ensure(),
@@ -55,7 +52,10 @@ fn run() -> Result<()> {
             bench::run(&firmware::workspace_root()).map(|_| ())
         }
         _ => {
-            eprintln!("usage: cargo xtask <test [--long] | fw [--board | --rotor | --crank] | run [--data FILE.csv] | bench | provision>");
+            eprintln!(
+                "usage: cargo xtask <test [--long] | fw [{}] | run [--data FILE.csv] | bench | provision>",
+                images::flags()
+            );
             std::process::exit(2);
         }
     }
@@ -72,42 +72,33 @@ fn test(long: bool) -> Result<()> {
     }
     status(host, "host tests")?;
 
-    step("firmware: cross-build the board image");
-    let board = firmware::build(firmware::Image::Board)?;
-    firmware::print_footprint(firmware::Image::Board, &board)?;
-    step("firmware: cross-build the QEMU image");
-    let qemu = firmware::build(firmware::Image::Qemu)?;
-    firmware::print_footprint(firmware::Image::Qemu, &qemu)?;
-    step("firmware: cross-build the rotor virtual-sensing QEMU image");
-    let rotor = firmware::build(firmware::Image::RotorQemu)?;
-    firmware::print_footprint(firmware::Image::RotorQemu, &rotor)?;
-    step("firmware: cross-build the slider-crank clearance QEMU image");
-    let crank = firmware::build(firmware::Image::CrankQemu)?;
-    firmware::print_footprint(firmware::Image::CrankQemu, &crank)?;
+    // Every image except the bench one (built by the bench step), with its footprint; the HIL
+    // images' ELF paths go to their tests.
+    let mut hil = cargo_here();
+    hil.args(["test", "-p", "edgekf-tests", "--features", "hil"]);
+    let mut tests: Vec<&str> = Vec::new();
+    for image in IMAGES.iter().filter(|i| i.role != Role::Bench) {
+        step(&format!("firmware: cross-build {}", image.what));
+        let elf = firmware::build(image)?;
+        firmware::print_footprint(image, &elf)?;
+        if let Role::Hil { env, tests: these } = image.role {
+            hil.env(env, &elf);
+            for t in these {
+                if !tests.contains(t) {
+                    tests.push(t);
+                }
+            }
+        }
+    }
 
     step("chip benchmarks: instruction counts per filter step in QEMU (deterministic, checked against budgets)");
     bench::run(&firmware::workspace_root())?;
 
     step("hardware-in-the-loop tests in QEMU");
-    let mut hil = cargo_here();
-    hil.args([
-        "test",
-        "-p",
-        "edgekf-tests",
-        "--features",
-        "hil",
-        "--test",
-        "hil",
-        "--test",
-        "crank_node",
-        "--",
-        "--nocapture",
-        "--test-threads",
-        "1",
-    ])
-    .env("EDGEKF_FW_ELF", &qemu)
-    .env("EDGEKF_ROTOR_ELF", &rotor)
-    .env("EDGEKF_CRANK_ELF", &crank);
+    for t in tests {
+        hil.args(["--test", t]);
+    }
+    hil.args(["--", "--nocapture", "--test-threads", "1"]);
     status(hil, "HIL tests")?;
     step("all tests passed");
     Ok(())

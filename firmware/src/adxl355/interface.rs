@@ -21,6 +21,13 @@ pub trait Interface {
     /// where every byte comes from the FIFO: that is what makes a one-transaction FIFO burst
     /// possible.
     fn read_registers(&mut self, start: u8, buf: &mut [u8]) -> Result<(), Self::Error>;
+
+    /// Whether `error` is a "no acknowledge", the transient failure a retry layer counts as
+    /// such (only I2C has them; the default says no).
+    fn is_nack(error: &Self::Error) -> bool {
+        let _ = error;
+        false
+    }
 }
 
 /// The part on an I2C bus: a register write is `[reg, value]`; a read is a write of `[reg]`
@@ -69,6 +76,11 @@ impl<I2C: I2c> Interface for I2cInterface<I2C> {
 
     fn read_registers(&mut self, start: u8, buf: &mut [u8]) -> Result<(), Self::Error> {
         self.i2c.write_read(self.address, &[start], buf)
+    }
+
+    fn is_nack(error: &Self::Error) -> bool {
+        use embedded_hal::i2c::Error as _;
+        matches!(error.kind(), embedded_hal::i2c::ErrorKind::NoAcknowledge(_))
     }
 }
 

@@ -120,7 +120,7 @@ fn ukf<const N: usize, const M: usize>(rng: &mut Lcg) {
 /// steady-state gain (`rotor_node_switch`: builds the steady-state filter, once), and the
 /// steady-state step the node runs from 0.5 s on (`rotor_node_steady`).
 fn rotor() {
-    use edgekf_firmware::rotor::{RotorEstimator, STEADY_AFTER};
+    use edgekf_firmware::systems::rotor::{RotorEstimator, STEADY_AFTER};
     let mut est = RotorEstimator::new();
     let y = |k: u32| Some([1e-6 * k as f32, -0.5e-6 * k as f32, 2e-6, 0.25e-6 * k as f32]);
     let mut k = 0;
@@ -167,7 +167,7 @@ fn rotor() {
 /// (`crank_window`, 2 500 samples, including about 10 instructions per sample to synthesise the
 /// input), whose count / 2 500 is the average per sample.
 fn crank() {
-    use edgekf_firmware::crank::{Storage, WINDOW};
+    use edgekf_firmware::systems::crank::{Storage, WINDOW};
     // Noise-like values from a multiplicative hash, and an impact every 97 samples.
     let alpha = |k: u32| {
         let noise = (k.wrapping_mul(2_654_435_761) >> 20) as f32 - 2048.0;
@@ -209,8 +209,10 @@ fn crank() {
 }
 
 /// The crank node on `storage`, or the bench ends with an error.
-fn crank_node(storage: &mut edgekf_firmware::crank::Storage) -> edgekf_firmware::crank::CrankNode<'_> {
-    match edgekf_firmware::crank::CrankNode::new(storage) {
+fn crank_node(
+    storage: &mut edgekf_firmware::systems::crank::Storage,
+) -> edgekf_firmware::systems::crank::CrankNode<'_> {
+    match edgekf_firmware::systems::crank::CrankNode::new(storage) {
         Ok(node) => node,
         Err(_) => {
             defmt::error!("bench crank: no estimator");
@@ -221,9 +223,9 @@ fn crank_node(storage: &mut edgekf_firmware::crank::Storage) -> edgekf_firmware:
 
 /// One step of `node` on `x`, its instructions counted.
 fn measured_crank_step(
-    node: &mut edgekf_firmware::crank::CrankNode<'_>,
+    node: &mut edgekf_firmware::systems::crank::CrankNode<'_>,
     x: f32,
-) -> Option<edgekf_firmware::crank::WindowReport> {
+) -> Option<edgekf_firmware::systems::crank::WindowReport> {
     bench_start();
     let report = core::hint::black_box(node.step(core::hint::black_box(Some(x))));
     bench_end();
@@ -235,7 +237,7 @@ fn measured_crank_step(
 /// and the threshold test). Only the samples before the first contact pay it, at most the first
 /// 0.1 s of a recording.
 fn crank_release() {
-    use edgekf_firmware::crank::{Storage, WINDOW};
+    use edgekf_firmware::systems::crank::{Storage, WINDOW};
     // Small noise-like values about a slow ramp: no contact.
     let alpha = |k: u32| ((k.wrapping_mul(2_654_435_761) >> 24) as f32 - 128.0) * 0.04 - 27.0 - 0.01 * k as f32;
     let mut storage: Storage = [0.0; WINDOW - 1];

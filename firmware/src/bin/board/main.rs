@@ -9,8 +9,9 @@
 
 use cortex_m_rt::{entry, exception, ExceptionFrame};
 use defmt_rtt as _;
-use edgekf_firmware::node::{Node, NodeConfig};
+use edgekf_firmware::adxl355::Adxl355;
 use edgekf_firmware::stack;
+use edgekf_firmware::systems::oscillator::{self, NodeConfig};
 use stm32f4xx_hal::i2c::{DutyCycle, I2c, Mode};
 use stm32f4xx_hal::rcc::Config;
 use stm32f4xx_hal::{pac, prelude::*};
@@ -25,24 +26,27 @@ fn main() -> ! {
     let mut rcc = dp.RCC.freeze(Config::hsi().sysclk(84.MHz()));
     let gpiob = dp.GPIOB.split(&mut rcc);
     let mut delay = cp.SYST.delay(&rcc.clocks);
-    let mut i2c = I2c::new(dp.I2C1, (gpiob.pb8, gpiob.pb9), Mode::fast(400.kHz(), DutyCycle::Ratio2to1), &mut rcc);
+    let i2c = I2c::new(dp.I2C1, (gpiob.pb8, gpiob.pb9), Mode::fast(400.kHz(), DutyCycle::Ratio2to1), &mut rcc);
 
     let config = NodeConfig::default();
-    let period_us = (1.0e6 * config.sensor.fifo_watermark as f32 / 3.0 / config.sensor.odr.hz()) as u32;
+    let sensor = config.source.sensor;
+    let period_us = (1.0e6 * sensor.fifo_watermark as f32 / 3.0 / sensor.odr.hz()) as u32;
+    let mut adxl = Adxl355::new_i2c(i2c, config.address);
     let mut node = loop {
-        match Node::start(i2c, config) {
+        match oscillator::start(adxl, &config) {
             Ok(node) => break node,
-            Err((e, bus)) => {
+            Err((e, back)) => {
                 defmt::error!("start failed: {}; retrying in 1 s", defmt::Debug2Format(&e));
                 delay.delay_ms(1000);
-                i2c = bus;
+                adxl = back;
             }
         }
     };
-    defmt::info!("edgekf board: odr={=f32} Hz, poll every {=u32} us", config.sensor.odr.hz(), period_us);
+    defmt::info!("edgekf board: odr={=f32} Hz, poll every {=u32} us", sensor.odr.hz(), period_us);
     loop {
         delay.delay_us(period_us);
-        let r = node.poll();
+        // The oscillator reports every poll.
+        let Some(r) = node.poll() else { continue };
         defmt::info!(
             "blk {=u32} amp={=f32} N x={=f32} m irms={=f32} nis={=f32}",
             r.block,

@@ -5,14 +5,20 @@
 //!
 //! Inputs: the four proximity probes of the paper rotor (`n5_x, n5_y, n32_x, n32_y`, m).
 //! Outputs per sample: the x/y displacement of both disk nodes (12 and 23), which no sensor
-//! measures, and the unbalance forces there.
+//! measures, and the unbalance forces there ([`RotorFrame`], one per sample in the HIL image
+//! [`RotorImage`]).
 
+use crate::frame::FrameSink;
+use crate::hil::{HilError, HilImage, HilNode};
+use crate::line_feed::{ByteSource, ChannelReader};
+use crate::node::{Innovation, Node, NodeEstimator, Poll};
+use crate::source::ChannelSource;
 use edgekf::filter::{FilterHealth, KalmanFilter, RiccatiError, SteadyStateFilter};
 use nalgebra::{ArrayStorage, SMatrix, SVector};
 
 #[allow(missing_docs, clippy::excessive_precision, clippy::unreadable_literal)]
 mod constants {
-    include!("generated/rotor.rs");
+    include!("../generated/rotor.rs");
 }
 
 /// States of the reduced model.
@@ -60,7 +66,7 @@ pub const SAMPLE_RATE_HZ: u32 = 1000;
 /// samples.
 ///
 /// ```
-/// use edgekf_firmware::rotor::{RotorEstimator, STEADY_AFTER};
+/// use edgekf_firmware::systems::rotor::{RotorEstimator, STEADY_AFTER};
 /// let mut est = RotorEstimator::new();
 /// for _ in 0..STEADY_AFTER {
 ///     est.step(Some([0.0; 4]));
@@ -157,7 +163,7 @@ impl RotorEstimator {
     /// filter for the first [`STEADY_AFTER`] samples, then the exported steady-state gain.
     ///
     /// ```
-    /// let mut est = edgekf_firmware::rotor::RotorEstimator::new();
+    /// let mut est = edgekf_firmware::systems::rotor::RotorEstimator::new();
     /// let r = est.step(Some([0.0; 4]));
     /// assert!(r.nis.is_finite());
     /// ```
@@ -170,7 +176,7 @@ impl RotorEstimator {
     /// filter throughout, the reference the switch is measured against).
     ///
     /// ```
-    /// use edgekf_firmware::rotor::RotorEstimator;
+    /// use edgekf_firmware::systems::rotor::RotorEstimator;
     /// let mut est = RotorEstimator::with_switch_at(None);
     /// for _ in 0..1000 {
     ///     est.step(Some([0.0; 4]));
@@ -255,7 +261,7 @@ impl RotorEstimator {
     /// Whether the steady-state gain is in use (from sample [`STEADY_AFTER`] on).
     ///
     /// ```
-    /// let est = edgekf_firmware::rotor::RotorEstimator::with_switch_at(Some(0));
+    /// let est = edgekf_firmware::systems::rotor::RotorEstimator::with_switch_at(Some(0));
     /// assert!(!est.is_steady()); // switches when the first sample arrives
     /// ```
     pub fn is_steady(&self) -> bool {
@@ -275,6 +281,130 @@ impl RotorEstimator {
                 refused_updates: self.before_switch.refused_updates.saturating_add(self.refused_steady),
             },
         }
+    }
+}
+
+crate::frame! {
+    /// One sample's estimates, as the HIL image reports them.
+    pub struct RotorFrame = "rot {=u32} {=f32} {=f32} {=f32} {=f32} {=f32} {=f32} {=f32} {=f32} {=f32}" {
+        /// Sample number, from 0.
+        pub sample: u32,
+        /// Disk node 12, x, m.
+        pub disk12_x: f32,
+        /// Disk node 12, y, m.
+        pub disk12_y: f32,
+        /// Disk node 23, x, m.
+        pub disk23_x: f32,
+        /// Disk node 23, y, m.
+        pub disk23_y: f32,
+        /// Unbalance force at node 12, x, N.
+        pub force12_x: f32,
+        /// Unbalance force at node 12, y, N.
+        pub force12_y: f32,
+        /// Unbalance force at node 23, x, N.
+        pub force23_x: f32,
+        /// Unbalance force at node 23, y, N.
+        pub force23_y: f32,
+        /// NIS of the sample's update (NaN if missing or refused).
+        pub nis: f32,
+    }
+}
+
+impl RotorFrame {
+    /// Sample `sample`'s report as a frame.
+    pub fn new(sample: u32, r: &RotorReport) -> Self {
+        let ([disk12_x, disk12_y, disk23_x, disk23_y], [force12_x, force12_y, force23_x, force23_y]) =
+            (r.disk, r.force);
+        Self { sample, disk12_x, disk12_y, disk23_x, disk23_y, force12_x, force12_y, force23_x, force23_y, nis: r.nis }
+    }
+
+    /// The report the frame carries.
+    pub fn report(&self) -> RotorReport {
+        RotorReport {
+            disk: [self.disk12_x, self.disk12_y, self.disk23_x, self.disk23_y],
+            force: [self.force12_x, self.force12_y, self.force23_x, self.force23_y],
+            nis: self.nis,
+        }
+    }
+}
+
+crate::frame! {
+    /// The end of a rotor run.
+    #[derive(Eq)]
+    pub struct RotorEnd = "rotor {=u32} {=u32} {=u32} {=u32}" {
+        /// Input lines stepped.
+        pub samples: u32,
+        /// Of those, lines that did not parse (stepped as missing).
+        pub bad_lines: u32,
+        /// Filter covariance resets (see [`RotorEstimator::health`]).
+        pub covariance_resets: u32,
+        /// Refused updates.
+        pub refused_updates: u32,
+    }
+}
+
+/// The rotor estimator as the node runs it: one sample per poll, each reported.
+pub struct RotorNode {
+    estimator: RotorEstimator,
+    last: Option<RotorReport>,
+}
+
+impl RotorNode {
+    /// Runs `estimator`.
+    pub fn new(estimator: RotorEstimator) -> Self {
+        Self { estimator, last: None }
+    }
+
+    /// The estimator.
+    pub fn estimator(&self) -> &RotorEstimator {
+        &self.estimator
+    }
+}
+
+impl NodeEstimator for RotorNode {
+    type Input = [f32; 4];
+    type Frame = RotorFrame;
+
+    fn step(&mut self, input: Option<[f32; 4]>) -> Innovation {
+        let r = self.estimator.step(input);
+        self.last = Some(r);
+        Innovation { residual: None, nis: Some(r.nis).filter(|n| n.is_finite()) }
+    }
+
+    fn report(&mut self, poll: &Poll) -> Option<RotorFrame> {
+        self.last.take().map(|r| RotorFrame::new(poll.block, &r))
+    }
+}
+
+/// The QEMU image `edgekf-rotor-qemu`: the four probes' readings from the HIL file (other
+/// columns ignored); a `rot` frame per sample, then `rotor`.
+pub struct RotorImage;
+
+impl HilImage for RotorImage {
+    const NAME: &'static str = "edgekf-rotor-qemu";
+    const COLUMNS: &'static [&'static str] = &CHANNELS;
+    type Input = [f32; 4];
+    type Storage = ();
+    type Source<B: ByteSource> = ChannelSource<B, 4>;
+    type Estimator<'s> = RotorNode;
+    type StartError = core::convert::Infallible;
+
+    fn storage() {}
+
+    #[inline(never)] // start-up temporaries stay out of the caller's frame
+    fn start<B: ByteSource>(input: B, _: &mut ()) -> Result<HilNode<'_, Self, B>, HilError<Self::StartError>> {
+        let reader = ChannelReader::new(input, CHANNELS).map_err(HilError::Header)?;
+        Ok(Node::new(ChannelSource::new(reader), RotorNode::new(RotorEstimator::new()), Default::default()))
+    }
+
+    fn finish<B: ByteSource>(node: &HilNode<'_, Self, B>, sink: &mut impl FrameSink) {
+        let h = node.estimator().estimator().health();
+        sink.frame(&RotorEnd {
+            samples: node.health().blocks,
+            bad_lines: node.source().reader().bad_lines(),
+            covariance_resets: h.covariance_resets,
+            refused_updates: h.refused_updates,
+        });
     }
 }
 
@@ -314,7 +444,7 @@ mod tests {
 
     #[test]
     fn sample_rate_is_the_generated_models() {
-        let header = include_str!("generated/rotor.rs").lines().next().unwrap();
+        let header = include_str!("../generated/rotor.rs").lines().next().unwrap();
         assert!(header.contains(&std::format!(" {SAMPLE_RATE_HZ} Hz.")), "{header}");
         assert_eq!(STEADY_AFTER, 500);
     }

@@ -1,0 +1,11 @@
+//! Each system's node estimator, its report frames and its HIL image, one file per system.
+//! Adding a system means a file here (a [`crate::node::NodeEstimator`] and a
+//! [`crate::hil::HilImage`]), a one-line QEMU binary and a row in `xtask`'s image table.
+//!
+//! * [`oscillator`]: the harmonic force driving a structural mode, from one ADXL355 axis;
+//! * [`rotor`]: rotor virtual sensing (disk motion and unbalance forces from four probes);
+//! * [`crank`]: slider-crank joint clearance from the crank angular acceleration.
+
+pub mod crank;
+pub mod oscillator;
+pub mod rotor;

@@ -1,0 +1,146 @@
+//! The firmware images, one row each: what `cargo xtask fw`, `bench` and `test` build, run and
+//! check. Adding a system adds its row here and nothing else in `xtask`.
+
+/// An instruction budget: kernel label, `n`, `m` (as the bench image prints them) and the most
+/// instructions one step may take on the Cortex-M4F.
+pub type Budget = (&'static str, usize, usize, u64);
+
+/// What an image is for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Role {
+    /// A board image: cross-built and sized, not run here.
+    Board,
+    /// A HIL image: the test targets of `edgekf-tests` that run it (with `--features hil`)
+    /// find its ELF in the environment variable `env`.
+    Hil {
+        /// The environment variable with the ELF's path.
+        env: &'static str,
+        /// The `--test` targets that run it.
+        tests: &'static [&'static str],
+    },
+    /// The instruction-count image of `cargo xtask bench`.
+    Bench,
+}
+
+/// One firmware image.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Image {
+    /// The binary's name.
+    pub bin: &'static str,
+    /// The `cargo xtask fw` flag that selects it; `None` for the default image.
+    pub flag: Option<&'static str>,
+    /// Cargo features of `edgekf-firmware` it needs.
+    pub features: &'static str,
+    /// What it is, for the step messages.
+    pub what: &'static str,
+    /// What it is for.
+    pub role: Role,
+    /// Its instruction budgets, measured by the bench image. Why these figures: the oscillator
+    /// step must leave most of a 1 kHz sample free; the rotor node's steady-state step must fit
+    /// a 1 kHz sample at 84 MHz with room for the I/O and the loop (20 000 instructions is under
+    /// a quarter of the 84 000 cycles); the slider-crank estimator samples at 10 kHz (8 400
+    /// cycles a sample): an ordinary sample within 200 instructions, a whole 0.25 s window (2 500
+    /// samples, the median and the model at its end included) within 300 per sample on average,
+    /// under 4 % of the core, and a sample while the release detector looks for the first
+    /// contact within 600; the 24-state Joseph-form step is the shared core's reference kernel.
+    pub budgets: &'static [Budget],
+}
+
+/// Every image, in the order `cargo xtask test` builds them.
+pub const IMAGES: [Image; 5] = [
+    Image {
+        bin: "edgekf-board",
+        flag: Some("--board"),
+        features: "board",
+        what: "the board image (STM32F411, ADXL355 on I2C1)",
+        role: Role::Board,
+        budgets: &[],
+    },
+    Image {
+        bin: "edgekf-qemu",
+        flag: None,
+        features: "qemu",
+        what: "the QEMU image (harmonic force on a virtual ADXL355)",
+        role: Role::Hil { env: "EDGEKF_FW_ELF", tests: &["hil"] },
+        budgets: &[("harmonic_step", 4, 1, 5_000)],
+    },
+    Image {
+        bin: "edgekf-rotor-qemu",
+        flag: Some("--rotor"),
+        features: "qemu",
+        what: "the rotor virtual-sensing QEMU image",
+        role: Role::Hil { env: "EDGEKF_ROTOR_ELF", tests: &["hil"] },
+        budgets: &[("rotor_node_steady", 20, 4, 20_000)],
+    },
+    Image {
+        bin: "edgekf-crank-qemu",
+        flag: Some("--crank"),
+        features: "qemu",
+        what: "the slider-crank clearance QEMU image",
+        role: Role::Hil { env: "EDGEKF_CRANK_ELF", tests: &["crank_node"] },
+        budgets: &[
+            ("crank_sample", 2500, 1, 200),
+            ("crank_window", 2500, 1, 750_000),
+            ("crank_release_sample", 2500, 1, 600),
+        ],
+    },
+    Image {
+        bin: "edgekf-bench",
+        flag: Some("--bench"),
+        features: "qemu",
+        what: "the instruction-count image",
+        role: Role::Bench,
+        budgets: &[("kalman_joseph", 24, 4, 150_000)],
+    },
+];
+
+/// The image `cargo xtask fw` builds without a flag (and `cargo xtask run` runs).
+pub fn default_image() -> &'static Image {
+    IMAGES.iter().find(|i| i.flag.is_none()).unwrap_or(&IMAGES[0])
+}
+
+/// The image selected by the first of `args` that is an image flag, or the default one.
+pub fn select(args: &[String]) -> &'static Image {
+    IMAGES.iter().find(|i| i.flag.is_some_and(|f| args.iter().any(|a| a == f))).unwrap_or_else(default_image)
+}
+
+/// The bench image.
+pub fn bench_image() -> &'static Image {
+    IMAGES.iter().find(|i| i.role == Role::Bench).unwrap_or(&IMAGES[0])
+}
+
+/// Every budget of every image.
+pub fn budgets() -> impl Iterator<Item = &'static Budget> {
+    IMAGES.iter().flat_map(|i| i.budgets.iter())
+}
+
+/// The `fw` flags, for the usage line.
+pub fn flags() -> String {
+    IMAGES.iter().filter_map(|i| i.flag).collect::<Vec<_>>().join(" | ")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_table_is_consistent() {
+        assert_eq!(IMAGES.iter().filter(|i| i.flag.is_none()).count(), 1, "exactly one default image");
+        assert_eq!(IMAGES.iter().filter(|i| i.role == Role::Bench).count(), 1, "exactly one bench image");
+        for (k, a) in IMAGES.iter().enumerate() {
+            for b in &IMAGES[k + 1..] {
+                assert!(a.bin != b.bin && (a.flag.is_none() || a.flag != b.flag), "{a:?} / {b:?}");
+            }
+        }
+        let arg = |s: &str| vec!["fw".to_string(), s.to_string()];
+        assert_eq!(select(&arg("--rotor")).bin, "edgekf-rotor-qemu");
+        assert_eq!(select(&arg("--crank")).bin, "edgekf-crank-qemu");
+        assert_eq!(select(&arg("--board")).bin, "edgekf-board");
+        assert_eq!(select(&[]).bin, "edgekf-qemu");
+        // Every bin in the table is one the firmware crate declares.
+        let manifest = include_str!("../../firmware/Cargo.toml");
+        for i in &IMAGES {
+            assert!(manifest.contains(&format!("name = \"{}\"", i.bin)), "{} is not a firmware binary", i.bin);
+        }
+    }
+}
