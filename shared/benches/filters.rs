@@ -3,8 +3,8 @@
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
 use edgekf::filter::{KalmanFilter, MerweSigmaPoints, SteadyState, SteadyStateFilter, UnscentedKalmanFilter};
-use edgekf::systems::oscillator::{HarmonicForceEstimator, HarmonicForceParams};
 use edgekf::models::synthetic::{dense_model, CubicModel, Lcg};
+use edgekf::systems::oscillator::{HarmonicForceEstimator, HarmonicForceParams};
 use edgekf::Real;
 use nalgebra::{SMatrix, SVector};
 
