@@ -211,13 +211,31 @@ pub const fn format_matches(format: &str, fields: &[&str], types: &[&str]) -> bo
     at == f.len()
 }
 
-/// Defines a report frame: the struct, its [`Frame`] implementation (defmt emission and
-/// parser) and a compile-time check that the format string lists the fields.
+/// Defines a report frame: the struct, its [`Frame`] implementation (defmt emission behind
+/// this crate's `defmt` feature, and the parser) and a compile-time check that the format
+/// string lists the fields. Meant for this crate's frames (the `defmt` feature it tests is the
+/// crate's own).
 ///
-/// ```ignore
-/// frame! {
+/// ```
+/// use edgekf_firmware::frame::Frame;
+/// edgekf_firmware::frame! {
 ///     /// Stack use.
-///     pub struct StackFrame = "stack {=u32} {=u32}" {
+///     pub struct Use = "use {=u32} used={=u32}" {
+///         /// Bytes at start-up.
+///         pub boot: u32,
+///         /// Bytes in the loop.
+///         pub used: u32,
+///     }
+/// }
+/// assert_eq!(Use::parse("use 10 used=20"), Some(Ok(Use { boot: 10, used: 20 })));
+/// ```
+///
+/// A format that does not list the fields, in order and with their types, does not compile:
+///
+/// ```compile_fail
+/// edgekf_firmware::frame! {
+///     /// The second placeholder is a `u16`, the field a `u32`.
+///     pub struct Use = "use {=u32} {=u16}" {
 ///         /// Bytes at start-up.
 ///         pub boot: u32,
 ///         /// Bytes in the loop.
@@ -226,7 +244,6 @@ pub const fn format_matches(format: &str, fields: &[&str], types: &[&str]) -> bo
 /// }
 /// ```
 #[macro_export]
-#[doc(hidden)]
 macro_rules! frame {
     (
         $(#[$meta:meta])*

@@ -58,5 +58,10 @@ impl<CommE: fmt::Debug> core::error::Error for Error<CommE> {}
 /// assert!(!is_nack::<ErrorKind>(&Error::InvalidConfig));
 /// ```
 pub fn is_nack<E: embedded_hal::i2c::Error>(e: &Error<E>) -> bool {
-    matches!(e, Error::Comm(c) if matches!(c.kind(), embedded_hal::i2c::ErrorKind::NoAcknowledge(_)))
+    matches!(e, Error::Comm(c) if is_i2c_nack(c))
+}
+
+/// Whether an I2C bus error is a NACK (address or data).
+pub(crate) fn is_i2c_nack<E: embedded_hal::i2c::Error>(e: &E) -> bool {
+    matches!(e.kind(), embedded_hal::i2c::ErrorKind::NoAcknowledge(_))
 }

@@ -79,8 +79,7 @@ impl<I2C: I2c> Interface for I2cInterface<I2C> {
     }
 
     fn is_nack(error: &Self::Error) -> bool {
-        use embedded_hal::i2c::Error as _;
-        matches!(error.kind(), embedded_hal::i2c::ErrorKind::NoAcknowledge(_))
+        super::error::is_i2c_nack(error)
     }
 }
 

@@ -144,31 +144,91 @@ impl<'s> CrankNode<'s> {
     }
 }
 
-crate::frame! {
+/// A frame carrying a clearance estimate between `$before` and `$after` fields: the joint, its
+/// clearance, the three scores, the three per-joint clearances and the release law, with the
+/// conversions from and to [`ClearanceEstimate`] (one definition for the `win` and `crank`
+/// frames).
+macro_rules! clearance_frame {
+    ($(#[$meta:meta])* $name:ident = $format:literal { $($before:tt)* } { $($after:tt)* }) => {
+        crate::frame! {
+            $(#[$meta])*
+            pub struct $name = $format {
+                $($before)*
+                /// The joint named (0, 1, 2: A, B, C).
+                pub joint: u8,
+                /// Its clearance, m.
+                pub clearance: f32,
+                /// Discriminant score of joint A.
+                pub score_a: f32,
+                /// Of joint B.
+                pub score_b: f32,
+                /// Of joint C.
+                pub score_c: f32,
+                /// Clearance if the joint is A, m.
+                pub clearance_a: f32,
+                /// If B.
+                pub clearance_b: f32,
+                /// If C.
+                pub clearance_c: f32,
+                /// The release law behind the clearance ([`release_law`]).
+                pub release_law: u8,
+                $($after)*
+            }
+        }
+
+        impl $name {
+            /// The estimate the frame carries; `None` for a joint other than 0, 1, 2.
+            pub fn estimate(&self) -> Option<ClearanceEstimate<f32>> {
+                let release = (self.release_law != NO_RELEASE_LAW).then_some(usize::from(self.release_law));
+                (self.joint < 3).then_some(ClearanceEstimate {
+                    joint: usize::from(self.joint),
+                    clearance: self.clearance,
+                    scores: [self.score_a, self.score_b, self.score_c],
+                    per_joint: [self.clearance_a, self.clearance_b, self.clearance_c],
+                    release,
+                })
+            }
+
+            /// The frame with the estimate fields set from `e`.
+            fn with_estimate(self, e: &ClearanceEstimate<f32>) -> Self {
+                let ([score_a, score_b, score_c], [clearance_a, clearance_b, clearance_c]) = (e.scores, e.per_joint);
+                Self {
+                    joint: e.joint as u8,
+                    clearance: e.clearance,
+                    score_a,
+                    score_b,
+                    score_c,
+                    clearance_a,
+                    clearance_b,
+                    clearance_c,
+                    release_law: release_law(e),
+                    ..self
+                }
+            }
+        }
+    };
+}
+
+clearance_frame! {
     /// A window's report.
-    pub struct WindowFrame = "win {=u32} {=u32} {=u8} {=f32} {=f32} {=f32} {=f32} {=f32} {=f32} {=f32} {=u8}" {
+    WindowFrame = "win {=u32} {=u32} {=u8} {=f32} {=f32} {=f32} {=f32} {=f32} {=f32} {=f32} {=u8}" {
         /// Windows completed so far.
         pub window: u32,
         /// Input lines read so far.
         pub samples: u32,
-        /// The joint named (0, 1, 2: A, B, C).
-        pub joint: u8,
-        /// Its clearance, m.
-        pub clearance: f32,
-        /// Discriminant score of joint A.
-        pub score_a: f32,
-        /// Of joint B.
-        pub score_b: f32,
-        /// Of joint C.
-        pub score_c: f32,
-        /// Clearance if the joint is A, m.
-        pub clearance_a: f32,
-        /// If B.
-        pub clearance_b: f32,
-        /// If C.
-        pub clearance_c: f32,
-        /// The release law behind the clearance ([`release_law`]).
-        pub release_law: u8,
+    } {}
+}
+
+impl From<&WindowReport> for WindowFrame {
+    fn from(r: &WindowReport) -> Self {
+        Self { window: r.window, samples: r.samples, ..Self::default() }.with_estimate(&r.estimate)
+    }
+}
+
+impl WindowFrame {
+    /// The report the frame carries; `None` for a joint other than 0, 1, 2.
+    pub fn report(&self) -> Option<WindowReport> {
+        Some(WindowReport { window: self.window, samples: self.samples, estimate: self.estimate()? })
     }
 }
 
@@ -236,27 +296,9 @@ impl From<[f32; FEATURES]> for FeaturesFrame {
     }
 }
 
-crate::frame! {
+clearance_frame! {
     /// The end of a crank run: the whole recording's estimate and the counts.
-    pub struct CrankEnd = "crank {=u8} {=f32} {=f32} {=f32} {=f32} {=f32} {=f32} {=f32} {=u8} {=u32} {=u32} {=u32} {=u32}" {
-        /// The joint named (0, 1, 2: A, B, C).
-        pub joint: u8,
-        /// Its clearance, m.
-        pub clearance: f32,
-        /// Discriminant score of joint A.
-        pub score_a: f32,
-        /// Of joint B.
-        pub score_b: f32,
-        /// Of joint C.
-        pub score_c: f32,
-        /// Clearance if the joint is A, m.
-        pub clearance_a: f32,
-        /// If B.
-        pub clearance_b: f32,
-        /// If C.
-        pub clearance_c: f32,
-        /// The release law behind the clearance ([`release_law`]).
-        pub release_law: u8,
+    CrankEnd = "crank {=u8} {=f32} {=f32} {=f32} {=f32} {=f32} {=f32} {=f32} {=u8} {=u32} {=u32} {=u32} {=u32}" {} {
         /// Windows completed.
         pub windows: u32,
         /// Input lines stepped.
@@ -265,66 +307,6 @@ crate::frame! {
         pub skipped: u32,
         /// Lines that did not parse.
         pub bad_lines: u32,
-    }
-}
-
-/// An estimate as the frames carry it: joint, clearance, scores, per-joint clearances, law.
-type EstimateFields = (u8, f32, [f32; 3], [f32; 3], u8);
-
-fn estimate_fields(e: &ClearanceEstimate<f32>) -> EstimateFields {
-    (e.joint as u8, e.clearance, e.scores, e.per_joint, release_law(e))
-}
-
-/// The estimate back from its fields; `None` for a joint other than 0, 1, 2.
-fn estimate_of((joint, clearance, scores, per_joint, law): EstimateFields) -> Option<ClearanceEstimate<f32>> {
-    let release = (law != NO_RELEASE_LAW).then_some(usize::from(law));
-    (joint < 3).then_some(ClearanceEstimate { joint: usize::from(joint), clearance, scores, per_joint, release })
-}
-
-impl From<&WindowReport> for WindowFrame {
-    fn from(r: &WindowReport) -> Self {
-        let (joint, clearance, [score_a, score_b, score_c], [clearance_a, clearance_b, clearance_c], release_law) =
-            estimate_fields(&r.estimate);
-        Self {
-            window: r.window,
-            samples: r.samples,
-            joint,
-            clearance,
-            score_a,
-            score_b,
-            score_c,
-            clearance_a,
-            clearance_b,
-            clearance_c,
-            release_law,
-        }
-    }
-}
-
-impl WindowFrame {
-    /// The report the frame carries; `None` for a joint other than 0, 1, 2.
-    pub fn report(&self) -> Option<WindowReport> {
-        let fields = (
-            self.joint,
-            self.clearance,
-            [self.score_a, self.score_b, self.score_c],
-            [self.clearance_a, self.clearance_b, self.clearance_c],
-            self.release_law,
-        );
-        Some(WindowReport { window: self.window, samples: self.samples, estimate: estimate_of(fields)? })
-    }
-}
-
-impl CrankEnd {
-    /// The whole recording's estimate; `None` for a joint other than 0, 1, 2.
-    pub fn estimate(&self) -> Option<ClearanceEstimate<f32>> {
-        estimate_of((
-            self.joint,
-            self.clearance,
-            [self.score_a, self.score_b, self.score_c],
-            [self.clearance_a, self.clearance_b, self.clearance_c],
-            self.release_law,
-        ))
     }
 }
 
@@ -372,22 +354,13 @@ impl HilImage for CrankImage {
     fn finish<B: ByteSource>(node: &HilNode<'_, Self, B>, sink: &mut impl FrameSink) {
         let est = node.estimator();
         sink.frame(&FeaturesFrame::from(est.features()));
-        let (joint, clearance, [score_a, score_b, score_c], [clearance_a, clearance_b, clearance_c], release_law) =
-            estimate_fields(&est.estimate());
-        sink.frame(&CrankEnd {
-            joint,
-            clearance,
-            score_a,
-            score_b,
-            score_c,
-            clearance_a,
-            clearance_b,
-            clearance_c,
-            release_law,
+        let end = CrankEnd {
             windows: est.windows(),
             samples: est.samples(),
             skipped: est.skipped(),
             bad_lines: node.source().reader().bad_lines(),
-        });
+            ..CrankEnd::default()
+        };
+        sink.frame(&end.with_estimate(&est.estimate()));
     }
 }
