@@ -1,5 +1,5 @@
 //! Figures of the clearance estimators' documentation (`host-sim/src/crank/estimate/ukf.rs`,
-//! `mod.rs`): `cargo run --release -p edgekf-sim --example crank_study -- <what>` with
+//! `mod.rs`): `cargo run --release -p edgekf-sim --features studies --example crank_study -- <what>` with
 //!
 //! * `release-curve`: the feature `a` of the release window (first 0.25 s) against the
 //!   clearance at A, mean ± std over 16 releases 30.000°, 30.002° … (and at 29–31°);
@@ -9,15 +9,15 @@
 //!   recordings of 0.25 mm at A (adaptive integrator at 1e-9, released 30° + 0.0013° · r, seed
 //!   7 + r);
 //! * `two-clearances [RUNS] [DURATION] [SPREAD] [stencil]`: identifiability of A and B together
-//!   ([`edgekf_sim::systems::crank::estimate::identify2`]): the likelihood surface over cA 0.15–0.35 ×
+//!   ([`edgekf_sim::systems::crank::studies::identify2`]): the likelihood surface over cA 0.15–0.35 ×
 //!   cB 0.05–0.25 mm about A 0.25 + B 0.15 mm, the Fisher information there and the
 //!   single-clearance bound (default 16 runs of 10 s per point released 30 ± 10°; `stencil`:
 //!   only cA 0.20–0.30 × cB 0.10–0.20 mm, enough for the Fisher matrix).
 use edgekf_sim::systems::crank::config::Method;
-use edgekf_sim::systems::crank::estimate::identify2::{Analysis, Design};
 use edgekf_sim::systems::crank::estimate::ukf::{self, UkfOptions};
 use edgekf_sim::systems::crank::estimate::Recording;
 use edgekf_sim::systems::crank::feature::window_features;
+use edgekf_sim::systems::crank::studies::identify2::{Analysis, Design};
 use edgekf_sim::systems::crank::{CrankConfig, Mechanism, SimOptions};
 
 fn feats(c: f64, angle: f64, seed: u64, dur: f64) -> Vec<f64> {

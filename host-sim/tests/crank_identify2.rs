@@ -1,11 +1,11 @@
 //! Identifiability of two clearances (A and B) from the crank angular acceleration
-//! ([`edgekf_sim::systems::crank::estimate::identify2`]), on a coarse stencil: cA 0.20 / 0.25 / 0.30 ×
+//! ([`edgekf_sim::systems::crank::studies::identify2`]), on a coarse stencil: cA 0.20 / 0.25 / 0.30 ×
 //! cB 0.10 / 0.15 / 0.20 mm and A alone at 0.20 / 0.25 / 0.30 mm, 8 runs of 2 s per point
 //! released 30 ± 10°, covariance scaled to a 10 s recording. Run in release with
 //! `--nocapture` for the figures; the full study is `cargo run --release -p edgekf-sim
 //! --example crank_study -- two-clearances`.
 
-use edgekf_sim::systems::crank::estimate::identify2::{fisher_text, Analysis, Design, FeatureSet};
+use edgekf_sim::systems::crank::studies::identify2::{fisher_text, Analysis, Design, FeatureSet};
 use edgekf_sim::systems::crank::CrankConfig;
 
 #[test]

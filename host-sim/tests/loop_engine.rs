@@ -3,8 +3,9 @@
 //! undeclared effect in its data, sizes it, and adds nothing to clean data.
 
 use edgekf_sim::residual_loop::filter::{discretise, run_state_space, Run, StateSpace};
+use edgekf_sim::residual_loop::onset::settled_mean;
 use edgekf_sim::residual_loop::optimize::ScalarRange;
-use edgekf_sim::residual_loop::search::{EffectDetail, EffectKind};
+use edgekf_sim::residual_loop::search::{Applied, EffectDetail, EffectKind};
 use edgekf_sim::residual_loop::signature::{summarise, Channel, ReferenceLines, SummaryContext};
 use edgekf_sim::residual_loop::{search, EffectLabel, LoopOptions, LoopSystem, RunSummary, Traces};
 use nalgebra::{DMatrix, DVector};
@@ -79,10 +80,10 @@ impl LoopSystem for Oscillator {
         "oscillator"
     }
 
-    fn run(&self, effects: &[(Effect, f64)]) -> anyhow::Result<(usize, Run)> {
-        let factor = effects.iter().find(|(e, _)| *e == Effect::Stiffness).map_or(1.0, |(_, th)| th.exp());
+    fn run(&self, effects: &[Applied<Effect>]) -> anyhow::Result<(usize, Run)> {
+        let factor = effects.iter().find(|e| e.effect == Effect::Stiffness).map_or(1.0, |e| e.theta.exp());
         let (a2, q2) = dynamics(factor);
-        let bias = effects.iter().any(|(e, _)| *e == Effect::Bias);
+        let bias = effects.iter().any(|e| e.effect == Effect::Bias);
         let n = if bias { 3 } else { 2 };
         let a = DMatrix::from_fn(n, n, |i, j| if i < 2 && j < 2 { a2[(i, j)] } else { 0.0 });
         let qc = DMatrix::from_fn(n, n, |i, j| if i < 2 && j < 2 { q2[(i, j)] } else { 0.0 });
@@ -123,7 +124,7 @@ impl LoopSystem for Oscillator {
         summarise(run, &ctx, &Default::default())
     }
 
-    fn candidates(&self, s: &RunSummary, _: &[(Effect, f64)]) -> Vec<Vec<Effect>> {
+    fn candidates(&self, s: &RunSummary, _: &[Applied<Effect>]) -> Vec<Vec<Effect>> {
         let mut named = Vec::new();
         if s.channels[0].z.abs() > 5.0 {
             named.push(Effect::Bias);
@@ -152,13 +153,10 @@ impl LoopSystem for Oscillator {
             .then_some((ScalarRange { low: 0.5f64.ln(), high: 2f64.ln(), neutral: 0.0, log: true, tolerance: 1e-5 }, 6))
     }
 
-    fn value(&self, _: &usize, run: &Run, e: &Effect, theta: f64) -> f64 {
-        match e {
-            Effect::Bias => {
-                let s = &run.effect_states[0];
-                s[s.len() / 2..].iter().sum::<f64>() / (s.len() - s.len() / 2) as f64
-            }
-            Effect::Stiffness => theta.exp(),
+    fn value(&self, _: &usize, run: &Run, e: &Applied<Effect>) -> f64 {
+        match e.effect {
+            Effect::Bias => settled_mean(&run.effect_states[0], 0),
+            Effect::Stiffness => e.theta.exp(),
         }
     }
 

@@ -64,9 +64,10 @@ fn run() -> Result<()> {
 /// The one command that runs every test.
 fn test(long: bool) -> Result<()> {
     provision::ensure()?;
-    step("host tests: cargo test --workspace");
+    // The studies (crank identifiability) are behind a feature; their tests run here.
+    step("host tests: cargo test --workspace --features edgekf-sim/studies");
     let mut host = cargo_here();
-    host.args(["test", "--workspace"]);
+    host.args(["test", "--workspace", "--features", "edgekf-sim/studies"]);
     if long {
         host.env("EDGEKF_LONG", "1");
     }

@@ -26,12 +26,14 @@ pub fn summary_table(r: &LoopReport) -> String {
     for e in &r.effects_added {
         let order = e.detail.order.map(|o| format!(" at {o}x")).unwrap_or_default();
         let what = e.detail.parameter.as_ref().or(e.detail.line.as_ref()).map(|p| format!(" {p}")).unwrap_or_default();
+        let from = e.detail.onset_s.map(|o| format!(" from {o:.3} s")).unwrap_or_default();
         s.push_str(&format!(
-            "  + {}{} at {}{}: {} (Δ log-likelihood {:.1}, BIC cost {:.1})\n",
+            "  + {}{} at {}{}{}: {} (Δ log-likelihood {:.1}, BIC cost {:.1})\n",
             e.kind,
             order,
             e.location,
             what,
+            from,
             show_value(e.value, &e.unit),
             e.delta_log_likelihood,
             e.bic_penalty

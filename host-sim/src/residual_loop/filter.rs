@@ -117,12 +117,46 @@ pub fn run_state_space(
     outputs: &DMatrix<f64>,
     tracked: &[usize],
 ) -> Result<Run> {
-    let d = discretise(ss.a, ss.qc, dt)?;
-    let n = ss.a.nrows();
-    let m = ss.c.nrows();
+    run_segments(&[(0, *ss)], dt, columns, outputs, tracked)
+}
+
+/// Runs the filter over `columns` with a model that changes mid-run: `segments` are
+/// `(first sample, model)` in increasing order, all with the same states (an effect that
+/// starts mid-run is decoupled before its onset, not absent). The state and its covariance
+/// carry over a switch; the gain is time-varying again after it until it has converged.
+/// `P_0` is the first segment's.
+///
+/// ```
+/// use edgekf_sim::residual_loop::filter::{run_segments, StateSpace};
+/// use nalgebra::DMatrix;
+/// // A level observed directly that steps from 0 to 1 at sample 200, with a bias state that is
+/// // unobserved (decoupled) before it: the second model sees level + bias.
+/// let (a, qc, r) = (DMatrix::zeros(2, 2), DMatrix::from_diagonal(&nalgebra::dvector![1e-6, 0.0]), DMatrix::from_element(1, 1, 1e-4));
+/// let p0 = DMatrix::from_diagonal(&nalgebra::dvector![1.0, 4.0]);
+/// let (before, after) = (DMatrix::from_row_slice(1, 2, &[1.0, 0.0]), DMatrix::from_row_slice(1, 2, &[1.0, 1.0]));
+/// let y: Vec<f64> = (0..400).map(|k| if k < 200 { 0.0 } else { 1.0 }).collect();
+/// let model = |c| StateSpace { a: &a, qc: &qc, c, r: &r, p0: &p0 };
+/// let run = run_segments(&[(0, model(&before)), (200, model(&after))], 1e-3, &[&y], &DMatrix::identity(2, 2), &[1]).unwrap();
+/// assert!(run.effect_states[0][199].abs() < 1e-12); // unobserved before the switch
+/// assert!((run.effect_states[0][399] - 1.0).abs() < 0.05); // the step is taken up by the bias
+/// ```
+pub fn run_segments(
+    segments: &[(usize, StateSpace<'_>)],
+    dt: f64,
+    columns: &[&[f64]],
+    outputs: &DMatrix<f64>,
+    tracked: &[usize],
+) -> Result<Run> {
+    let Some((_, first)) = segments.first() else { return Err(anyhow!("filter: no model to run")) };
+    let n = first.a.nrows();
+    let m = first.c.nrows();
+    if segments.iter().any(|(_, s)| s.a.nrows() != n || s.c.nrows() != m || s.c.ncols() != n) {
+        return Err(anyhow!("filter: the segments' models differ in size"));
+    }
+    let models: Vec<(usize, Discrete, &StateSpace<'_>)> =
+        segments.iter().map(|(k, s)| Ok((*k, discretise(s.a, s.qc, dt)?, s))).collect::<Result<_>>()?;
+    let model = |i: usize| (&models[i].1, models[i].2.c, models[i].2.r, models[i].2.c.transpose());
     let len = columns.iter().map(|c| c.len()).min().unwrap_or(0);
-    let (c, r) = (ss.c, ss.r);
-    let ct = c.transpose();
     let out_rows = outputs;
     let effect_idx = tracked;
     if out_rows.ncols() != n || effect_idx.iter().any(|&i| i >= n) || columns.len() != m {
@@ -133,7 +167,10 @@ pub fn run_state_space(
         ));
     }
     let mut x = DVector::<f64>::zeros(n);
-    let mut p = ss.p0.clone();
+    let mut p = first.p0.clone();
+    let mut segment = 0;
+    let (mut d, mut c, mut r, mut ct) = model(0);
+    let mut switched_at = 0;
     let mut run = Run {
         innovation: vec![Vec::with_capacity(len); m],
         variance: vec![Vec::with_capacity(len); m],
@@ -146,6 +183,11 @@ pub fn run_state_space(
     let max_tv = 3000usize;
     #[allow(clippy::needless_range_loop)]
     for k in 0..len {
+        if models.get(segment + 1).is_some_and(|(from, _, _)| k >= *from) {
+            segment += 1;
+            (d, c, r, ct) = model(segment);
+            (frozen, prev_diag, switched_at) = (None, None, k);
+        }
         let y = DVector::from_fn(m, |i, _| columns[i][k]);
         let finite = y.iter().all(|v| v.is_finite());
         if finite {
@@ -177,7 +219,7 @@ pub fn run_state_space(
                         .zip(prev.iter())
                         .map(|(a, b)| ((a - b) / b.abs().max(1e-300)).abs())
                         .fold(0.0, f64::max);
-                    if change < 1e-7 || k >= max_tv {
+                    if change < 1e-7 || k - switched_at >= max_tv {
                         frozen =
                             Some(Frozen { gain: gain.clone(), sdiag: sdiag.clone(), s_inv: s_inv.clone(), logdet });
                         run.frozen_at = Some(k);

@@ -7,18 +7,24 @@
 //!
 //! The engine knows no system: a system implements [`LoopSystem`] in its own folder.
 //!
-//! * [`search`]: the [`LoopSystem`] trait, the loop and its report;
+//! * [`search`]: the [`LoopSystem`] trait and the loop;
+//! * [`vocabulary`]: the effect kinds, their extra fields and [`Applied`] effects;
+//! * [`report`]: what a run reports (`report.json`'s layout);
+//! * [`onset`]: effects that start mid-run (the onset's placement, the halves after it);
 //! * [`signature`]: the innovations' statistics and what is left unexplained;
 //! * [`filter`]: a dynamic-size Kalman filter for the host search (time-varying gain until the
 //!   covariance converges, then frozen);
 //! * [`optimize`]: the one-dimensional maximum-likelihood fit of an effect's scalar.
 
 pub mod filter;
+pub mod onset;
 pub mod optimize;
+pub mod report;
 pub mod search;
 pub mod signature;
+pub mod vocabulary;
 
 pub use search::{
-    search, AddedEffect, EffectLabel, LoopOptions, LoopReport, LoopSystem, NotIdentifiable, RunSummary, Traces,
+    search, AddedEffect, Applied, EffectLabel, LoopOptions, LoopReport, LoopSystem, NotIdentifiable, RunSummary, Traces,
 };
 pub use signature::{Channel, Signature, SignatureOptions};

@@ -8,17 +8,17 @@
 //! machine, a mechanism or a vehicle.
 
 use super::filter::Run;
+use super::onset;
 use super::optimize::{maximise, ScalarRange};
 use super::signature::{unexplained, Signature, SignatureOptions};
 use anyhow::{anyhow, Result};
-use serde::Serialize;
 use std::fmt::Debug;
 
+pub use super::report::{
+    AddedEffect, LoopReport, NotIdentifiable, Refused, Source, SystemSection, Traces, Trial, SCHEMA_VERSION,
+};
 pub use super::signature::{Channel, ChannelSignature, PeakSignature, RunSummary};
-
-/// The version of `report.json`'s layout: raised when a field changes meaning or goes away
-/// (adding a field does not raise it).
-pub const SCHEMA_VERSION: u32 = 2;
+pub use super::vocabulary::{Applied, EffectDetail, EffectKind, EffectLabel};
 
 /// How the loop runs (the engine's own settings; a system's tuning is its own data).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -53,282 +53,15 @@ impl Default for LoopOptions {
     }
 }
 
-/// The kinds of effect, one vocabulary for every system (the README's table gives each kind's
-/// `location`, the unit of its `value` and its extra fields).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum EffectKind {
-    /// A constant offset on a channel (channel unit; `drift` in unit/s where it drifts).
-    SensorBias,
-    /// A factor on a channel's declared scale.
-    SensorScale,
-    /// A pure delay of a channel, s.
-    SensorDelay,
-    /// A first-order lag of a channel, s (time constant).
-    SensorLag,
-    /// A force at an order of the running speed, N (`order`).
-    HarmonicForce,
-    /// A catch-all input at a node or channel, RMS in N or the channel's unit.
-    UnknownInput,
-    /// A factor on a component's declared parameter (`parameter`).
-    Parameter,
-    /// A mass added at a node, kg.
-    PointMass,
-    /// A mode the model lacks, Hz (`damping`).
-    ExtraMode,
-    /// A bearing defect: impulse size in the channel's unit (`line`, `harmonics`, `band_hz`).
-    BearingDefect,
-    /// An actuator's health factor after the onset (1 = healthy; `onset_s`).
-    ActuatorHealth,
-    /// A joint's radial clearance, m.
-    Clearance,
-}
-
-impl EffectKind {
-    /// The name in reports (`sensor_bias`, …).
-    pub fn as_str(self) -> &'static str {
-        match self {
-            EffectKind::SensorBias => "sensor_bias",
-            EffectKind::SensorScale => "sensor_scale",
-            EffectKind::SensorDelay => "sensor_delay",
-            EffectKind::SensorLag => "sensor_lag",
-            EffectKind::HarmonicForce => "harmonic_force",
-            EffectKind::UnknownInput => "unknown_input",
-            EffectKind::Parameter => "parameter",
-            EffectKind::PointMass => "point_mass",
-            EffectKind::ExtraMode => "extra_mode",
-            EffectKind::BearingDefect => "bearing_defect",
-            EffectKind::ActuatorHealth => "actuator_health",
-            EffectKind::Clearance => "clearance",
-        }
-    }
-}
-
-impl std::fmt::Display for EffectKind {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.as_str())
-    }
-}
-
-impl PartialEq<&str> for EffectKind {
-    fn eq(&self, other: &&str) -> bool {
-        self.as_str() == *other
-    }
-}
-
-/// The extra fields of an effect, each used by the kinds the README's table names.
-#[derive(Debug, Clone, Default, PartialEq, Serialize)]
-pub struct EffectDetail {
-    /// Order of the running speed (harmonic forces, bearing lines).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub order: Option<f64>,
-    /// The parameter (`mass`, `young`, `kxx`, …) of a `parameter` effect.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub parameter: Option<String>,
-    /// The defect line (`BPFO`, `BPFI`, `BSF`, `FTF`) of a `bearing_defect`.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub line: Option<String>,
-    /// Harmonics of the defect line modelled.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub harmonics: Option<u32>,
-    /// The band the defect's impulses ring in, Hz.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub band_hz: Option<[f64; 2]>,
-    /// Drift of a bias, in the channel's unit per second.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub drift: Option<f64>,
-    /// Damping ratio of an extra mode.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub damping: Option<f64>,
-    /// When the effect began, s from the first sample (change-point effects).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub onset_s: Option<f64>,
-}
-
-/// An effect the loop kept.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct AddedEffect {
-    /// The kind ([`EffectKind`]).
-    pub kind: EffectKind,
-    /// Channel name, `node N`, or a component (`disk 12`, `shaft`, `bearing 4`).
-    pub location: String,
-    /// Estimated size in SI units (a force's amplitude averaged over the second half of the
-    /// run), or the factor on the declared value for `sensor_scale` and `parameter`.
-    pub value: f64,
-    /// Unit of `value` (`1` for a factor).
-    pub unit: String,
-    /// The kind's extra fields.
-    #[serde(flatten)]
-    pub detail: EffectDetail,
-    /// Spectral lines (Hz) of the innovations that were there before this effect and are gone
-    /// after it.
-    pub explains: Vec<f64>,
-    /// Gain in log-likelihood.
-    pub delta_log_likelihood: f64,
-    /// Its cost: `½ p ln n`.
-    pub bic_penalty: f64,
-}
-
-/// A candidate the loop fitted and refused.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct Refused {
-    /// The kind.
-    pub kind: EffectKind,
-    /// Where.
-    pub location: String,
-    /// The fitted value, as an added effect would report it, where the fit gave one.
-    pub value: Option<f64>,
-    /// Why it was refused (at a bound of its range, one half of the run only, no usable model).
-    pub reason: String,
-}
-
-/// Where a report came from, so that it can be traced and rerun.
-#[derive(Debug, Clone, Default, PartialEq, Serialize)]
-pub struct Source {
-    /// The data file.
-    pub data: Option<String>,
-    /// SHA-256 of the data file's bytes, hex.
-    pub data_sha256: Option<String>,
-    /// The configuration file.
-    pub config: Option<String>,
-    /// The healthy baseline the loop started from, if any.
-    pub baseline: Option<String>,
-    /// The command line.
-    pub command: Option<String>,
-    /// edgekf's version.
-    pub version: String,
-}
-
-/// A system's own part of a report, beside the engine's fields (a running speed, say).
-#[derive(Debug, Clone, Default, PartialEq, Serialize)]
-pub struct SystemSection {
-    /// Fields written at the top level of `report.json`.
-    #[serde(flatten)]
-    pub fields: serde_json::Map<String, serde_json::Value>,
-    /// The same for people: `(label, text)`, printed under the verdict and on the page.
-    #[serde(skip)]
-    pub lines: Vec<(String, String)>,
-}
-
-/// An effect (or location) the data cannot resolve.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct NotIdentifiable {
-    /// Kind.
-    pub kind: EffectKind,
-    /// Location.
-    pub location: String,
-    /// The parameter, for `parameter`.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub parameter: Option<String>,
-    /// The statistic behind the verdict (`max_delta_log_likelihood`, `delta_log_likelihood_gap`).
-    pub statistic: String,
-    /// Its value.
-    pub value: f64,
-    /// Why, in words.
-    pub reason: String,
-}
-
-/// One candidate evaluated.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct Trial {
-    /// Iteration.
-    pub iteration: usize,
-    /// Kind.
-    pub kind: EffectKind,
-    /// Location.
-    pub location: String,
-    /// Order (harmonic forces, bearing lines).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub order: Option<f64>,
-    /// Parameter name (parameter effects).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub parameter: Option<String>,
-    /// Unit of `value`.
-    pub unit: String,
-    /// Fitted value (scalar effects), as reported.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub value: Option<f64>,
-    /// Gain in log-likelihood over the current model.
-    pub delta_log_likelihood: f64,
-    /// The gain in the first and in the second half of the run.
-    pub delta_halves: [f64; 2],
-    /// `½ p ln n`.
-    pub bic_penalty: f64,
-    /// Kept.
-    pub accepted: bool,
-}
-
-/// The series behind the report's plots (not serialised).
-#[derive(Debug, Clone, Default)]
-pub struct Traces {
-    /// Time, s.
-    pub t: Vec<f64>,
-    /// Sensor channels.
-    pub channels: Vec<Channel>,
-    /// Virtual-sensing rows (`n12_x`, …).
-    pub rows: Vec<Channel>,
-    /// `truth_` column of each row, where the file has one.
-    pub truth: Vec<Option<Vec<f64>>>,
-    /// The base model's run.
-    pub before: Run,
-    /// The final model's run.
-    pub after: Run,
-}
-
-/// What the loop found.
-#[derive(Debug, Clone, Serialize)]
-pub struct LoopReport {
-    /// [`SCHEMA_VERSION`].
-    pub schema_version: u32,
-    /// The system (its registry name).
-    pub system: String,
-    /// Where the report came from.
-    pub source: Source,
-    /// Effects kept, in order.
-    pub effects_added: Vec<AddedEffect>,
-    /// The base model.
-    pub before: RunSummary,
-    /// The final model.
-    pub after: RunSummary,
-    /// Effects the data cannot resolve.
-    pub not_identifiable: Vec<NotIdentifiable>,
-    /// Signatures left that no effect of the library explains (empty when the final
-    /// innovations are consistent).
-    pub unexplained: Vec<Signature>,
-    /// Candidates fitted and refused, with the reason.
-    pub refused: Vec<Refused>,
-    /// Every candidate evaluated.
-    pub trials: Vec<Trial>,
-    /// Why the loop stopped.
-    pub stopped: String,
-    /// The system's own fields (a running speed, say), at the top level of the JSON.
-    #[serde(flatten)]
-    pub section: SystemSection,
-    /// The series behind the plots.
-    #[serde(skip)]
-    pub traces: Traces,
-}
-
-/// How an effect is written in the report.
-#[derive(Debug, Clone, PartialEq)]
-pub struct EffectLabel {
-    /// Kind.
-    pub kind: EffectKind,
-    /// Channel name, `node N`, or a component.
-    pub location: String,
-    /// The kind's extra fields.
-    pub detail: EffectDetail,
-    /// Unit of the reported value (`1` for a factor).
-    pub unit: String,
-}
-
 /// A system the loop can be closed on: a base model with a filter, a library of effects that
 /// augment it, and the data. The engine ([`search`]) asks it for filter runs with a list of
 /// effects, for summaries of those runs and for candidates; everything else (acceptance,
 /// identifiability, the report) is the engine's.
 ///
-/// An effect is `(Self::Effect, θ)`: what and where, plus the scalar the engine fits by
-/// maximum likelihood when [`LoopSystem::scalar`] gives it a range (0 otherwise).
+/// An effect is an [`Applied`]: what and where (`Self::Effect`), the scalar θ the engine fits
+/// by maximum likelihood when [`LoopSystem::scalar`] gives it a range (0 otherwise), and, for
+/// effects the system says [may start mid-run](LoopSystem::may_start_mid_run), the onset the
+/// engine fits with it.
 pub trait LoopSystem {
     /// One augmentation at one place.
     type Effect: Copy + PartialEq + Debug;
@@ -336,22 +69,31 @@ pub trait LoopSystem {
     type Model;
     /// The system's name in the report.
     fn name(&self) -> &str;
-    /// Runs the filter with `effects` over the whole recording.
-    fn run(&self, effects: &[(Self::Effect, f64)]) -> Result<(Self::Model, Run)>;
+    /// Runs the filter with `effects` over the whole recording; an effect with an
+    /// [`onset_s`](Applied::onset_s) acts from that time on and is absent before it.
+    fn run(&self, effects: &[Applied<Self::Effect>]) -> Result<(Self::Model, Run)>;
     /// The innovations' statistics and the virtual-sensing error of a run.
     fn summarise(&self, run: &Run) -> RunSummary;
     /// Candidates for the next effect, given the current model's `effects` and the summary of
     /// its run, in tiers: a later tier is tried only when no candidate of an earlier one is kept
     /// (the catch-all goes last). The engine drops effects already in the model.
-    fn candidates(&self, summary: &RunSummary, effects: &[(Self::Effect, f64)]) -> Vec<Vec<Self::Effect>>;
+    fn candidates(&self, summary: &RunSummary, effects: &[Applied<Self::Effect>]) -> Vec<Vec<Self::Effect>>;
     /// How `effect` reads in the report.
     fn label(&self, effect: &Self::Effect) -> EffectLabel;
-    /// Free parameters `effect` costs in the BIC.
+    /// Free parameters `effect` costs in the BIC (an onset, when fitted, costs one more).
     fn parameters(&self, effect: &Self::Effect) -> usize;
     /// The range of the effect's scalar and the grid points to search it with, if it has one.
     fn scalar(&self, effect: &Self::Effect) -> Option<(ScalarRange, usize)>;
-    /// The size the report gives `effect` (in the model of `run`).
-    fn value(&self, model: &Self::Model, run: &Run, effect: &Self::Effect, theta: f64) -> f64;
+    /// The size the report gives `effect` in the model of `run` (a state's size over the
+    /// settled part of the effect's stretch: [`onset::settled_mean`]).
+    fn value(&self, model: &Self::Model, run: &Run, effect: &Applied<Self::Effect>) -> f64;
+    /// Whether `effect` may begin mid-run (a fault, a knock on the sensor, a part working
+    /// loose): the engine then also fits it with an onset, and tests the halves of the stretch
+    /// after the onset. Only systems whose [`run`](LoopSystem::run) honours
+    /// [`Applied::onset_s`] may say yes; none by default.
+    fn may_start_mid_run(&self, _effect: &Self::Effect) -> bool {
+        false
+    }
     /// Effects to screen at the end for identifiability, each with the scalars to try (a
     /// component parameter halved and doubled): if none of them changes the log-likelihood by
     /// more than the effect's BIC cost, the data cannot see it. None by default.
@@ -369,8 +111,7 @@ pub trait LoopSystem {
 
 /// A candidate fitted to the data.
 struct Fitted<E, M> {
-    effect: E,
-    theta: f64,
+    applied: Applied<E>,
     model: M,
     run: Run,
     delta: f64,
@@ -381,8 +122,7 @@ struct Fitted<E, M> {
 
 /// An effect kept, with the lines it explained.
 struct Kept<E> {
-    effect: E,
-    theta: f64,
+    applied: Applied<E>,
     delta: f64,
     penalty: f64,
     label: EffectLabel,
@@ -393,34 +133,46 @@ struct Kept<E> {
 struct Engine<'a, S: LoopSystem> {
     sys: &'a S,
     options: &'a LoopOptions,
+    /// Sample times of the data, s.
+    t: Vec<f64>,
     /// Scalar measurements in the run (for the BIC).
     n_meas: f64,
 }
 
 impl<S: LoopSystem> Engine<'_, S> {
-    fn penalty(&self, e: &S::Effect) -> f64 {
-        0.5 * self.sys.parameters(e) as f64 * self.n_meas.ln()
+    /// `½ p ln n` for the effect's parameters, and one more for a fitted onset.
+    fn penalty(&self, e: &S::Effect, onset: bool) -> f64 {
+        0.5 * (self.sys.parameters(e) + usize::from(onset)) as f64 * self.n_meas.ln()
     }
 
-    /// Gain in log-likelihood of `run` over `base`, in the first and the second half.
-    fn halves(&self, run: &Run, base: &Run) -> [f64; 2] {
-        let n = run.nis.len().min(base.nis.len());
-        let mid = n / 2;
-        let part = |r: &Run, lo: usize, hi: usize| -> f64 {
-            -0.5 * (lo..hi)
-                .filter(|&k| r.nis[k].is_finite() && r.log_det_s[k].is_finite())
-                .map(|k| r.nis[k] + r.log_det_s[k])
-                .sum::<f64>()
-        };
-        [part(run, 0, mid) - part(base, 0, mid), part(run, mid, n) - part(base, mid, n)]
+    /// Fits `cand` on top of `effects`: present from the start and, if it may start mid-run,
+    /// with a fitted onset; the better of the two (one that pays for itself first).
+    fn fit(&self, effects: &[Applied<S::Effect>], cand: S::Effect, base: &Run) -> Result<Fitted<S::Effect, S::Model>> {
+        let whole = self.fit_from(effects, cand, None, base);
+        if !self.sys.may_start_mid_run(&cand) {
+            return whole;
+        }
+        let late = self.fit_onset(effects, cand, base, whole.as_ref().ok());
+        let rank = |f: &Fitted<S::Effect, S::Model>| (self.pays(f), f.delta - f.penalty);
+        match (whole, late) {
+            (Ok(w), Ok(l)) => Ok(if rank(&l) > rank(&w) { l } else { w }),
+            (Ok(f), Err(_)) | (Err(_), Ok(f)) => Ok(f),
+            (Err(e), Err(_)) => Err(e),
+        }
     }
 
-    /// Fits `cand` on top of `effects`: its scalar by maximum likelihood, its states by the
-    /// filter.
-    fn fit(&self, effects: &[(S::Effect, f64)], cand: S::Effect, base: &Run) -> Result<Fitted<S::Effect, S::Model>> {
+    /// Fits `cand` acting from `onset_s` (from the start if `None`): its scalar by maximum
+    /// likelihood, its states by the filter.
+    fn fit_from(
+        &self,
+        effects: &[Applied<S::Effect>],
+        cand: S::Effect,
+        onset_s: Option<f64>,
+        base: &Run,
+    ) -> Result<Fitted<S::Effect, S::Model>> {
         let with = |theta: f64| {
             let mut e = effects.to_vec();
-            e.push((cand, theta));
+            e.push(Applied { effect: cand, theta, onset_s });
             e
         };
         let theta = match self.sys.scalar(&cand) {
@@ -448,11 +200,63 @@ impl<S: LoopSystem> Engine<'_, S> {
             }
             None => 0.0,
         };
+        let applied = Applied { effect: cand, theta, onset_s };
         let (model, run) = self.sys.run(&with(theta))?;
         let delta = run.log_likelihood() - base.log_likelihood();
-        let halves = self.halves(&run, base);
-        let label = self.sys.label(&cand);
-        Ok(Fitted { effect: cand, theta, model, run, delta, halves, penalty: self.penalty(&cand), label })
+        let halves = onset::halves(&run, base, applied.first_sample(&self.t));
+        let mut label = self.sys.label(&cand);
+        label.detail.onset_s = onset_s;
+        let penalty = self.penalty(&cand, onset_s.is_some());
+        Ok(Fitted { applied, model, run, delta, halves, penalty, label })
+    }
+
+    /// Fits `cand` with an onset: placed where the gain of the whole-run fit `whole` starts to
+    /// accumulate (or on a coarse grid when there is none), refined with the scalar held, and
+    /// the scalar refitted there.
+    fn fit_onset(
+        &self,
+        effects: &[Applied<S::Effect>],
+        cand: S::Effect,
+        base: &Run,
+        whole: Option<&Fitted<S::Effect, S::Model>>,
+    ) -> Result<Fitted<S::Effect, S::Model>> {
+        let n = base.nis.len().min(self.t.len());
+        let (lo, hi) = onset::window(n).ok_or_else(|| anyhow!("the run is too short to place an onset in"))?;
+        let (k0, first) = match whole {
+            Some(w) => {
+                let k = onset::change_point(&w.run, base, lo, hi);
+                (k, self.fit_from(effects, cand, Some(self.t[k]), base)?)
+            }
+            None => onset::grid(lo, hi)
+                .filter_map(|k| self.fit_from(effects, cand, Some(self.t[k]), base).ok().map(|f| (k, f)))
+                .max_by(|a, b| a.1.delta.total_cmp(&b.1.delta))
+                .ok_or_else(|| anyhow!("no onset gives a usable model"))?,
+        };
+        let theta = first.applied.theta;
+        let sample = |k: f64| (k.round().max(0.0) as usize).clamp(lo, hi);
+        let reach = ((hi - lo) / 10).max(2);
+        let refined = maximise(
+            |k| {
+                let mut e = effects.to_vec();
+                e.push(Applied { effect: cand, theta, onset_s: Some(self.t[sample(k)]) });
+                self.sys.run(&e).ok().map(|(_, r)| r.log_likelihood())
+            },
+            k0.saturating_sub(reach).max(lo) as f64,
+            (k0 + reach).min(hi) as f64,
+            6,
+            0.5,
+        );
+        let k1 = refined.map_or(k0, |m| sample(m.x));
+        if k1 == k0 {
+            return Ok(first);
+        }
+        let second = self.fit_from(effects, cand, Some(self.t[k1]), base)?;
+        Ok(if second.delta >= first.delta { second } else { first })
+    }
+
+    fn reported_value(&self, f: &Fitted<S::Effect, S::Model>) -> Option<f64> {
+        let scalar_or_late = self.sys.scalar(&f.applied.effect).is_some() || f.applied.onset_s.is_some();
+        scalar_or_late.then(|| self.sys.value(&f.model, &f.run, &f.applied))
     }
 
     fn trial(&self, iteration: usize, f: &Fitted<S::Effect, S::Model>, accepted: bool) -> Trial {
@@ -462,8 +266,9 @@ impl<S: LoopSystem> Engine<'_, S> {
             location: f.label.location.clone(),
             order: f.label.detail.order,
             parameter: f.label.detail.parameter.clone(),
+            onset_s: f.applied.onset_s,
             unit: f.label.unit.clone(),
-            value: self.sys.scalar(&f.effect).map(|_| self.sys.value(&f.model, &f.run, &f.effect, f.theta)),
+            value: self.reported_value(f),
             delta_log_likelihood: f.delta,
             delta_halves: f.halves,
             bic_penalty: f.penalty,
@@ -471,10 +276,11 @@ impl<S: LoopSystem> Engine<'_, S> {
         }
     }
 
-    /// `kind at location: Δ log-likelihood, BIC cost, halves`.
+    /// `kind at location [from t s]: Δ log-likelihood, BIC cost, halves`.
     fn describe(&self, f: &Fitted<S::Effect, S::Model>) -> String {
+        let from = f.applied.onset_s.map(|o| format!(" from {o:.3} s")).unwrap_or_default();
         format!(
-            "{} at {}: Δ log-likelihood {:.1}, BIC cost {:.1}, halves {:.1} / {:.1}",
+            "{} at {}{from}: Δ log-likelihood {:.1}, BIC cost {:.1}, halves {:.1} / {:.1}",
             f.label.kind, f.label.location, f.delta, f.penalty, f.halves[0], f.halves[1]
         )
     }
@@ -489,7 +295,7 @@ impl<S: LoopSystem> Engine<'_, S> {
     fn fit_all(
         &self,
         iteration: usize,
-        effects: &[(S::Effect, f64)],
+        effects: &[Applied<S::Effect>],
         cands: Vec<S::Effect>,
         base: &Run,
         refused: &mut Vec<Refused>,
@@ -517,8 +323,8 @@ impl<S: LoopSystem> Engine<'_, S> {
         results
     }
 
-    /// Pays for itself: the whole run gains more than the BIC cost, and each half at least
-    /// `half_gain` of it.
+    /// Pays for itself: the whole run gains more than the BIC cost, and each half (of the
+    /// stretch after the onset, for a change-point effect) at least `half_gain` of it.
     fn pays(&self, f: &Fitted<S::Effect, S::Model>) -> bool {
         f.delta > f.penalty && self.pays_in_halves(f)
     }
@@ -556,6 +362,14 @@ impl<S: LoopSystem> Engine<'_, S> {
             .collect()
     }
 
+    /// What the halves are of, in words.
+    fn stretch(f: &Fitted<S::Effect, S::Model>) -> String {
+        match f.applied.onset_s {
+            Some(o) => format!("both halves of the stretch after its onset at {o:.3} s"),
+            None => "both halves of the run".into(),
+        }
+    }
+
     /// An effect that pays over the whole run but not in both halves: helping only part of the
     /// run, it is not a constant property of the system.
     fn partial(&self, f: &Fitted<S::Effect, S::Model>) -> Signature {
@@ -565,8 +379,9 @@ impl<S: LoopSystem> Engine<'_, S> {
             statistic: "delta_log_likelihood_halves".into(),
             value: f.halves[0].min(f.halves[1]),
             description: format!(
-                "{}: it helps only part of the run, so it is not a constant property",
-                self.describe(f)
+                "{}: it helps only part of the run (not {}), so it is not a lasting property",
+                self.describe(f),
+                Self::stretch(f)
             ),
         }
     }
@@ -576,28 +391,32 @@ impl<S: LoopSystem> Engine<'_, S> {
         Refused {
             kind: f.label.kind,
             location: f.label.location.clone(),
-            value: self.sys.scalar(&f.effect).map(|_| self.sys.value(&f.model, &f.run, &f.effect, f.theta)),
+            value: self.reported_value(f),
             reason: format!(
-                "pays over the whole run (Δ log-likelihood {:.1} against a BIC cost of {:.1}) but not in both halves ({:.1} / {:.1}): it helps only part of the run",
-                f.delta, f.penalty, f.halves[0], f.halves[1]
+                "pays over the whole run (Δ log-likelihood {:.1} against a BIC cost of {:.1}) but not in {} ({:.1} / {:.1}): it helps only part of the run",
+                f.delta,
+                f.penalty,
+                Self::stretch(f),
+                f.halves[0],
+                f.halves[1]
             ),
         }
     }
 
     /// Effects of [`LoopSystem::screened`] the data cannot see from the final model.
-    fn screen(&self, effects: &[(S::Effect, f64)], run: &Run) -> Result<Vec<NotIdentifiable>> {
+    fn screen(&self, effects: &[Applied<S::Effect>], run: &Run) -> Result<Vec<NotIdentifiable>> {
         let base = run.log_likelihood();
         let mut out = Vec::new();
         for (e, thetas) in self.sys.screened() {
-            if effects.iter().any(|(x, _)| *x == e) {
+            if effects.iter().any(|x| x.effect == e) {
                 continue;
             }
-            let penalty = self.penalty(&e);
+            let penalty = self.penalty(&e, false);
             let label = self.sys.label(&e);
             let mut worst: f64 = 0.0;
             for theta in thetas {
                 let mut trial = effects.to_vec();
-                trial.push((e, theta));
+                trial.push(Applied::new(e, theta));
                 let (_, r) = self.sys.run(&trial)?;
                 worst = worst.max((r.log_likelihood() - base).abs());
                 if worst > penalty {
@@ -646,11 +465,13 @@ fn explained(before: &RunSummary, after: &RunSummary) -> Vec<f64> {
 }
 
 /// Closes the loop on `sys`: runs its base model, then adds effects while the innovations are
-/// not consistent and an effect pays for its parameters (BIC) in both halves of the run; then
-/// screens what the data cannot see and reports what is left.
+/// not consistent and an effect pays for its parameters (BIC) in both halves of the run (of
+/// the stretch after its onset, for an effect that starts mid-run); then screens what the data
+/// cannot see and reports what is left.
 pub fn search<S: LoopSystem>(sys: &S, options: &LoopOptions) -> Result<LoopReport> {
-    let mut engine = Engine { sys, options, n_meas: 2.0 };
-    let mut effects: Vec<(S::Effect, f64)> = Vec::new();
+    let traces = sys.traces();
+    let mut engine = Engine { sys, options, t: traces.t.clone(), n_meas: 2.0 };
+    let mut effects: Vec<Applied<S::Effect>> = Vec::new();
     engine.progress(|| "running the base model".into());
     let (mut cur_model, mut cur_run) = sys.run(&effects)?;
     engine.n_meas = cur_run.measurements().max(2) as f64;
@@ -680,7 +501,7 @@ pub fn search<S: LoopSystem>(sys: &S, options: &LoopOptions) -> Result<LoopRepor
         for tier in sys.candidates(&current, &effects) {
             let mut fresh: Vec<S::Effect> = Vec::new();
             for e in tier {
-                if !effects.iter().any(|(x, _)| *x == e) && !fresh.contains(&e) {
+                if !effects.iter().any(|x| x.effect == e) && !fresh.contains(&e) {
                     fresh.push(e);
                 }
             }
@@ -719,23 +540,11 @@ pub fn search<S: LoopSystem>(sys: &S, options: &LoopOptions) -> Result<LoopRepor
             break;
         };
         trials.push(engine.trial(iteration, &win, true));
-        engine.progress(|| {
-            format!(
-                "iteration {iteration}: kept {} at {} (Δ log-likelihood {:.1}, BIC cost {:.1})",
-                win.label.kind, win.label.location, win.delta, win.penalty
-            )
-        });
+        engine.progress(|| format!("iteration {iteration}: kept {}", engine.describe(&win)));
         let next = sys.summarise(&win.run);
         let explains = explained(&current, &next);
-        effects.push((win.effect, win.theta));
-        added.push(Kept {
-            effect: win.effect,
-            theta: win.theta,
-            delta: win.delta,
-            penalty: win.penalty,
-            label: win.label,
-            explains,
-        });
+        effects.push(win.applied);
+        added.push(Kept { applied: win.applied, delta: win.delta, penalty: win.penalty, label: win.label, explains });
         (cur_model, cur_run) = (win.model, win.run);
         current = next;
     }
@@ -747,7 +556,7 @@ pub fn search<S: LoopSystem>(sys: &S, options: &LoopOptions) -> Result<LoopRepor
         .map(|f| AddedEffect {
             kind: f.label.kind,
             location: f.label.location,
-            value: sys.value(&cur_model, &cur_run, &f.effect, f.theta),
+            value: sys.value(&cur_model, &cur_run, &f.applied),
             unit: f.label.unit,
             detail: f.label.detail,
             explains: f.explains,
@@ -762,7 +571,7 @@ pub fn search<S: LoopSystem>(sys: &S, options: &LoopOptions) -> Result<LoopRepor
         u.extend(partial);
         u
     };
-    let traces = Traces { before: base_run, after: cur_run, ..sys.traces() };
+    let traces = Traces { before: base_run, after: cur_run, ..traces };
     Ok(LoopReport {
         schema_version: SCHEMA_VERSION,
         system: sys.name().to_string(),

@@ -532,128 +532,46 @@ fn estimate(args: EstimateArgs) -> anyhow::Result<()> {
 }
 
 fn train(args: TrainArgs) -> anyhow::Result<()> {
-    use super::estimate::train;
+    use super::estimate::training::{self, TrainPlan};
     let config = match &args.config {
         Some(path) => CrankConfig::load(path)?,
         None => CrankConfig::default(),
     };
-    let ok = |c: &[f64]| !c.is_empty() && c.iter().all(|v| v.is_finite() && *v > 0.0 && *v < 0.01);
-    if !ok(&args.clearances) || !ok(&args.test_clearances) {
-        anyhow::bail!("--clearances and --test-clearances must be clearances in metres (0.1 mm = 0.1e-3)");
-    }
-    if args.variants == 0 || !(args.duration.is_finite() && args.duration >= 0.5) {
-        anyhow::bail!("--variants must be at least 1 and --duration at least 0.5 s");
-    }
-    if !(args.ridge.is_finite() && args.ridge >= 0.0) {
-        anyhow::bail!("--ridge {} must be non-negative", args.ridge);
-    }
-    let window = 0.25;
+    let plan = TrainPlan {
+        clearances: args.clearances,
+        variants: args.variants,
+        duration: args.duration,
+        threads: args.threads,
+        ridge: args.ridge,
+        seed_base: args.seed_base,
+        squares: !args.linear,
+        release_variants: args.release_variants,
+        release_seed_base: args.release_seed_base,
+        max_step: args.max_step,
+        test_variants: args.test_variants,
+        test_seed_base: args.test_seed_base,
+        test_clearances: args.test_clearances,
+        save_features: args.save_features,
+        load_features: args.load_features,
+        load_test_features: args.load_test_features,
+    };
+    plan.validate()?;
     let started = Instant::now();
-    let grid = train::grid(&args.clearances, args.variants, args.seed_base, args.duration);
-    let total = grid.len();
-    let show = |k: usize, r: &train::Run| {
-        eprintln!(
-            "crank train: run {:>4}/{total}: {} {:.3} mm, release {:.1}°, radius ×{:.2}, seed {} ({:.0} s elapsed)",
-            k + 1,
-            r.joint,
-            r.clearance * 1e3,
-            r.release_deg,
-            r.radius,
-            r.seed,
-            started.elapsed().as_secs_f64()
-        );
-    };
-    let (runs, feats) = match &args.load_features {
-        Some(path) => train::read_features(path)?,
-        None => {
-            let feats = train::features_of(&config, &grid, window, args.threads, &show)?;
-            (grid, feats)
-        }
-    };
-    if let Some(path) = &args.save_features {
-        train::write_features(path, &runs, &feats).with_context(|| format!("{}: cannot write", path.display()))?;
-    }
-    let desc = format!(
-        "{} runs of {} s: joints A, B, C × clearances {:?} mm × {} draws (release 20–40°, journal radius × 0.8–1.2), seeds from {}, adaptive integrator, ridge {}{}",
-        runs.len(),
-        args.duration,
-        args.clearances.iter().map(|c| c * 1e3).collect::<Vec<_>>(),
-        args.variants,
-        args.seed_base,
-        args.ridge,
-        if !args.linear { ", with squares" } else { "" }
-    );
-    let mut model = train::fit(&runs, &feats, window, args.ridge, !args.linear, desc);
-    model.trained_for =
-        Some(super::estimate::trained_for::TrainedFor::new(&config, train::RELEASE_RANGE_DEG, train::RADIUS_RANGE));
-    if args.release_variants > 0 {
-        if !(args.max_step.is_finite() && args.max_step > 0.0) {
-            anyhow::bail!("--max-step {} must be positive", args.max_step);
-        }
-        let grid = train::release_grid(&args.clearances, args.release_variants, args.release_seed_base);
-        let total = grid.len();
-        let rf = train::features_of(&config, &grid, window, args.threads, &|k, _| {
-            if (k + 1) % 100 == 0 || k + 1 == total {
-                eprintln!("crank train: release run {}/{total}", k + 1);
-            }
-        })?;
-        let labels: Vec<usize> = rf.iter().map(|f| f.missed.unwrap_or(usize::MAX)).collect();
-        let seen = |h: usize| labels.iter().filter(|&&l| l == h).count();
-        eprintln!(
-            "crank train: release grid: contact seen in {} of {total} runs; first contact {} , second {}, later {}",
-            rf.iter().filter(|f| f.release.is_some()).count(),
-            seen(0),
-            seen(1),
-            labels.iter().filter(|&&l| (2..usize::MAX).contains(&l)).count()
-        );
-        let features: Vec<_> = rf.iter().map(|f| f.release).collect();
-        // The window features' own error, from the training runs, weighs the hypotheses.
-        let (_, _, spread) = train::score(&model, &runs, &feats);
-        let windows = feats.iter().map(|f| f.windows as f64).sum::<f64>() / feats.len().max(1) as f64;
-        let stage =
-            super::estimate::release::ReleaseStage::fit(&grid, &features, &labels, args.max_step, (spread, windows));
-        for fit in stage.residuals(&grid, &features, &labels) {
-            eprintln!(
-                "crank train: release law {} / contact {}: {} runs, ln c residual RMS {:.4}, largest {:.4}",
-                fit.joint,
-                fit.hypothesis + 1,
-                fit.runs,
-                fit.rms,
-                fit.largest
-            );
-        }
-        model.trained_on += &format!(
-            "; release laws: {total} runs of {:.2} s, {} draws, seeds from {}",
-            grid.first().map_or(0.0, |r| r.duration),
-            args.release_variants,
-            args.release_seed_base
-        );
-        model.release = Some(stage);
-    }
-    let (rate, worst, rms) = train::score(&model, &runs, &feats);
+    let progress = |line: String| eprintln!("crank train: {line} ({:.0} s elapsed)", started.elapsed().as_secs_f64());
+    let trained = training::train(&config, &plan, &progress)?;
+    let s = trained.training;
     println!(
         "training set: joint right in {:.1} % of {} runs; clearance error RMS {:.1} %, worst {:.1} %",
-        rate * 100.0,
-        runs.len(),
-        rms * 100.0,
-        worst * 100.0
+        s.joint_right * 100.0,
+        s.runs,
+        s.rms * 100.0,
+        s.worst * 100.0
     );
+    let model = trained.model;
     std::fs::write(&args.out, model.to_toml()).with_context(|| format!("{}: cannot write", args.out.display()))?;
     println!("wrote {}", args.out.display());
-    if args.test_variants > 0 || args.load_test_features.is_some() {
-        let (test, tf) = match &args.load_test_features {
-            Some(path) => train::read_features(path)?,
-            None => {
-                let test = train::grid(&args.test_clearances, args.test_variants, args.test_seed_base, args.duration);
-                let tf = train::features_of(&config, &test, window, args.threads, &|_, _| {})?;
-                (test, tf)
-            }
-        };
-        if let Some(path) = &args.save_features {
-            let path = path.with_extension("test.csv");
-            train::write_features(&path, &test, &tf).with_context(|| format!("{}: cannot write", path.display()))?;
-        }
-        for (r, f) in test.iter().zip(&tf) {
+    if let Some(tested) = training::test(&config, &model, &plan)? {
+        for (r, f) in &tested.runs {
             let e = model.estimate_features(*f);
             println!(
                 "test {} {:.3} mm (release {:.1}°, radius ×{:.2}, seed {}): named {} {:.4} mm ({:+.1} %; first stage {:+.1} %{})",
@@ -672,21 +590,14 @@ fn train(args: TrainArgs) -> anyhow::Result<()> {
                 }
             );
         }
-        let (rate, worst, rms) = train::score(&model, &test, &tf);
-        let within = test
-            .iter()
-            .zip(&tf)
-            .filter(|(r, f)| {
-                let e = model.estimate_features(**f);
-                e.joint == r.joint && (e.clearance[r.joint.index()] / r.clearance - 1.0).abs() <= 0.03
-            })
-            .count();
+        let s = tested.score;
         println!(
-            "test set (unseen seeds and draws): joint right in {:.1} % of {} runs; clearance error RMS {:.1} %, worst {:.1} %, within ±3 % in {within}",
-            rate * 100.0,
-            test.len(),
-            rms * 100.0,
-            worst * 100.0
+            "test set (unseen seeds and draws): joint right in {:.1} % of {} runs; clearance error RMS {:.1} %, worst {:.1} %, within ±3 % in {}",
+            s.joint_right * 100.0,
+            s.runs,
+            s.rms * 100.0,
+            s.worst * 100.0,
+            tested.within_3_percent
         );
     }
     println!("wall {:.1} s", started.elapsed().as_secs_f64());

@@ -79,6 +79,8 @@ pub mod mechanism;
 pub mod simulate;
 pub mod spectrum;
 pub mod state;
+#[cfg(feature = "studies")]
+pub mod studies;
 
 pub use config::CrankConfig;
 pub use error::CrankError;

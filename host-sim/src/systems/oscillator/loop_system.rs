@@ -7,15 +7,20 @@
 //! * `harmonic_force` at 2× or 3× the drive (another phasor): a second harmonic of the force;
 //! * `parameter` of the `mode`: its natural frequency or damping ratio, as a factor.
 //!
+//! Any of them may begin mid-run (the engine then fits its onset): before it, the effect's
+//! states are kept but decoupled, and the mode keeps its declared parameters.
+//!
 //! The filter is the engine's dense Kalman filter on this continuous model, so the loop and the
 //! node's estimator share the model's matrices but not their code path.
 
 use super::scenario::Scenario;
 use crate::io::data::DataFile;
-use crate::residual_loop::filter::{run_state_space, Run, StateSpace};
+use crate::residual_loop::filter::{run_segments, Run, StateSpace};
+use crate::residual_loop::onset::settled_mean;
 use crate::residual_loop::optimize::ScalarRange;
 use crate::residual_loop::search::{
-    search, Channel, EffectDetail, EffectKind, EffectLabel, LoopOptions, LoopReport, LoopSystem, RunSummary, Traces,
+    search, Applied, Channel, EffectDetail, EffectKind, EffectLabel, LoopOptions, LoopReport, LoopSystem, RunSummary,
+    Traces,
 };
 use crate::residual_loop::signature::{summarise, ReferenceLines, SummaryContext};
 use anyhow::{anyhow, Result};
@@ -72,13 +77,13 @@ impl<'a> OscillatorSystem<'a> {
         })
     }
 
-    /// The declared parameters with the `parameter` effects applied.
-    fn params_with(&self, effects: &[(Effect, f64)]) -> HarmonicForceParams {
+    /// The declared parameters with the `parameter` effects in `active` applied.
+    fn params_with(&self, effects: &[Applied<Effect>], active: &[bool]) -> HarmonicForceParams {
         let mut p = self.params;
-        for &(e, theta) in effects {
-            match e {
-                Effect::Frequency => p.natural_freq_hz *= theta.exp(),
-                Effect::Damping => p.damping_ratio *= theta.exp(),
+        for (e, _) in effects.iter().zip(active).filter(|(_, on)| **on) {
+            match e.effect {
+                Effect::Frequency => p.natural_freq_hz *= e.theta.exp(),
+                Effect::Damping => p.damping_ratio *= e.theta.exp(),
                 _ => {}
             }
         }
@@ -86,12 +91,12 @@ impl<'a> OscillatorSystem<'a> {
     }
 
     /// Where each effect's states start, and the total state count.
-    fn layout(effects: &[(Effect, f64)]) -> (Vec<usize>, usize) {
+    fn layout(effects: &[Applied<Effect>]) -> (Vec<usize>, usize) {
         let mut n = 4;
         let mut starts = Vec::with_capacity(effects.len());
-        for (e, _) in effects {
+        for e in effects {
             starts.push(n);
-            n += match e {
+            n += match e.effect {
                 Effect::SensorBias => 1,
                 Effect::HarmonicForce { .. } => 2,
                 _ => 0,
@@ -99,19 +104,12 @@ impl<'a> OscillatorSystem<'a> {
         }
         (starts, n)
     }
-}
 
-impl LoopSystem for OscillatorSystem<'_> {
-    type Effect = Effect;
-    /// Each effect with the index of its first state among the run's tracked states.
-    type Model = Vec<(Effect, usize)>;
-
-    fn name(&self) -> &str {
-        "oscillator"
-    }
-
-    fn run(&self, effects: &[(Effect, f64)]) -> Result<(Vec<(Effect, usize)>, Run)> {
-        let p = self.params_with(effects);
+    /// The continuous model with the effects in `active` acting; the states of the others are
+    /// kept but decoupled (no dynamics, no noise, not measured), so that they wait at their
+    /// prior until their onset.
+    fn model(&self, effects: &[Applied<Effect>], active: &[bool]) -> Matrices {
+        let p = self.params_with(effects, active);
         let (starts, n) = Self::layout(effects);
         let (wn, w) = (p.omega_n(), p.drive_rad_s);
         let base = p.continuous_a();
@@ -128,43 +126,115 @@ impl LoopSystem for OscillatorSystem<'_> {
         p0[(2, 2)] = p.initial_force_std.powi(2);
         p0[(3, 3)] = p.initial_force_std.powi(2);
         let mut scale = 1.0;
-        let mut tracked = Vec::new();
-        let mut model = Vec::with_capacity(effects.len());
-        for (&(e, theta), &s) in effects.iter().zip(&starts) {
-            model.push((e, tracked.len()));
-            match e {
+        let mut bias_states = Vec::new();
+        for ((e, &s), &on) in effects.iter().zip(&starts).zip(active) {
+            match e.effect {
                 Effect::SensorBias => {
-                    c[(0, s)] = 1.0;
-                    qc[(s, s)] = BIAS_PSD;
                     p0[(s, s)] = BIAS_STD * BIAS_STD;
-                    tracked.push(s);
+                    bias_states.push(s);
+                    if on {
+                        c[(0, s)] = 1.0;
+                        qc[(s, s)] = BIAS_PSD;
+                    }
                 }
                 Effect::HarmonicForce { order } => {
-                    let wk = order as f64 * w;
-                    (a[(s, s + 1)], a[(s + 1, s)]) = (-wk, wk);
-                    // The phasor's real part drives the mode as p₁ does, and is measured with it.
-                    a[(1, s)] = wn;
-                    c[(0, s)] = 1.0;
-                    qc[(s, s)] = p.force_psd;
-                    qc[(s + 1, s + 1)] = p.force_psd;
                     p0[(s, s)] = p.initial_force_std.powi(2);
                     p0[(s + 1, s + 1)] = p.initial_force_std.powi(2);
-                    tracked.extend([s, s + 1]);
+                    if on {
+                        let wk = order as f64 * w;
+                        (a[(s, s + 1)], a[(s + 1, s)]) = (-wk, wk);
+                        // The phasor's real part drives the mode as p₁ does, and is measured
+                        // with it.
+                        a[(1, s)] = wn;
+                        c[(0, s)] = 1.0;
+                        qc[(s, s)] = p.force_psd;
+                        qc[(s + 1, s + 1)] = p.force_psd;
+                    }
                 }
-                Effect::SensorScale => scale *= theta.exp(),
-                Effect::Frequency | Effect::Damping => {}
+                Effect::SensorScale if on => scale *= e.theta.exp(),
+                Effect::SensorScale | Effect::Frequency | Effect::Damping => {}
             }
         }
         // The bias is added after the scale: it is the sensor's offset, not the motion's.
-        for j in 0..n {
-            if !effects.iter().zip(&starts).any(|((e, _), &s)| *e == Effect::SensorBias && s == j) {
-                c[(0, j)] *= scale;
+        for j in (0..n).filter(|j| !bias_states.contains(j)) {
+            c[(0, j)] *= scale;
+        }
+        // The states are scaled by the model's ωn ([ωn² x, ωn ẋ, …]); restate them in the declared
+        // ωn's scale, so that every model of a run (before and after a frequency change) shares
+        // one state and the displacement row is the same.
+        let ratio = self.params.omega_n() / wn;
+        let sc = |i: usize| match i {
+            0 => ratio * ratio,
+            1 => ratio,
+            _ => 1.0,
+        };
+        for i in 0..n {
+            for j in 0..n {
+                a[(i, j)] *= sc(i) / sc(j);
+                qc[(i, j)] *= sc(i) * sc(j);
+                p0[(i, j)] *= sc(i) * sc(j);
             }
+            c[(0, i)] /= sc(i);
         }
         let r = DMatrix::from_element(1, 1, p.accel_noise_std * p.accel_noise_std);
-        let ss = StateSpace { a: &a, qc: &qc, c: &c, r: &r, p0: &p0 };
+        Matrices { a, qc, c, r, p0 }
+    }
+}
+
+/// One model of the oscillator (see [`StateSpace`]).
+struct Matrices {
+    a: DMatrix<f64>,
+    qc: DMatrix<f64>,
+    c: DMatrix<f64>,
+    r: DMatrix<f64>,
+    p0: DMatrix<f64>,
+}
+
+impl Matrices {
+    fn state_space(&self) -> StateSpace<'_> {
+        StateSpace { a: &self.a, qc: &self.qc, c: &self.c, r: &self.r, p0: &self.p0 }
+    }
+}
+
+impl LoopSystem for OscillatorSystem<'_> {
+    type Effect = Effect;
+    /// Each effect with the index of its first state among the run's tracked states.
+    type Model = Vec<(Effect, usize)>;
+
+    fn name(&self) -> &str {
+        "oscillator"
+    }
+
+    /// One model per stretch between onsets: before an effect's onset it is decoupled.
+    fn run(&self, effects: &[Applied<Effect>]) -> Result<(Vec<(Effect, usize)>, Run)> {
+        let t = &self.data.t;
+        let mut switches: Vec<usize> = effects.iter().map(|e| e.first_sample(t)).collect();
+        switches.push(0);
+        switches.sort_unstable();
+        switches.dedup();
+        let models: Vec<(usize, Matrices)> = switches
+            .iter()
+            .map(|&k| {
+                let active: Vec<bool> = effects.iter().map(|e| e.first_sample(t) <= k).collect();
+                (k, self.model(effects, &active))
+            })
+            .collect();
+        let segments: Vec<(usize, StateSpace<'_>)> = models.iter().map(|(k, m)| (*k, m.state_space())).collect();
+        let (starts, n) = Self::layout(effects);
+        let mut tracked = Vec::new();
+        let mut model = Vec::with_capacity(effects.len());
+        for (e, &s) in effects.iter().zip(&starts) {
+            model.push((e.effect, tracked.len()));
+            match e.effect {
+                Effect::SensorBias => tracked.push(s),
+                Effect::HarmonicForce { .. } => tracked.extend([s, s + 1]),
+                _ => {}
+            }
+        }
+        let wn = self.params.omega_n();
         let displacement = DMatrix::from_fn(1, n, |_, j| if j == 0 { 1.0 / (wn * wn) } else { 0.0 });
-        let run = run_state_space(&ss, 1.0 / p.sample_rate_hz, &[&self.ax], &displacement, &tracked)?;
+        let dt = 1.0 / self.params.sample_rate_hz;
+        let run = run_segments(&segments, dt, &[&self.ax], &displacement, &tracked)?;
         Ok((model, run))
     }
 
@@ -188,7 +258,7 @@ impl LoopSystem for OscillatorSystem<'_> {
 
     /// A bias when the innovations' mean is off; lines at 2× or 3× the drive name a force
     /// there; colour or a wrong NIS the scale and the mode's parameters.
-    fn candidates(&self, s: &RunSummary, _: &[(Effect, f64)]) -> Vec<Vec<Effect>> {
+    fn candidates(&self, s: &RunSummary, _: &[Applied<Effect>]) -> Vec<Vec<Effect>> {
         let mut named = Vec::new();
         let c = &s.channels[0];
         if c.z.abs() >= self.options.signatures.bias_z {
@@ -254,19 +324,26 @@ impl LoopSystem for OscillatorSystem<'_> {
         }
     }
 
-    /// A bias's mean, a force's amplitude (times the modal mass) over the second half of the
-    /// run, or the fitted factor.
-    fn value(&self, model: &Vec<(Effect, usize)>, run: &Run, effect: &Effect, theta: f64) -> f64 {
-        let n = run.nis.len();
-        let half = n / 2;
-        let avg = |f: &dyn Fn(usize) -> f64| (half..n).map(f).sum::<f64>() / (n - half).max(1) as f64;
-        let Some(&(_, offset)) = model.iter().find(|(e, _)| e == effect) else { return f64::NAN };
+    /// A bias's mean, a force's amplitude (times the modal mass) once settled, or the fitted
+    /// factor.
+    fn value(&self, model: &Vec<(Effect, usize)>, run: &Run, effect: &Applied<Effect>) -> f64 {
+        let Some(&(_, offset)) = model.iter().find(|(e, _)| *e == effect.effect) else { return f64::NAN };
+        let from = effect.first_sample(&self.data.t);
         let s = &run.effect_states;
-        match effect {
-            Effect::SensorBias => avg(&|k| s[offset][k]),
-            Effect::HarmonicForce { .. } => self.params.modal_mass_kg * avg(&|k| s[offset][k].hypot(s[offset + 1][k])),
-            Effect::SensorScale | Effect::Frequency | Effect::Damping => theta.exp(),
+        match effect.effect {
+            Effect::SensorBias => settled_mean(&s[offset], from),
+            Effect::HarmonicForce { .. } => {
+                let amplitude: Vec<f64> = s[offset].iter().zip(&s[offset + 1]).map(|(a, b)| a.hypot(*b)).collect();
+                self.params.modal_mass_kg * settled_mean(&amplitude, from)
+            }
+            Effect::SensorScale | Effect::Frequency | Effect::Damping => effect.theta.exp(),
         }
+    }
+
+    /// Every effect may begin mid-run: a knock that shifts the sensor's offset or gain, a rub
+    /// that adds a harmonic, a crack or a loosening that changes the mode.
+    fn may_start_mid_run(&self, _: &Effect) -> bool {
+        true
     }
 
     fn traces(&self) -> Traces {

@@ -6,18 +6,15 @@
 //!   release window measured last. On recordings of 0.25 mm at A from an independent run
 //!   (adaptive integrator at 1e-9): 4 s, all of 2 recordings × 3 starts (0.01, 0.1, 0.2 mm)
 //!   within ±3.5 % (CI test: −3.0, +3.1, +1.4 %); 10 s, 4 of 9 within ±5 %, 8 of 9 within
-//!   ±11 %, one at −35 % (`cargo run --release -p edgekf-sim --example crank_study -- ukf 10
+//!   ±11 %, one at −35 % (`cargo run --release -p edgekf-sim --features studies --example crank_study -- ukf 10
 //!   3`). Almost all the information is in the release window, whose `a` is many-branched in
 //!   the clearance (see [`ukf`]); ~1 000 simulations of 0.25 s per 10 s;
 //! * [`model`]: the fast estimator. Ten cheap time-domain features of the recording, a linear
 //!   discriminant that names the joint with the clearance and a per-joint regression for its
 //!   size; then the release stage ([`release`]): the time of the first contact seen after
 //!   release and the crank acceleration before it give the clearance through per-joint laws
-//!   (`c ∝ t₁²`). Learned on the host from the reference simulator ([`train`], `edgekf crank
-//!   train`) and built in as `fast_model.toml`; no simulation at run time;
-//! * [`identify2`]: identifiability of two clearances (A and B): ensemble likelihood surface
-//!   and Fisher information over (cA, cB); with the window features a 10 s recording bounds cA
-//!   and cB at 0.25 + 0.15 mm to ~13 % and ~15 % (correlation −0.6), not ±10 %;
+//!   (`c ∝ t₁²`). Learned on the host from the reference simulator ([`train`], ordered by
+//!   [`training`] for `edgekf crank train`) and built in as `fast_model.toml`; no simulation at run time;
 //! * [`fast`]: the earlier single-feature map (impact rate → clearance at A), kept for old
 //!   `--model` files.
 //!
@@ -30,7 +27,8 @@
 //! (six runs at 0.3 mm released 30.00°, 30.01° … 30.05° give 0.269–0.321 mm at A). Two
 //! clearances at once are outside the model: over A 0.15–0.35 mm × B 0.1–0.25 mm (30°, 10 s)
 //! the window features name A and read 0.10–0.19 mm, while the discriminant score of A jumps
-//! from ~150 (one clearance) to ~550–640 ([`identify2`]). The features cost 32 operations per
+//! from ~150 (one clearance) to ~550–640 (the `studies` feature's `identify2`: a 10 s recording bounds
+//! cA and cB at 0.25 + 0.15 mm to ~13 % and ~15 %, not ±10 %). The features cost 32 operations per
 //! sample (3.2 M for 10 s, 1 ms), the release detector ~40 per sample until the contact; the
 //! UKF integrates 30 steps of the full model per sample (3 M steps for 10 s, 0.96 s in
 //! release).
@@ -42,11 +40,11 @@
 
 pub mod chip;
 pub mod fast;
-pub mod identify2;
 pub mod model;
 pub mod release;
 pub mod train;
 pub mod trained_for;
+pub mod training;
 pub mod ukf;
 
 use super::simulate::CrankRecording;

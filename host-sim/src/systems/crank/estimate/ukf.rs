@@ -11,7 +11,7 @@
 //!   state the sigma point reached at the end of the previous window ([`Mechanism::transfer_state`]).
 //!
 //! What limits the filter, and the choices made here (figures from `cargo run --release -p
-//! edgekf-sim --example crank_study -- information | release-curve | ukf 10 3`):
+//! edgekf-sim --features studies --example crank_study -- information | release-curve | ukf 10 3`):
 //!
 //! * The scatter of `a` is intrinsic to the chaotic impacts, not to the gross motion: over 24
 //!   releases 30.000°…30.046° a window's `a` spreads by 20–40 rad/s² (0.25 mm), and that

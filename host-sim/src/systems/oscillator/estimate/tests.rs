@@ -139,7 +139,7 @@ fn clipped_readings_are_missing_not_wrong() {
 #[test]
 fn an_unmodelled_harmonic_shows_in_the_innovations() {
     let mut s = Scenario::default();
-    s.force.extra.push(ExtraHarmonic { multiple: 2.0, amplitude_n: 0.05, phase_deg: 0.0 });
+    s.force.extra.push(ExtraHarmonic::new(2.0, 0.05, 0.0));
     let d = s.simulate().to_data_file();
     let e = run::<f64>(&d, &s.estimator_params(), &EstimateOptions::default()).unwrap();
     let sigma = s.sensor.noise_std();

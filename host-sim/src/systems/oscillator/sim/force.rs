@@ -33,6 +33,38 @@ pub struct ExtraHarmonic {
     /// Phase, degrees.
     #[serde(default)]
     pub phase_deg: f64,
+    /// When it begins, s (0: from the start): a rub or a loosening that starts mid-run. It
+    /// fades in over the force's `transition_s` as the main harmonic's changes do.
+    #[serde(default)]
+    pub start_s: f64,
+}
+
+impl ExtraHarmonic {
+    /// A harmonic at `multiple` × the drive, present from the start.
+    pub fn new(multiple: f64, amplitude_n: f64, phase_deg: f64) -> Self {
+        Self { multiple, amplitude_n, phase_deg, start_s: 0.0 }
+    }
+
+    /// Its force at `t` for a drive of `drive_rad_s`, N, faded in over `transition_s` after
+    /// `start_s`.
+    ///
+    /// ```
+    /// use edgekf_sim::systems::oscillator::sim::ExtraHarmonic;
+    /// let rub = ExtraHarmonic { start_s: 2.0, ..ExtraHarmonic::new(2.0, 0.5, 0.0) };
+    /// assert_eq!(rub.force(10.0, 1.9, 0.2), 0.0);
+    /// assert_eq!(rub.force(10.0, 3.0, 0.2), 0.5 * (60.0f64).cos());
+    /// ```
+    pub fn force(&self, drive_rad_s: f64, t: f64, transition_s: f64) -> f64 {
+        let s = t - self.start_s;
+        let w = if self.start_s <= 0.0 || s >= transition_s {
+            1.0
+        } else if s < 0.0 {
+            0.0
+        } else {
+            0.5 * (1.0 - (PI * s / transition_s).cos())
+        };
+        w * self.amplitude_n * (self.multiple * drive_rad_s * t + self.phase_deg.to_radians()).cos()
+    }
 }
 
 /// The force on the mode: `F(t) = A(t) cos(Ω t + φ(t)) + Σ extra`.
@@ -115,11 +147,7 @@ impl ForceConfig {
 
     /// The total force, N: main harmonic plus the extras.
     pub fn force(&self, t: f64) -> f64 {
-        let extra: f64 = self
-            .extra
-            .iter()
-            .map(|e| e.amplitude_n * (e.multiple * self.drive_rad_s * t + e.phase_deg.to_radians()).cos())
-            .sum();
+        let extra: f64 = self.extra.iter().map(|e| e.force(self.drive_rad_s, t, self.transition_s)).sum();
         self.main_force(t) + extra
     }
 
@@ -153,7 +181,7 @@ impl ForceConfig {
             last = Some(c.t);
         }
         for (i, e) in self.extra.iter().enumerate() {
-            if ![e.multiple, e.amplitude_n, e.phase_deg].iter().all(|v| v.is_finite()) {
+            if ![e.multiple, e.amplitude_n, e.phase_deg, e.start_s].iter().all(|v| v.is_finite()) {
                 return Err(format!("force.extra[{i}]: values must be finite"));
             }
         }
@@ -203,10 +231,7 @@ mod tests {
 
     #[test]
     fn extras_add_to_the_main_force() {
-        let f = ForceConfig {
-            extra: vec![ExtraHarmonic { multiple: 2.0, amplitude_n: 0.5, phase_deg: 0.0 }],
-            ..ForceConfig::constant(10.0, 1.0, 0.0)
-        };
+        let f = ForceConfig { extra: vec![ExtraHarmonic::new(2.0, 0.5, 0.0)], ..ForceConfig::constant(10.0, 1.0, 0.0) };
         let t = 0.3;
         assert!((f.force(t) - ((10.0 * t).cos() + 0.5 * (20.0 * t).cos())).abs() < 1e-15);
         assert!((f.main_force(t) - (10.0 * t).cos()).abs() < 1e-15);

@@ -157,6 +157,10 @@ fn to_nalgebra(m: &faer::Mat<f64>) -> DMatrix<f64> {
 /// acceleration plus the static correction's second derivative) through its Butterworth
 /// low-pass, whose sections become states of the model (2 per second-order section), so the
 /// filter sees the same phase lag as the sensor.
+///
+/// The steps: [`modal_basis`], [`force_inputs`] with their static correction, the modal and
+/// force dynamics ([`Layout::dynamics`]), the output rows, the sensors with their low-passes
+/// ([`Layout::sensors`]) and the priors ([`Layout::prior`]).
 pub fn reduce(model: &RotorModel, speed: f64, tuning: &Tuning) -> Result<ReducedRotor> {
     let cfg = model.config();
     let sys = model.assemble(speed);
@@ -165,15 +169,71 @@ pub fn reduce(model: &RotorModel, speed: f64, tuning: &Tuning) -> Result<Reduced
     if r == 0 || r > n {
         bail!("modes must be between 1 and {n}, not {r}");
     }
-    let m = to_nalgebra(&sys.m);
     let k = to_nalgebra(&sys.k);
-    let c_total = to_nalgebra(&sys.c_total(speed));
-    let k_sym = (&k + k.transpose()) * 0.5;
+    let modes = modal_basis(&to_nalgebra(&sys.m), &k, r)?;
+    let force_nodes = cfg.unbalance_nodes();
+    let forces = force_inputs(&force_nodes, n, &k, &modes)?;
+    let sample_rate = cfg.operation.sample_rate;
+    let sections: Vec<Vec<Section>> = cfg
+        .sensors
+        .iter()
+        .map(|s| match s.kind {
+            SensorKind::Acceleration(a) if a.lowpass_order > 0 && tuning.sensor_lowpass => {
+                butterworth(a.lowpass_order, a.corner_hz(sample_rate))
+            }
+            _ => Vec::new(),
+        })
+        .collect();
+    let lowpass_states: usize = sections.iter().flatten().map(Section::states).sum();
+    let layout = Layout { r, u: force_nodes.len(), lowpass_start: 2 * r + 2 * force_nodes.len(), lowpass_states };
+    let (mut a, qc_forces, mut g_modal) =
+        layout.dynamics(&modes, &forces, &to_nalgebra(&sys.c_total(speed)), speed, tuning);
+    let out_row = |d: usize| layout.displacement_row(&modes, &forces, d);
+    let nodes = model.n_nodes();
+    let mut displacement = DMatrix::<f64>::zeros(2 * nodes, layout.states());
+    for node in 0..nodes {
+        displacement.row_mut(2 * node).copy_from(&out_row(dof(node, 0)));
+        displacement.row_mut(2 * node + 1).copy_from(&out_row(dof(node, 1)));
+    }
+    let mut force = DMatrix::<f64>::zeros(2 * layout.u, layout.states());
+    for j in 0..2 * layout.u {
+        force[(j, 2 * r + j)] = 1.0;
+    }
+    let sensors = layout.sensors(cfg, &sections, &modes, &out_row, &mut a, &mut g_modal, tuning);
+    let qc = qc_forces + &g_modal * g_modal.transpose() * tuning.modal_psd;
+    Ok(ReducedRotor {
+        frequencies_hz: modes.frequencies_hz,
+        force_nodes,
+        a,
+        qc,
+        c: sensors.c,
+        r: DMatrix::from_diagonal(&nalgebra::DVector::from_vec(sensors.noise)),
+        displacement,
+        force,
+        p0: layout.prior(tuning),
+        channels: sensors.channels,
+        offsets: sensors.offsets,
+        lowpass_start: layout.lowpass_start,
+        accel_inputs: sensors.accel_inputs,
+        speed,
+        sample_rate,
+    })
+}
 
-    // Mass-normalised modes through the Cholesky factor of M: L⁻¹ K L⁻ᵀ v = ω² v, φ = L⁻ᵀ v.
+/// The kept modes: mass-normalised shapes `Φ` (DOF × mode), `ω²` and the frequencies.
+struct Modes {
+    phi: DMatrix<f64>,
+    lambda: Vec<f64>,
+    frequencies_hz: Vec<f64>,
+}
+
+/// The `r` lowest modes of `K φ = ω² M φ` with the symmetric part of `K`, through the Cholesky
+/// factor of `M`: `L⁻¹ K L⁻ᵀ v = ω² v`, `φ = L⁻ᵀ v`.
+fn modal_basis(m: &DMatrix<f64>, k: &DMatrix<f64>, r: usize) -> Result<Modes> {
+    let n = m.nrows();
+    let k_sym = (k + k.transpose()) * 0.5;
     let chol = m.clone().cholesky().context("the mass matrix is not positive definite")?;
-    let l = chol.l();
-    let l_inv = l.clone().try_inverse().context("singular mass factor")?;
+    let l_inv = chol.l().try_inverse().context("singular mass factor")?;
     let sym = &l_inv * &k_sym * l_inv.transpose();
     let eig = SymmetricEigen::new((&sym + sym.transpose()) * 0.5);
     let mut order: Vec<usize> = (0..n).collect();
@@ -186,198 +246,222 @@ pub fn reduce(model: &RotorModel, speed: f64, tuning: &Tuning) -> Result<Reduced
     let phi = l_inv.transpose() * v;
     let lambda: Vec<f64> = kept.iter().map(|&i| eig.eigenvalues[i]).collect();
     let frequencies_hz = lambda.iter().map(|w2| w2.sqrt() / (2.0 * std::f64::consts::PI)).collect();
+    Ok(Modes { phi, lambda, frequencies_hz })
+}
 
-    // Force states: two per unbalance node, acting on its x and y DOFs.
-    let force_nodes = cfg.unbalance_nodes();
-    let u = force_nodes.len();
-    if u == 0 {
+/// The force states' inputs: their modal participation `Φᵀ S_f` and the static correction of
+/// the truncated modes `K⁻¹ S_f − Φ Λ⁻¹ Φᵀ S_f` (DOF × force state).
+struct Forces {
+    modal: DMatrix<f64>,
+    residual: DMatrix<f64>,
+}
+
+/// Two force states per unbalance node, acting on its x and y DOFs.
+fn force_inputs(nodes: &[usize], n: usize, k: &DMatrix<f64>, modes: &Modes) -> Result<Forces> {
+    if nodes.is_empty() {
         bail!("the configuration has no [[unbalance]] node to estimate a force at");
     }
-    let mut sf = DMatrix::<f64>::zeros(n, 2 * u);
-    for (j, &node) in force_nodes.iter().enumerate() {
+    let mut sf = DMatrix::<f64>::zeros(n, 2 * nodes.len());
+    for (j, &node) in nodes.iter().enumerate() {
         sf[(dof(node, 0), 2 * j)] = 1.0;
         sf[(dof(node, 1), 2 * j + 1)] = 1.0;
     }
-    // Static correction: K⁻¹ S_f − Φ Λ⁻¹ Φᵀ S_f.
     let k_inv_sf = k.clone().lu().solve(&sf).context("the stiffness matrix is singular")?;
-    let phi_t_sf = phi.transpose() * &sf;
-    let lambda_inv = DMatrix::from_diagonal(&nalgebra::DVector::from_iterator(r, lambda.iter().map(|w| 1.0 / w)));
-    let residual = &k_inv_sf - &phi * &lambda_inv * &phi_t_sf;
+    let modal = modes.phi.transpose() * &sf;
+    let r = modes.lambda.len();
+    let lambda_inv = DMatrix::from_diagonal(&nalgebra::DVector::from_iterator(r, modes.lambda.iter().map(|w| 1.0 / w)));
+    let residual = &k_inv_sf - &modes.phi * &lambda_inv * &modal;
+    Ok(Forces { modal, residual })
+}
 
-    // Sensor low-pass sections (accelerometers), appended after the force states.
-    let sample_rate = cfg.operation.sample_rate;
-    let sections: Vec<Vec<Section>> = cfg
-        .sensors
-        .iter()
-        .map(|s| match s.kind {
-            SensorKind::Acceleration(a) if a.lowpass_order > 0 && tuning.sensor_lowpass => {
-                butterworth(a.lowpass_order, a.corner_hz(sample_rate))
+/// Where the states sit: `[η (r), η̇ (r), forces (2u), low-pass states]`.
+struct Layout {
+    r: usize,
+    u: usize,
+    lowpass_start: usize,
+    lowpass_states: usize,
+}
+
+/// The sensors' part of the model.
+struct Sensors {
+    c: DMatrix<f64>,
+    noise: Vec<f64>,
+    channels: Vec<String>,
+    offsets: Vec<f64>,
+    accel_inputs: Vec<AccelInput>,
+}
+
+impl Layout {
+    fn states(&self) -> usize {
+        self.lowpass_start + self.lowpass_states
+    }
+
+    /// `A` of the modes (damping projected on them) and the forces (rotating phasors or random
+    /// walks), the forces' process noise, and how the modal noise enters (the modal
+    /// accelerations; the sensors add their low-pass inputs, so `Q` carries the cross terms).
+    fn dynamics(
+        &self,
+        modes: &Modes,
+        forces: &Forces,
+        c_total: &DMatrix<f64>,
+        speed: f64,
+        tuning: &Tuning,
+    ) -> (DMatrix<f64>, DMatrix<f64>, DMatrix<f64>) {
+        let (r, u, ns) = (self.r, self.u, self.states());
+        let mut a = DMatrix::<f64>::zeros(ns, ns);
+        let cm = modes.phi.transpose() * c_total * &modes.phi;
+        for i in 0..r {
+            a[(i, r + i)] = 1.0;
+            a[(r + i, i)] = -modes.lambda[i];
+            for j in 0..r {
+                a[(r + i, r + j)] = -cm[(i, j)];
             }
-            _ => Vec::new(),
-        })
-        .collect();
-    let nf: usize = sections.iter().flatten().map(Section::states).sum();
-    let lowpass_start = 2 * r + 2 * u;
-    let ns = lowpass_start + nf;
-    let mut a = DMatrix::<f64>::zeros(ns, ns);
-    let cm = phi.transpose() * &c_total * &phi;
-    for i in 0..r {
-        a[(i, r + i)] = 1.0;
-        a[(r + i, i)] = -lambda[i];
-        for j in 0..r {
-            a[(r + i, r + j)] = -cm[(i, j)];
+            for j in 0..2 * u {
+                a[(r + i, 2 * r + j)] = forces.modal[(i, j)];
+            }
         }
-        for j in 0..2 * u {
-            a[(r + i, 2 * r + j)] = phi_t_sf[(i, j)];
+        let mut qc = DMatrix::<f64>::zeros(ns, ns);
+        let mut g_modal = DMatrix::<f64>::zeros(ns, r);
+        for i in 0..r {
+            g_modal[(r + i, i)] = 1.0;
         }
-    }
-    let mut qc = DMatrix::<f64>::zeros(ns, ns);
-    // How the modal process noise enters: the modal accelerations, and through them the
-    // accelerometers' low-pass inputs (filled in below), so `Q` carries the cross terms.
-    let mut g_modal = DMatrix::<f64>::zeros(ns, r);
-    for i in 0..r {
-        g_modal[(r + i, i)] = 1.0;
-    }
-    for j in 0..u {
-        let (a0, a1) = (2 * r + 2 * j, 2 * r + 2 * j + 1);
-        if tuning.force_model == ForceModel::Phasor {
-            // ṗ_x = −Ω p_y, ṗ_y = Ω p_x: forward rotation at the running speed.
-            a[(a0, a1)] = -speed;
-            a[(a1, a0)] = speed;
+        for j in 0..u {
+            let (a0, a1) = (2 * r + 2 * j, 2 * r + 2 * j + 1);
+            if tuning.force_model == ForceModel::Phasor {
+                // ṗ_x = −Ω p_y, ṗ_y = Ω p_x: forward rotation at the running speed.
+                a[(a0, a1)] = -speed;
+                a[(a1, a0)] = speed;
+            }
+            qc[(a0, a0)] = tuning.force_psd;
+            qc[(a1, a1)] = tuning.force_psd;
         }
-        qc[(a0, a0)] = tuning.force_psd;
-        qc[(a1, a1)] = tuning.force_psd;
+        (a, qc, g_modal)
     }
 
-    // Displacement of every DOF: Φ η + residual · forces.
-    let out_row = |d: usize| {
-        let mut row = DMatrix::<f64>::zeros(1, ns);
-        for j in 0..r {
-            row[(0, j)] = phi[(d, j)];
+    /// Displacement of DOF `d`: `Φ η + residual · forces`.
+    fn displacement_row(&self, modes: &Modes, forces: &Forces, d: usize) -> DMatrix<f64> {
+        let mut row = DMatrix::<f64>::zeros(1, self.states());
+        for j in 0..self.r {
+            row[(0, j)] = modes.phi[(d, j)];
         }
-        for j in 0..2 * u {
-            row[(0, 2 * r + j)] = residual[(d, j)];
+        for j in 0..2 * self.u {
+            row[(0, 2 * self.r + j)] = forces.residual[(d, j)];
         }
         row
-    };
-    let nodes = model.n_nodes();
-    let mut displacement = DMatrix::<f64>::zeros(2 * nodes, ns);
-    for node in 0..nodes {
-        displacement.row_mut(2 * node).copy_from(&out_row(dof(node, 0)));
-        displacement.row_mut(2 * node + 1).copy_from(&out_row(dof(node, 1)));
-    }
-    let mut force = DMatrix::<f64>::zeros(2 * u, ns);
-    for j in 0..2 * u {
-        force[(j, 2 * r + j)] = 1.0;
     }
 
-    let mut c = DMatrix::<f64>::zeros(cfg.sensors.len(), ns);
-    let mut r_diag = Vec::new();
-    let mut channels = Vec::new();
-    let mut offsets = Vec::new();
-    let mut accel_inputs = Vec::new();
-    let mut next = lowpass_start;
-    for (i, (s, secs)) in cfg.sensors.iter().zip(&sections).enumerate() {
-        let d = dof(s.node, s.direction.dof());
-        match s.kind {
-            SensorKind::Displacement { noise_std } => {
-                c.row_mut(i).copy_from(&out_row(d));
-                // A perfect sensor still gets a floor, so R stays positive definite.
-                r_diag.push((noise_std * noise_std).max(1e-18) * tuning.measurement_scale);
-                offsets.push(0.0);
-            }
-            SensorKind::Acceleration(acc) => {
-                // Acceleration of the DOF: the second derivative of its displacement row,
-                // `row · A · A` over the noise-free dynamics. For the modal part that is Φ η̈; for
-                // the static correction of the forces it is residual · A_f² (−Ω² residual with
-                // rotating phasors, 0 with random walks).
-                let accel = &out_row(d) * &a * &a;
-                // The low-pass: the first section's input is the acceleration row, the next
-                // sections' the previous output; exact, like the reference simulator's.
-                // Without a low-pass (or with `sensor_lowpass` off) the row is read directly; the
-                // modal noise would then be a feed-through correlated with Q, which is left out.
-                let mut input: DMatrix<f64> = accel;
-                let row = 2 * s.node + s.direction.dof();
-                let sens = acc.sensitivity.unwrap_or(1.0);
-                match secs.first() {
-                    Some(Section::First { wc }) => {
-                        accel_inputs.push(AccelInput { channel: i, row, state: Some(next), gain: *wc })
-                    }
-                    Some(Section::Second { wc, .. }) => {
-                        accel_inputs.push(AccelInput { channel: i, row, state: Some(next + 1), gain: wc * wc })
-                    }
-                    None => accel_inputs.push(AccelInput { channel: i, row, state: None, gain: sens }),
+    /// The sensor rows and noise; an accelerometer's low-pass sections become states, fed by
+    /// the DOF's acceleration (written into `a` and the modal noise input `g_modal`).
+    #[allow(clippy::too_many_arguments)]
+    fn sensors(
+        &self,
+        cfg: &crate::systems::rotor::RotorConfig,
+        sections: &[Vec<Section>],
+        modes: &Modes,
+        out_row: &dyn Fn(usize) -> DMatrix<f64>,
+        a: &mut DMatrix<f64>,
+        g_modal: &mut DMatrix<f64>,
+        tuning: &Tuning,
+    ) -> Sensors {
+        let (r, ns) = (self.r, self.states());
+        let sample_rate = cfg.operation.sample_rate;
+        let mut out = Sensors {
+            c: DMatrix::<f64>::zeros(cfg.sensors.len(), ns),
+            noise: Vec::new(),
+            channels: Vec::new(),
+            offsets: Vec::new(),
+            accel_inputs: Vec::new(),
+        };
+        let mut next = self.lowpass_start;
+        for (i, (s, secs)) in cfg.sensors.iter().zip(sections).enumerate() {
+            let d = dof(s.node, s.direction.dof());
+            match s.kind {
+                SensorKind::Displacement { noise_std } => {
+                    out.c.row_mut(i).copy_from(&out_row(d));
+                    // A perfect sensor still gets a floor, so R stays positive definite.
+                    out.noise.push((noise_std * noise_std).max(1e-18) * tuning.measurement_scale);
+                    out.offsets.push(0.0);
                 }
-                for (k, sec) in secs.iter().enumerate() {
-                    let y = next;
-                    // Only the first section sees the acceleration (and its noise) directly.
-                    let noise_gain = |g: &mut DMatrix<f64>, row: usize, f: f64| {
-                        if k == 0 {
-                            for m in 0..r {
-                                g[(row, m)] += f * phi[(d, m)];
+                SensorKind::Acceleration(acc) => {
+                    // Acceleration of the DOF: the second derivative of its displacement row,
+                    // `row · A · A` over the noise-free dynamics. For the modal part that is Φ η̈;
+                    // for the static correction of the forces it is residual · A_f² (−Ω²
+                    // residual with rotating phasors, 0 with random walks).
+                    let accel = &out_row(d) * &*a * &*a;
+                    // The low-pass: the first section's input is the acceleration row, the next
+                    // sections' the previous output; exact, like the reference simulator's.
+                    // Without a low-pass (or with `sensor_lowpass` off) the row is read directly;
+                    // the modal noise would then be a feed-through correlated with Q, which is
+                    // left out.
+                    let mut input: DMatrix<f64> = accel;
+                    let row = 2 * s.node + s.direction.dof();
+                    let sens = acc.sensitivity.unwrap_or(1.0);
+                    out.accel_inputs.push(match secs.first() {
+                        Some(Section::First { wc }) => AccelInput { channel: i, row, state: Some(next), gain: *wc },
+                        Some(Section::Second { wc, .. }) => {
+                            AccelInput { channel: i, row, state: Some(next + 1), gain: wc * wc }
+                        }
+                        None => AccelInput { channel: i, row, state: None, gain: sens },
+                    });
+                    for (k, sec) in secs.iter().enumerate() {
+                        let y = next;
+                        // Only the first section sees the acceleration (and its noise) directly.
+                        let noise_gain = |g: &mut DMatrix<f64>, row: usize, f: f64| {
+                            if k == 0 {
+                                for m in 0..r {
+                                    g[(row, m)] += f * modes.phi[(d, m)];
+                                }
+                            }
+                        };
+                        match *sec {
+                            Section::First { wc } => {
+                                for j in 0..ns {
+                                    a[(y, j)] += wc * input[(0, j)];
+                                }
+                                noise_gain(g_modal, y, wc);
+                                a[(y, y)] -= wc;
+                                next += 1;
+                            }
+                            Section::Second { wc, q } => {
+                                let yd = y + 1;
+                                a[(y, yd)] = 1.0;
+                                for j in 0..ns {
+                                    a[(yd, j)] += wc * wc * input[(0, j)];
+                                }
+                                noise_gain(g_modal, yd, wc * wc);
+                                a[(yd, y)] -= wc * wc;
+                                a[(yd, yd)] -= wc / q;
+                                next += 2;
                             }
                         }
-                    };
-                    match *sec {
-                        Section::First { wc } => {
-                            for j in 0..ns {
-                                a[(y, j)] += wc * input[(0, j)];
-                            }
-                            noise_gain(&mut g_modal, y, wc);
-                            a[(y, y)] -= wc;
-                            next += 1;
-                        }
-                        Section::Second { wc, q } => {
-                            let yd = y + 1;
-                            a[(y, yd)] = 1.0;
-                            for j in 0..ns {
-                                a[(yd, j)] += wc * wc * input[(0, j)];
-                            }
-                            noise_gain(&mut g_modal, yd, wc * wc);
-                            a[(yd, y)] -= wc * wc;
-                            a[(yd, yd)] -= wc / q;
-                            next += 2;
-                        }
+                        input = DMatrix::<f64>::zeros(1, ns);
+                        input[(0, y)] = 1.0;
                     }
-                    input = DMatrix::<f64>::zeros(1, ns);
-                    input[(0, y)] = 1.0;
+                    out.c.row_mut(i).copy_from(&(input * sens));
+                    let sigma = acc.noise_std(sample_rate) * sens.abs();
+                    out.noise.push((sigma * sigma).max(1e-18) * tuning.measurement_scale);
+                    out.offsets.push(if acc.sensitivity.is_some() { acc.offset } else { 0.0 });
                 }
-                c.row_mut(i).copy_from(&(input * sens));
-                let sigma = acc.noise_std(sample_rate) * sens.abs();
-                r_diag.push((sigma * sigma).max(1e-18) * tuning.measurement_scale);
-                offsets.push(if acc.sensitivity.is_some() { acc.offset } else { 0.0 });
             }
+            out.channels.push(s.channel_name());
         }
-        channels.push(s.channel_name());
+        out
     }
-    qc += &g_modal * g_modal.transpose() * tuning.modal_psd;
-    let r_mat = DMatrix::from_diagonal(&nalgebra::DVector::from_vec(r_diag));
-    let mut p0 = DMatrix::<f64>::zeros(ns, ns);
-    for i in 0..2 * r {
-        p0[(i, i)] = tuning.initial_modal_std.powi(2);
+
+    /// The initial covariance: the modal and force priors of the tuning; the low-pass states
+    /// start at rest with the rotor, with a small prior that keeps `P` positive definite.
+    fn prior(&self, tuning: &Tuning) -> DMatrix<f64> {
+        let ns = self.states();
+        let mut p0 = DMatrix::<f64>::zeros(ns, ns);
+        for i in 0..2 * self.r {
+            p0[(i, i)] = tuning.initial_modal_std.powi(2);
+        }
+        for j in 0..2 * self.u {
+            p0[(2 * self.r + j, 2 * self.r + j)] = tuning.initial_force_std.powi(2);
+        }
+        for i in self.lowpass_start..ns {
+            p0[(i, i)] = 1e-6;
+        }
+        p0
     }
-    for j in 0..2 * u {
-        p0[(2 * r + j, 2 * r + j)] = tuning.initial_force_std.powi(2);
-    }
-    // The low-pass states start at rest with the rotor; a small prior keeps P positive definite.
-    for i in lowpass_start..ns {
-        p0[(i, i)] = 1e-6;
-    }
-    Ok(ReducedRotor {
-        frequencies_hz,
-        force_nodes,
-        a,
-        qc,
-        c,
-        r: r_mat,
-        displacement,
-        force,
-        p0,
-        channels,
-        offsets,
-        lowpass_start,
-        accel_inputs,
-        speed,
-        sample_rate,
-    })
 }

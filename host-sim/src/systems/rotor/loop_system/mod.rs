@@ -19,9 +19,10 @@ use self::effects::{apply_parameters, augment, AugmentedModel, Effect, EffectTun
 use self::speed::{estimate_speed, RunningSpeed};
 use crate::io::data::DataFile;
 use crate::residual_loop::filter::{run_state_space, Run, StateSpace};
+use crate::residual_loop::onset::settled_mean;
 use crate::residual_loop::optimize::ScalarRange;
 use crate::residual_loop::search::{
-    search, EffectDetail, EffectLabel, LoopOptions, LoopReport, LoopSystem, RunSummary, SystemSection, Traces,
+    search, Applied, EffectDetail, EffectLabel, LoopOptions, LoopReport, LoopSystem, RunSummary, SystemSection, Traces,
 };
 use crate::residual_loop::signature::{summarise, Channel, NamedLine, ReferenceLines, SummaryContext, LINE_HARMONICS};
 use crate::systems::rotor::bearing_geometry::BearingLine;
@@ -203,7 +204,12 @@ impl LoopSystem for RotorSystem<'_> {
 
     /// Composes the augmented model (re-reducing the rotor when a component parameter is
     /// changed) and runs the filter over the data.
-    fn run(&self, effects: &[(Effect, f64)]) -> Result<(AugmentedModel, Run)> {
+    fn run(&self, applied: &[Applied<Effect>]) -> Result<(AugmentedModel, Run)> {
+        if applied.iter().any(|e| e.onset_s.is_some()) {
+            return Err(anyhow!("the rotor's effects act from the start of the run (no onset)"));
+        }
+        let effects: Vec<(Effect, f64)> = applied.iter().map(|e| (e.effect, e.theta)).collect();
+        let effects = effects.as_slice();
         let cols: Vec<&[f64]> = self.columns.iter().map(Vec::as_slice).collect();
         let dt = 1.0 / self.red.sample_rate;
         let tuning = &self.rotor.effects;
@@ -238,7 +244,7 @@ impl LoopSystem for RotorSystem<'_> {
     /// elsewhere), then the structural ones (scales, delays, parameters, 1× forces off the
     /// unbalance nodes) when the innovations carry lines or colour; the catch-all
     /// (`unknown_input` at each force site) in a tier of its own.
-    fn candidates(&self, s: &RunSummary, effects: &[(Effect, f64)]) -> Vec<Vec<Effect>> {
+    fn candidates(&self, s: &RunSummary, effects: &[Applied<Effect>]) -> Vec<Vec<Effect>> {
         let mut named = Vec::new();
         let mut biased: Vec<(f64, usize)> = s
             .channels
@@ -283,7 +289,7 @@ impl LoopSystem for RotorSystem<'_> {
         let modelled = |b: usize, l: BearingLine| {
             effects
                 .iter()
-                .any(|(e, _)| matches!(e, Effect::BearingDefect { bearing, line, .. } if *bearing == b && *line == l))
+                .any(|a| matches!(a.effect, Effect::BearingDefect { bearing, line, .. } if bearing == b && line == l))
         };
         for (bearing, line, seen) in defects.into_iter().filter(|&(b, l, _)| !modelled(b, l)) {
             if let Some(&(_, _, order)) = self.lines.iter().find(|(b, l, _)| *b == bearing && *l == line) {
@@ -351,27 +357,26 @@ impl LoopSystem for RotorSystem<'_> {
         e.scalar(self.red.sample_rate).map(|r| (r, grid))
     }
 
-    /// The fitted scalar (a factor as `exp θ`), or the effect states' size over the second
-    /// half of the run.
-    fn value(&self, model: &AugmentedModel, run: &Run, effect: &Effect, theta: f64) -> f64 {
+    /// The fitted scalar (a factor as `exp θ`), or the effect states' size once settled.
+    fn value(&self, model: &AugmentedModel, run: &Run, applied: &Applied<Effect>) -> f64 {
+        let effect = &applied.effect;
         let Some(pos) = model.effects.iter().position(|(e, _, _)| e == effect) else { return f64::NAN };
         let m = self.channels();
         let offset: usize = model.effects[..pos].iter().map(|(e, _, _)| e.states(m)).sum();
-        let n = self.data.t.len();
-        let half = n / 2;
-        let avg = |f: &dyn Fn(usize) -> f64| (half..n).map(f).sum::<f64>() / (n - half).max(1) as f64;
+        let from = applied.first_sample(&self.data.t);
         let s = &run.effect_states;
+        let settled = |f: &dyn Fn(usize) -> f64| settled_mean(&(0..s[offset].len()).map(f).collect::<Vec<_>>(), from);
         match effect {
-            Effect::SensorBias { .. } => avg(&|k| s[offset][k]),
-            Effect::HarmonicForce { .. } => avg(&|k| s[offset][k].hypot(s[offset + 1][k])),
+            Effect::SensorBias { .. } => settled(&|k| s[offset][k]),
+            Effect::HarmonicForce { .. } => settled(&|k| s[offset][k].hypot(s[offset + 1][k])),
             Effect::BearingDefect { harmonics, .. } => {
                 let power =
                     |k: usize| (0..2 * (*harmonics).max(1) as usize).map(|j| s[offset + j][k].powi(2)).sum::<f64>();
-                (avg(&power) / 2.0).sqrt()
+                (settled(&power) / 2.0).sqrt()
             }
-            Effect::UnknownInput { .. } => avg(&|k| s[offset][k].powi(2) + s[offset + 1][k].powi(2)).sqrt(),
-            Effect::SensorScale { .. } | Effect::Parameter(_) => theta.exp(),
-            Effect::SensorDelay { .. } | Effect::ExtraMode { .. } => theta,
+            Effect::UnknownInput { .. } => settled(&|k| s[offset][k].powi(2) + s[offset + 1][k].powi(2)).sqrt(),
+            Effect::SensorScale { .. } | Effect::Parameter(_) => applied.theta.exp(),
+            Effect::SensorDelay { .. } | Effect::ExtraMode { .. } => applied.theta,
         }
     }
 

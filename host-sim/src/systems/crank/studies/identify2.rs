@@ -7,63 +7,8 @@
 //! towards smaller cB) but that the features see mostly one combination of the two clearances,
 //! and the chaotic scatter of 10 s of impacts leaves the other direction at a std of ~0.036 mm.
 //!
-//! Measured (reference A 0.25 + B 0.15 mm; Fisher by central differences over ±0.05 mm at A
-//! and B; 16 runs of 10 s per point; `cargo run --release -p edgekf-sim --example crank_study --
-//! two-clearances 16 10 10 stencil`, 3 min on two cores; ± is a delete-one jackknife over the
-//! runs):
-//!
-//! | features, release | CRB cA | CRB cB | correlation | weakest direction (cA, cB), std | A alone: CRB cA |
-//! |---|---|---|---|---|---|
-//! | fast (10), 30 ± 10° | 12.9 ± 2.2 % | 15.2 ± 2.2 % | −0.61 ± 0.14 | (+0.87, −0.50), 0.036 mm | 7.8 % |
-//! | all (12), 30 ± 10° | 13.1 ± 2.3 % | 15.5 ± 2.4 % | −0.63 ± 0.14 | (+0.86, −0.51), 0.037 mm | 7.8 % |
-//! | spectral `a` (2), 30 ± 10° | ∞ (`I` singular) | ∞ | — | (+0.92, −0.38) | 20 % |
-//! | fast (10), 30 ± 0.01° | 13.0 ± 2.1 % | 18.0 ± 3.0 % | −0.78 ± 0.09 | (+0.79, −0.62), 0.040 mm | 4.3 % |
-//! | all (12), 30 ± 0.01° | 11.5 ± 1.8 % | 17.5 ± 2.8 % | −0.76 ± 0.10 | (+0.75, −0.66), 0.036 mm | 3.1 % |
-//! | spectral `a` (2), 30 ± 0.01° | ∞ (rank one) | ∞ | — | (+0.74, −0.67) | 4.7 % |
-//!
-//! (last three rows: `… two-clearances 16 10 0.01 stencil`, the release angle known). The
-//! information matrix (fast, ±10°) is [[1525, 1314], [1314, 3063]] /mm²: eigenvalues 771 and
-//! 3 820 /mm². The well-seen direction is (+0.50, +0.87), a weighted sum of the clearances; the
-//! weak one trades cA against cB. The single-clearance bound computed the same way, 7.8 %,
-//! agrees with the fast estimator's measured scatter at A (RMS 7.1 %, [`super`]): the bound is
-//! reached there, so the features, not the estimator, are the limit. Knowing the release angle
-//! sharpens one clearance (7.8 → 4.3 %, spectral `a` 20 → 4.7 %: the release window) but not two
-//! (cB 15 → 18 %): the ambiguity between the joints, not the release, limits.
-//!
-//! Surface (fast features, expected `ln L(g) − ln L(ref)` for a 10 s recording of the
-//! reference; grid points above −3.0 are not excluded at 95 %), the 10 s stencil:
-//!
-//! | cA \ cB (mm) | 0.10 | 0.15 | 0.20 |
-//! |---|---|---|---|
-//! | 0.20 | −13.9 | −2.9 | −1.5 |
-//! | 0.25 | −7.1 | 0 | −1.3 |
-//! | 0.30 | −5.1 | −1.0 | −10.1 |
-//!
-//! and the whole grid from 12 runs of 5 s scaled to 10 s (`… two-clearances 12 5 10`, 6 min;
-//! the scaling is an approximation: those runs give CRB 8.9 / 15.2 % but correlation ≈ 0,
-//! so the shape of the information changes with the length of the run, and the 10 s figures
-//! above are the ones to use):
-//!
-//! | cA \ cB (mm) | 0.05 | 0.10 | 0.15 | 0.20 | 0.25 |
-//! |---|---|---|---|---|---|
-//! | 0.15 | −28.9 | −25.0 | −18.5 | −16.6 | −13.6 |
-//! | 0.20 | −18.2 | −12.1 | −7.2 | −5.8 | −2.8 |
-//! | 0.25 | −11.0 | −5.6 | 0 | −0.9 | −1.7 |
-//! | 0.30 | −4.2 | −8.4 | −0.6 | −1.7 | −4.4 |
-//! | 0.35 | −4.7 | −6.5 | −5.2 | −4.5 | −12.3 |
-//!
-//! Six of 25 grid points are not excluded, along a ridge from (0.20, 0.25) through the reference
-//! to (0.30, 0.15) mm: cA −20 … +20 % with cB +67 … 0 %. With the spectral `a` alone, 22 of 25.
-//! A CRB of 15 % for cB means that even an efficient, unbiased estimator puts only about half
-//! of its 10 s estimates of cB within ±10 %; reaching a 10 % std needs ~2.3× the information
-//! (a ~25 s recording if it adds up like independent windows), ±10 % at 2σ ~9× (~90 s), or a
-//! feature that sees the (cA − cB) direction.
-//!
-//! Checked by `crank_identify2` (`cargo test --release -p edgekf-sim --test crank_identify2 --
-//! --nocapture`, 16 s): a coarse design (8 runs of 2 s per point, ±10°, covariance scaled to
-//! 10 s) gives CRB cA 7.7 %, cB 13.8 %, correlation −0.35, single clearance 5.9 %; the test
-//! checks the matrix's symmetry and semidefiniteness, the single-clearance bound against the
-//! fast estimator's scatter, and computes the verdict.
+//! The measured tables (Cramér–Rao bounds per feature set, the likelihood surfaces) are in
+//! `docs/crank_two_clearances.md`, each with the command that makes it.
 //!
 //! Method. The dynamics are chaotic, so a feature of one run is a draw from a distribution; the
 //! ensemble of runs at a clearance pair is the measurement model.
@@ -72,7 +17,7 @@
 //!   (`u_r` uniform in −1…1) with noise seed `seed_base + r`; the **same** `(angle, seed)` list at
 //!   every grid point (common random numbers, so that differences between grid points are
 //!   paired). Adaptive integrator at the configuration's tolerance, the configured sensor noise.
-//! * Features per run ([`FEATURE_NAMES`]): the fast model's ten ([`super::model::feature_vector`],
+//! * Features per run ([`FEATURE_NAMES`]): the fast model's ten ([`model::feature_vector`],
 //!   window means in logarithms) and the paper's spectral feature `a` ([`crate::systems::crank::feature`])
 //!   in logarithms, of the release window and averaged over the later windows. Three sets are
 //!   analysed ([`FeatureSet`]).
@@ -93,8 +38,8 @@
 //!   eigenvector of the smallest eigenvalue of `I`: the direction in (cA, cB) the features do
 //!   not see.
 
-use super::model::feature_vector;
 use crate::systems::crank::config::Method;
+use crate::systems::crank::estimate::model::{self, feature_vector};
 use crate::systems::crank::feature::window_features;
 use crate::systems::crank::{CrankConfig, Mechanism, SimOptions};
 use nalgebra::{DMatrix, DVector};
@@ -104,7 +49,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 
 /// Number of features per run.
-pub const FEATURES: usize = super::model::FEATURES + 2;
+pub const FEATURES: usize = model::FEATURES + 2;
 
 /// The features of a run: the fast model's ten, then `ln a` of the release window and of the
 /// mean over the later windows.
@@ -117,8 +62,8 @@ pub const FEATURES: usize = super::model::FEATURES + 2;
 pub const FEATURE_NAMES: [&str; FEATURES] = {
     let mut names = [""; FEATURES];
     let mut i = 0;
-    while i < super::model::FEATURES {
-        names[i] = super::model::FEATURE_NAMES[i];
+    while i < model::FEATURES {
+        names[i] = model::FEATURE_NAMES[i];
         i += 1;
     }
     names[FEATURES - 2] = "ln_a_release";

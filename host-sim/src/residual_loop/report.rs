@@ -1,0 +1,180 @@
+//! What a loop run reports: [`LoopReport`] (`report.json`'s layout, [`SCHEMA_VERSION`]) and its
+//! parts, the same for every system.
+
+use super::filter::Run;
+use super::signature::{Channel, RunSummary, Signature};
+use super::vocabulary::{EffectDetail, EffectKind};
+use serde::Serialize;
+
+/// The version of `report.json`'s layout: raised when a field changes meaning or goes away
+/// (adding a field does not raise it).
+pub const SCHEMA_VERSION: u32 = 2;
+
+/// An effect the loop kept.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct AddedEffect {
+    /// The kind ([`EffectKind`]).
+    pub kind: EffectKind,
+    /// Channel name, `node N`, or a component (`disk 12`, `shaft`, `bearing 4`).
+    pub location: String,
+    /// Estimated size in SI units (a state's size, a force's amplitude, averaged over the
+    /// second half of the stretch the effect acts on), or the factor on the declared value for
+    /// `sensor_scale` and `parameter`.
+    pub value: f64,
+    /// Unit of `value` (`1` for a factor).
+    pub unit: String,
+    /// The kind's extra fields.
+    #[serde(flatten)]
+    pub detail: EffectDetail,
+    /// Spectral lines (Hz) of the innovations that were there before this effect and are gone
+    /// after it.
+    pub explains: Vec<f64>,
+    /// Gain in log-likelihood.
+    pub delta_log_likelihood: f64,
+    /// Its cost: `½ p ln n`.
+    pub bic_penalty: f64,
+}
+
+/// A candidate the loop fitted and refused.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Refused {
+    /// The kind.
+    pub kind: EffectKind,
+    /// Where.
+    pub location: String,
+    /// The fitted value, as an added effect would report it, where the fit gave one.
+    pub value: Option<f64>,
+    /// Why it was refused (at a bound of its range, one half of the run only, no usable model).
+    pub reason: String,
+}
+
+/// Where a report came from, so that it can be traced and rerun.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct Source {
+    /// The data file.
+    pub data: Option<String>,
+    /// SHA-256 of the data file's bytes, hex.
+    pub data_sha256: Option<String>,
+    /// The configuration file.
+    pub config: Option<String>,
+    /// The healthy baseline the loop started from, if any.
+    pub baseline: Option<String>,
+    /// The command line.
+    pub command: Option<String>,
+    /// edgekf's version.
+    pub version: String,
+}
+
+/// A system's own part of a report, beside the engine's fields (a running speed, say).
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct SystemSection {
+    /// Fields written at the top level of `report.json`.
+    #[serde(flatten)]
+    pub fields: serde_json::Map<String, serde_json::Value>,
+    /// The same for people: `(label, text)`, printed under the verdict and on the page.
+    #[serde(skip)]
+    pub lines: Vec<(String, String)>,
+}
+
+/// An effect (or location) the data cannot resolve.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct NotIdentifiable {
+    /// Kind.
+    pub kind: EffectKind,
+    /// Location.
+    pub location: String,
+    /// The parameter, for `parameter`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub parameter: Option<String>,
+    /// The statistic behind the verdict (`max_delta_log_likelihood`, `delta_log_likelihood_gap`).
+    pub statistic: String,
+    /// Its value.
+    pub value: f64,
+    /// Why, in words.
+    pub reason: String,
+}
+
+/// One candidate evaluated.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Trial {
+    /// Iteration.
+    pub iteration: usize,
+    /// Kind.
+    pub kind: EffectKind,
+    /// Location.
+    pub location: String,
+    /// Order (harmonic forces, bearing lines).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub order: Option<f64>,
+    /// Parameter name (parameter effects).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub parameter: Option<String>,
+    /// The fitted onset, s on the data's `t` (change-point fits).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub onset_s: Option<f64>,
+    /// Unit of `value`.
+    pub unit: String,
+    /// Fitted value (scalar effects), as reported.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub value: Option<f64>,
+    /// Gain in log-likelihood over the current model.
+    pub delta_log_likelihood: f64,
+    /// The gain in the first and in the second half of the run (of the stretch after the
+    /// onset, for a change-point fit).
+    pub delta_halves: [f64; 2],
+    /// `½ p ln n`.
+    pub bic_penalty: f64,
+    /// Kept.
+    pub accepted: bool,
+}
+
+/// The series behind the report's plots (not serialised).
+#[derive(Debug, Clone, Default)]
+pub struct Traces {
+    /// Time, s.
+    pub t: Vec<f64>,
+    /// Sensor channels.
+    pub channels: Vec<Channel>,
+    /// Virtual-sensing rows (`n12_x`, …).
+    pub rows: Vec<Channel>,
+    /// `truth_` column of each row, where the file has one.
+    pub truth: Vec<Option<Vec<f64>>>,
+    /// The base model's run.
+    pub before: Run,
+    /// The final model's run.
+    pub after: Run,
+}
+
+/// What the loop found.
+#[derive(Debug, Clone, Serialize)]
+pub struct LoopReport {
+    /// [`SCHEMA_VERSION`].
+    pub schema_version: u32,
+    /// The system (its registry name).
+    pub system: String,
+    /// Where the report came from.
+    pub source: Source,
+    /// Effects kept, in order.
+    pub effects_added: Vec<AddedEffect>,
+    /// The base model.
+    pub before: RunSummary,
+    /// The final model.
+    pub after: RunSummary,
+    /// Effects the data cannot resolve.
+    pub not_identifiable: Vec<NotIdentifiable>,
+    /// Signatures left that no effect of the library explains (empty when the final
+    /// innovations are consistent).
+    pub unexplained: Vec<Signature>,
+    /// Candidates fitted and refused, with the reason.
+    pub refused: Vec<Refused>,
+    /// Every candidate evaluated.
+    pub trials: Vec<Trial>,
+    /// Why the loop stopped.
+    pub stopped: String,
+    /// The system's own fields (a running speed, say), at the top level of the JSON.
+    #[serde(flatten)]
+    pub section: SystemSection,
+    /// The series behind the plots.
+    #[serde(skip)]
+    pub traces: Traces,
+}
