@@ -36,6 +36,9 @@ pub fn command(registry: &[SystemEntry]) -> clap::Command {
 /// Runs the demo parts, a blank line between them.
 pub fn run(registry: &[SystemEntry], m: &ArgMatches) -> Result<()> {
     let args = DemoArgs::from_arg_matches(m).map_err(|e| anyhow::anyhow!("{e}"))?;
+    if let Some(dir) = &args.out {
+        crate::io::output::check_folder(dir, &[], &[args.config.as_deref()])?;
+    }
     let mut first = true;
     for part in registry.iter().filter_map(|s| s.demo) {
         if part.closes_loop && args.skip_loop {

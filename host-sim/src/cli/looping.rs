@@ -3,7 +3,8 @@
 //! the report files, with where the report came from (`source`).
 
 use super::registry::SystemEntry;
-use crate::report::text::{summary_table, write_report};
+use crate::io::output::check_folder;
+use crate::report::text::{summary_table, write_report, REPORT_FILES};
 use crate::residual_loop::{LoopOptions, LoopReport};
 use anyhow::{Context, Result};
 use clap::{ArgMatches, Args, FromArgMatches};
@@ -68,6 +69,7 @@ pub fn run(registry: &[SystemEntry], m: &ArgMatches, command_line: &str) -> Resu
         .and_then(|s| s.close_loop.as_ref())
         .expect("clap only accepts registered names");
     let args = LoopArgs::from_arg_matches(sub).map_err(|e| anyhow::anyhow!("{e}"))?;
+    check_folder(&args.report, &REPORT_FILES, &[Some(&args.data), Some(&args.config)])?;
     let request = LoopRequest {
         config: args.config.clone(),
         data: args.data.clone(),

@@ -73,14 +73,42 @@ where
     }
 }
 
-/// The `edgekf` binary: [`run_with`] on the process's arguments; errors print one line and
-/// exit 1.
+/// The `edgekf` binary: [`run_with`] on the process's arguments. Exit codes: 0 done (also
+/// when the reader of standard output goes away, as `| head` does), 1 bad data, configuration
+/// or output path (one line on standard error), 2 a usage error (clap's message).
 pub fn main(registry: &[SystemEntry]) -> ExitCode {
+    quiet_on_a_closed_pipe();
     match run_with(registry, std::env::args_os()) {
         Ok(()) => ExitCode::SUCCESS,
+        Err(e) if is_closed_pipe(&e) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", one_line(&e));
             ExitCode::FAILURE
         }
     }
+}
+
+/// `e` and its causes on one line (`: `-separated, inner line breaks folded).
+fn one_line(e: &anyhow::Error) -> String {
+    format!("{e:#}").split_whitespace().collect::<Vec<_>>().join(" ")
+}
+
+/// Whether `e` is a write to a pipe whose reader has gone.
+fn is_closed_pipe(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| c.downcast_ref::<std::io::Error>().is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe))
+}
+
+/// `edgekf … | head -1` closes the pipe while edgekf still prints, and Rust's `print!` then
+/// panics. The reader having seen enough is not an error: end quietly with exit 0 instead of a
+/// panic message and exit 101. Every other panic keeps the default report.
+fn quiet_on_a_closed_pipe() {
+    let default = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        let payload = info.payload();
+        let message = payload.downcast_ref::<String>().map(String::as_str).or(payload.downcast_ref::<&str>().copied());
+        if message.is_some_and(|m| m.starts_with("failed printing to stdout") && m.contains("Broken pipe")) {
+            std::process::exit(0);
+        }
+        default(info);
+    }));
 }

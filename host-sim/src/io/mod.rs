@@ -1,3 +1,5 @@
 //! Files that `edgekf` reads and writes.
 
+pub mod config;
 pub mod data;
+pub mod output;

@@ -1,18 +1,24 @@
 //! What the loop prints and writes: the summary table of the command line, and the report
 //! files (`report.json`, `report.html`) of a report directory.
 
+use crate::io::output::write_atomic;
 use crate::residual_loop::search::{Channel, LoopReport, RunSummary};
 use anyhow::{Context, Result};
 use std::path::Path;
 
-/// Writes `dir/report.json` and `dir/report.html`, creating `dir` if needed.
+/// The files of a report directory.
+pub const REPORT_FILES: [&str; 2] = ["report.json", "report.html"];
+
+/// Writes `dir/report.json` and `dir/report.html`, creating `dir` if needed; both are made
+/// before either is written, and each is written whole ([`write_atomic`]).
 pub fn write_report(report: &LoopReport, dir: &Path) -> Result<()> {
+    let json = serde_json::to_string_pretty(report)?;
+    let html = super::html::render(report)?;
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    let path = dir.join("report.json");
-    std::fs::write(&path, serde_json::to_string_pretty(report)?)
-        .with_context(|| format!("writing {}", path.display()))?;
-    let path = dir.join("report.html");
-    std::fs::write(&path, super::html::render(report)?).with_context(|| format!("writing {}", path.display()))?;
+    for (name, text) in REPORT_FILES.iter().zip([json, html]) {
+        let path = dir.join(name);
+        write_atomic(&path, text).with_context(|| format!("writing {}", path.display()))?;
+    }
     Ok(())
 }
 

@@ -363,7 +363,7 @@ pub fn to_csv_string(path: &Path, names: &[&str], t: &[f64], columns: &[&[f64]])
 /// ```
 pub fn write(path: &Path, names: &[&str], t: &[f64], columns: &[&[f64]]) -> Result<(), DataError> {
     let text = to_csv_string(path, names, t, columns)?;
-    std::fs::write(path, text).map_err(|source| DataError::Write { path: path.to_owned(), source })
+    crate::io::output::write_atomic(path, text).map_err(|source| DataError::Write { path: path.to_owned(), source })
 }
 
 #[cfg(test)]

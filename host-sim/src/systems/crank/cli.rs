@@ -18,6 +18,7 @@ use super::integrate::Integrator;
 use super::simulate::{CrankRecording, SimOptions};
 use super::{Joint, Mechanism};
 use crate::io::data;
+use crate::io::output::{check, check_folder};
 use anyhow::Context as _;
 use clap::{Args, Subcommand, ValueEnum};
 use std::io::Write as _;
@@ -252,6 +253,7 @@ fn describe_clearances(c: &[Option<f64>; 3]) -> String {
 }
 
 fn simulate(args: SimulateArgs) -> anyhow::Result<()> {
+    check(&[Some(&args.out)], &[args.config.as_deref()])?;
     let mut config = match &args.config {
         Some(path) => CrankConfig::load(path)?,
         None => CrankConfig::default(),
@@ -400,6 +402,7 @@ fn feature(args: FeatureArgs) -> anyhow::Result<()> {
 
 fn estimate(args: EstimateArgs) -> anyhow::Result<()> {
     use super::estimate::{self, ukf, Recording};
+    check(&[Some(&args.out)], &[Some(&args.data), args.config.as_deref(), args.model.as_deref()])?;
     let config = match &args.config {
         Some(path) => CrankConfig::load(path)?,
         None => CrankConfig::default(),
@@ -533,6 +536,9 @@ fn estimate(args: EstimateArgs) -> anyhow::Result<()> {
 
 fn train(args: TrainArgs) -> anyhow::Result<()> {
     use super::estimate::training::{self, TrainPlan};
+    let test_features = args.save_features.as_ref().map(|p| p.with_extension("test.csv"));
+    let inputs = [args.config.as_deref(), args.load_features.as_deref(), args.load_test_features.as_deref()];
+    check(&[Some(&args.out), args.save_features.as_deref(), test_features.as_deref()], &inputs)?;
     let config = match &args.config {
         Some(path) => CrankConfig::load(path)?,
         None => CrankConfig::default(),
@@ -568,7 +574,8 @@ fn train(args: TrainArgs) -> anyhow::Result<()> {
         s.worst * 100.0
     );
     let model = trained.model;
-    std::fs::write(&args.out, model.to_toml()).with_context(|| format!("{}: cannot write", args.out.display()))?;
+    crate::io::output::write_atomic(&args.out, model.to_toml())
+        .with_context(|| format!("{}: cannot write", args.out.display()))?;
     println!("wrote {}", args.out.display());
     if let Some(tested) = training::test(&config, &model, &plan)? {
         for (r, f) in &tested.runs {
@@ -609,6 +616,9 @@ fn train(args: TrainArgs) -> anyhow::Result<()> {
 pub fn demo(args: &crate::cli::demo::DemoArgs) -> anyhow::Result<()> {
     use super::demo::CrankDemo;
     println!("{}", CrankDemo::describe());
+    if let Some(dir) = &args.out {
+        check_folder(dir, &["crank/data.csv", "crank/est.csv"], &[args.config.as_deref()])?;
+    }
     let crank = CrankDemo::run()?;
     print!("{}", crank.summary());
     if let Some(dir) = &args.out {

@@ -253,7 +253,7 @@ fn positive(name: &str, v: f64) -> Result<(), CrankError> {
 impl CrankConfig {
     /// Parses and validates a configuration from TOML text.
     pub fn from_toml_str(text: &str) -> Result<Self, CrankError> {
-        let c: CrankConfig = toml::from_str(text).map_err(|e| CrankError::Config(e.to_string().trim_end().into()))?;
+        let c: CrankConfig = crate::io::config::parse_toml(text).map_err(|e| CrankError::Config(e.to_string()))?;
         c.validate()?;
         Ok(c)
     }

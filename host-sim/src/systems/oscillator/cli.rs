@@ -8,6 +8,7 @@ use super::report::{steady_windows, Summary};
 use super::scenario::{Fault, Scenario};
 use crate::cli::demo::DemoArgs;
 use crate::io::data;
+use crate::io::output::{check, check_folder};
 use anyhow::Context as _;
 use clap::{Subcommand, ValueEnum};
 use std::path::{Path, PathBuf};
@@ -86,6 +87,7 @@ fn scenario(config: Option<&Path>) -> anyhow::Result<Scenario> {
 pub fn run(command: OscillatorCommand) -> anyhow::Result<()> {
     match command {
         OscillatorCommand::Simulate { config, out, faults } => {
+            check(&[Some(&out)], &[config.as_deref()])?;
             let mut s = scenario(config.as_deref())?;
             if faults {
                 s.faults.extend(Fault::demo_set(s.duration_s));
@@ -96,13 +98,15 @@ pub fn run(command: OscillatorCommand) -> anyhow::Result<()> {
             Ok(())
         }
         OscillatorCommand::Export { config, out } => {
+            check(&[Some(&out)], &[config.as_deref()])?;
             let s = scenario(config.as_deref())?;
             let text = harmonic_constants(&s.estimator_params())?;
-            std::fs::write(&out, text).with_context(|| format!("writing {}", out.display()))?;
+            crate::io::output::write_atomic(&out, text).with_context(|| format!("writing {}", out.display()))?;
             println!("wrote {}: discrete model and steady-state gain of {}", out.display(), describe(&s));
             Ok(())
         }
         OscillatorCommand::Estimate { config, data: path, out, precision, settle } => {
+            check(&[out.as_deref()], &[Some(&path), config.as_deref()])?;
             let s = scenario(config.as_deref())?;
             let (data, report) = data::read(&path, &KNOWN_CHANNELS)?;
             eprintln!("{}: {report}", path.display());
@@ -140,6 +144,9 @@ pub fn run(command: OscillatorCommand) -> anyhow::Result<()> {
 /// The oscillator's part of `edgekf demo`: the demo scenario (or `--config`'s) estimated in
 /// `f64` and `f32`; `--out DIR` writes `data.csv`, `est.csv` and `est_f32.csv`.
 pub fn demo(args: &DemoArgs) -> anyhow::Result<()> {
+    if let Some(dir) = &args.out {
+        check_folder(dir, &["data.csv", "est.csv", "est_f32.csv"], &[args.config.as_deref()])?;
+    }
     let demo = Demo::run(&scenario(args.config.as_deref())?)?;
     println!("edgekf demo — {}", demo.summary());
     if let Some(dir) = &args.out {

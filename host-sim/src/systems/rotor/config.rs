@@ -531,8 +531,8 @@ fn finite(what: impl fmt::Display, v: f64) -> Result<(), String> {
 impl RotorConfig {
     /// Parses and validates a configuration.
     pub fn from_toml_str(text: &str) -> Result<Self, RotorError> {
-        let cfg: RotorConfig = toml::from_str(text)
-            .map_err(|e| RotorError::Config { origin: None, message: e.to_string().trim_end().to_owned() })?;
+        let cfg: RotorConfig = crate::io::config::parse_toml(text)
+            .map_err(|e| RotorError::Config { origin: None, message: e.to_string() })?;
         cfg.validate()?;
         Ok(cfg)
     }

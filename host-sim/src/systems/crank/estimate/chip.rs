@@ -57,11 +57,12 @@ pub struct ExportArgs {
 
 /// `edgekf crank export`: writes the model as Rust constants for the firmware.
 pub fn export(args: ExportArgs) -> anyhow::Result<()> {
+    crate::io::output::check(&[Some(&args.out)], &[args.model.as_deref()])?;
     let model = match &args.model {
         Some(path) => FastModel::load(path)?,
         None => FastModel::builtin(),
     };
-    std::fs::write(&args.out, model.to_rust())
+    crate::io::output::write_atomic(&args.out, model.to_rust())
         .map_err(|e| anyhow::anyhow!("{}: cannot write: {e}", args.out.display()))?;
     println!("wrote {}: {CONST_NAME} ({} s windows)", args.out.display(), model.window);
     Ok(())

@@ -128,7 +128,7 @@ impl FeatureMap {
     pub fn load(path: &std::path::Path) -> anyhow::Result<Self> {
         let text =
             std::fs::read_to_string(path).map_err(|e| anyhow::anyhow!("{}: cannot read: {e}", path.display()))?;
-        let map: Self = toml::from_str(&text).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+        let map: Self = crate::io::config::parse_toml(&text).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
         map.validate().map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
         Ok(map)
     }

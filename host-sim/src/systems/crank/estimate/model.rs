@@ -170,7 +170,7 @@ impl FastModel {
 
     /// Parses and checks a model.
     pub fn from_toml_str(text: &str) -> anyhow::Result<Self> {
-        let m: Self = toml::from_str(text)?;
+        let m: Self = crate::io::config::parse_toml(text)?;
         m.validate().map_err(|e| anyhow::anyhow!(e))?;
         Ok(m)
     }

@@ -252,7 +252,7 @@ pub fn write_features(path: &std::path::Path, runs: &[Run], feats: &[FeatureVect
             f.missed.map_or("NaN".to_string(), |m| m.to_string())
         );
     }
-    std::fs::write(path, text)
+    crate::io::output::write_atomic(path, text)
 }
 
 /// Reads what [`write_features`] wrote.

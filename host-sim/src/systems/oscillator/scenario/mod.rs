@@ -134,7 +134,7 @@ impl Default for Scenario {
 impl Scenario {
     /// Parses and validates a scenario from TOML text.
     pub fn from_toml_str(text: &str) -> anyhow::Result<Self> {
-        let s: Scenario = toml::from_str(text).map_err(|e| anyhow::anyhow!("{}", e.to_string().trim_end()))?;
+        let s: Scenario = crate::io::config::parse_toml(text)?;
         s.validate()?;
         Ok(s)
     }

@@ -58,6 +58,7 @@ fn rms_error(t: &[f64], est: &[f64], truth: &[f64], t0: f64) -> f64 {
 /// Runs the virtual-sensing filter over a data file; prints notices and a summary, writes the
 /// estimates if asked.
 pub fn estimate(config: &Path, data_path: &Path, out: Option<&Path>, options: &EstimateOptions) -> Result<()> {
+    crate::io::output::check(&[out], &[Some(data_path), Some(config)])?;
     let (model, red) = load_tuned(config, options.modes, options.random_walk, options.robust)?;
     let known: Vec<String> = red.channels.clone();
     let known_refs: Vec<&str> = known.iter().map(String::as_str).collect();
@@ -133,8 +134,9 @@ fn write_estimates(out: &Path, est: &Estimates) -> Result<()> {
 /// Writes the discrete reduced model and its steady-state gain as Rust constants
 /// (`ROTOR_A`, `_C`, `_Q`, `_R`, `_GAIN`, `_S`, and `ROTOR_DISK_*` output rows) for the firmware.
 pub fn export(config: &Path, out: &Path, modes: usize) -> Result<()> {
+    crate::io::output::check(&[Some(out)], &[Some(config)])?;
     let text = export_text(config, modes)?;
-    std::fs::write(out, text).with_context(|| format!("writing {}", out.display()))?;
+    crate::io::output::write_atomic(out, text).with_context(|| format!("writing {}", out.display()))?;
     println!(
         "wrote {}: discrete model (20 states, 4 sensors), steady-state gain, P0, disk and force rows",
         out.display()

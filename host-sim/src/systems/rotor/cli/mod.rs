@@ -319,6 +319,7 @@ pub fn run(command: RotorCommand) -> anyhow::Result<()> {
             Ok(())
         }
         RotorCommand::Simulate { config, duration, out, seed, method, substeps } => {
+            crate::io::output::check(&[Some(&out)], &[Some(&config)])?;
             let (_, model) = load(&config)?;
             let method = match method {
                 MethodArg::Exact => Method::Exact,
@@ -405,6 +406,11 @@ pub fn close_loop(
 pub fn demo(args: &crate::cli::demo::DemoArgs) -> anyhow::Result<()> {
     use super::demo::LoopDemo;
     use crate::report::text::{summary_table, write_report};
+    if let Some(dir) = &args.out {
+        let files = crate::report::text::REPORT_FILES.map(|f| format!("loop/{f}"));
+        let files: Vec<&str> = files.iter().map(String::as_str).chain(["loop/data.csv"]).collect();
+        crate::io::output::check_folder(dir, &files, &[args.config.as_deref()])?;
+    }
     println!("closing the loop — {}", LoopDemo::describe());
     let demo = LoopDemo::run(true)?;
     print!("{}", summary_table(&demo.report));
