@@ -5,8 +5,8 @@
 //! against the truth, and what is left unexplained or not identifiable.
 //!
 //! This module is the page: its head and style sheet, the verdict, and the order of the
-//! sections. [`tables`] writes the tables, [`figures`] the plots (with the
-//! [plot kit](crate::report::plot)), [`format`] the numbers; every text taken from the report
+//! sections. `tables` writes the tables, `figures` the plots (with the
+//! [plot kit](crate::report::plot)), `format` the numbers; every text taken from the report
 //! is escaped.
 //!
 //! ```no_run

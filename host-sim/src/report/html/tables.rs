@@ -77,13 +77,18 @@ fn frequencies(f: &[f64]) -> String {
     }
 }
 
+/// A section that is one table: its heading, then the table, or `none` when it has no rows.
+fn table_section(out: &mut String, title: &str, none: &str, head: &[&str], rows: &[Vec<Cell>]) {
+    h2(out, title);
+    if rows.is_empty() {
+        para(out, "", none);
+    } else {
+        out.push_str(&table(head, rows, |_| ""));
+    }
+}
+
 /// The effects added, in order.
 pub(super) fn effects(out: &mut String, added: &[AddedEffect]) {
-    h2(out, "Effects added");
-    if added.is_empty() {
-        para(out, "", "No effect was added: the base model is kept.");
-        return;
-    }
     let rows: Vec<Vec<Cell>> = added
         .iter()
         .enumerate()
@@ -110,7 +115,7 @@ pub(super) fn effects(out: &mut String, added: &[AddedEffect]) {
         "BIC cost",
         "lines explained (Hz)",
     ];
-    out.push_str(&table(&head, &rows, |_| ""));
+    table_section(out, "Effects added", "No effect was added: the base model is kept.", &head, &rows);
 }
 
 /// How a statistic improves, for highlighting the final model's value.
@@ -257,11 +262,6 @@ fn error_table(out: &mut String, tr: &Traces, b: &RunSummary, a: &RunSummary) {
 
 /// Effects or locations the data cannot resolve.
 pub(super) fn not_identifiable(out: &mut String, list: &[NotIdentifiable]) {
-    h2(out, "Not identifiable");
-    if list.is_empty() {
-        para(out, "", "Nothing was found that the data cannot resolve.");
-        return;
-    }
     let rows: Vec<Vec<Cell>> = list
         .iter()
         .map(|n| {
@@ -275,16 +275,12 @@ pub(super) fn not_identifiable(out: &mut String, list: &[NotIdentifiable]) {
             ]
         })
         .collect();
-    out.push_str(&table(&["kind", "location", "parameter", "statistic", "value", "why"], &rows, |_| ""));
+    let head = ["kind", "location", "parameter", "statistic", "value", "why"];
+    table_section(out, "Not identifiable", "Nothing was found that the data cannot resolve.", &head, &rows);
 }
 
 /// Signatures that no effect of the library explains.
 pub(super) fn unexplained(out: &mut String, list: &[Signature]) {
-    h2(out, "Unexplained");
-    if list.is_empty() {
-        para(out, "", "Nothing is left unexplained.");
-        return;
-    }
     let rows: Vec<Vec<Cell>> = list
         .iter()
         .map(|s| {
@@ -297,7 +293,8 @@ pub(super) fn unexplained(out: &mut String, list: &[Signature]) {
             ]
         })
         .collect();
-    out.push_str(&table(&["channel", "frequency (Hz)", "statistic", "value", "description"], &rows, |_| ""));
+    let head = ["channel", "frequency (Hz)", "statistic", "value", "description"];
+    table_section(out, "Unexplained", "Nothing is left unexplained.", &head, &rows);
 }
 
 /// Every candidate evaluated, in a collapsed `<details>`.

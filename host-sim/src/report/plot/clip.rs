@@ -31,6 +31,17 @@ fn clip_segment(p: (f64, f64), q: (f64, f64)) -> Option<((f64, f64), (f64, f64))
 /// The drawable runs of the polyline `points` on axes `x`, `y`: a non-finite point, or one
 /// outside the x range, breaks the line; the line leaves and re-enters through the y range's
 /// ends (clipped, as a plot should).
+///
+/// ```
+/// use edgekf_sim::report::plot::{clip, Axis};
+///
+/// let line = [(0.0, 0.5), (1.0, f64::NAN), (2.0, 0.5), (3.0, 2.0)];
+/// let runs = clip(&line, Axis::Linear(0.0, 3.0), Axis::Linear(0.0, 1.0));
+/// // The NaN breaks the line; the last segment is cut where it leaves the axis at y = 1.
+/// assert_eq!(runs.len(), 2);
+/// let (x, y) = runs[1][1];
+/// assert!((x - 7.0 / 3.0).abs() < 1e-12 && (y - 1.0).abs() < 1e-12);
+/// ```
 pub fn clip(points: &[(f64, f64)], x: Axis, y: Axis) -> Vec<Vec<(f64, f64)>> {
     let mut runs: Vec<Vec<(f64, f64)>> = Vec::new();
     let mut prev: Option<(f64, f64)> = None;

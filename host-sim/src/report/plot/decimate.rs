@@ -6,6 +6,16 @@
 /// Decimates `(t, y)` for a plot `columns` pixels wide: the minimum and the maximum of each
 /// column in time order, so spikes survive. A column without a finite value gives a NaN point,
 /// which breaks the line.
+///
+/// ```
+/// use edgekf_sim::report::plot::min_max;
+///
+/// let t: Vec<f64> = (0..10_000).map(f64::from).collect();
+/// let mut y = vec![0.0; 10_000];
+/// y[4321] = 7.0; // a spike of one sample
+/// let drawn = min_max(&t, &y, 400);
+/// assert!(drawn.len() <= 800 && drawn.contains(&(4321.0, 7.0)));
+/// ```
 pub fn min_max(t: &[f64], y: &[f64], columns: usize) -> Vec<(f64, f64)> {
     let points: Vec<(f64, f64)> = t.iter().copied().zip(y.iter().copied()).collect();
     min_max_points(&points, columns)

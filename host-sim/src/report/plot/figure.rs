@@ -9,6 +9,27 @@ use anyhow::Result;
 use plotters::prelude::*;
 
 /// A figure of panels.
+///
+/// ```
+/// use edgekf_sim::report::plot::{Entry, Figure, Key, LegendColumn, Line, Panel, RGBColor, Stroke};
+///
+/// let grey = RGBColor(120, 120, 120);
+/// let panels: Vec<Panel> = ["left", "right"]
+///     .iter()
+///     .map(|title| {
+///         let mut p = Panel::new(title, "t (s)", "y");
+///         p.lines.push(Line::new("", grey, vec![(0.0, 0.2), (1.0, 0.8)]));
+///         p
+///     })
+///     .collect();
+/// let legend = LegendColumn { width: 120, entries: vec![Entry::new(Key::Line(Stroke::solid(grey, 1)), &["a ramp"])] };
+/// let figure = Figure::new("Two ramps", (800, 240), panels).columns(2).titled("Ramps").with_legend(legend);
+/// assert_eq!(figure.grid(), (1, 2));
+/// let svg = figure.svg()?;
+/// assert!(svg.starts_with("<svg role=\"img\" aria-label=\"Two ramps\""));
+/// assert!(svg.contains("Ramps") && svg.contains("a ramp"));
+/// # anyhow::Ok(())
+/// ```
 #[derive(Debug, Clone, PartialEq)]
 pub struct Figure {
     /// What the figure shows, for screen readers (the SVG's `aria-label`).
