@@ -45,18 +45,21 @@
 //!   worst −20.4 %); the last running estimate equals the whole-recording one; ~3–7 s.
 //!
 //! A wrong argument prints the usage and exits with status 2; a failed run exits with 1.
+//!
+//! The figures are drawn with the plot kit of the HTML report ([`edgekf_sim::report::plot`]);
+//! this file only says what each figure shows.
 
 use anyhow::Context;
 use edgekf::systems::crank::{window_samples, ClearanceEstimate, ClearanceEstimator, ClearanceModel};
+use edgekf_sim::report::plot::{
+    tick, Axis, Band, Entry, Figure, Key, LegendColumn, Line, Marker, Markers, Mesh, Panel, RGBColor, Shape, Stroke,
+};
 use edgekf_sim::systems::crank::config::Method;
 use edgekf_sim::systems::crank::estimate::model::{FastModel, ModelEstimate};
 use edgekf_sim::systems::crank::estimate::train::{grid, Run};
 use edgekf_sim::systems::crank::estimate::ukf::{self, UkfOptions, UkfRun};
 use edgekf_sim::systems::crank::estimate::Recording;
 use edgekf_sim::systems::crank::{CrankConfig, Joint, Mechanism, SimOptions};
-use plotters::coord::CoordTranslate;
-use plotters::element::DashedPathElement;
-use plotters::prelude::*;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -80,14 +83,14 @@ const DURATIONS: std::ops::RangeInclusive<f64> = 0.5..=60.0;
 
 /// Size of the figure, px.
 const SIZE: (u32, u32) = (820, 500);
-/// Font family of the figure's text (rendered by the viewer, as in the HTML report).
-const FONT: &str = "sans-serif";
 /// Colours of the three starts (colour-blind safe: blue, orange, green).
 const COLOURS: [RGBColor; 3] = [RGBColor(31, 100, 180), RGBColor(228, 108, 10), RGBColor(44, 160, 44)];
 /// Colour of the truth and of the final-estimate legend entry.
 const TRUTH_COLOUR: RGBColor = RGBColor(40, 40, 40);
 /// Colour of the ±5 % band.
 const BAND_COLOUR: RGBColor = RGBColor(120, 120, 120);
+/// Fill of the bands about the truth.
+const BAND_FILL: RGBColor = RGBColor(236, 236, 236);
 
 /// The usage line.
 const USAGE: &str = "usage: crank_plots convergence [DURATION_S] [OUTDIR]\n       \
@@ -242,17 +245,6 @@ fn y_max(runs: &[Convergence]) -> f64 {
     ((top * 1.12) / 0.05).ceil() * 0.05
 }
 
-/// An axis tick label: at most three decimals, without trailing zeros.
-fn tick(v: &f64) -> String {
-    let s = format!("{v:.3}");
-    let s = s.trim_end_matches('0').trim_end_matches('.');
-    if s == "-0" {
-        "0".into()
-    } else {
-        s.into()
-    }
-}
-
 /// How far right of the recording's end the final estimates are drawn, s (at least half a
 /// window, or 3 % of the recording): they come from the release window's update, made after
 /// the last window.
@@ -260,120 +252,54 @@ fn final_offset(duration: f64) -> f64 {
     (0.03 * duration).max(0.125)
 }
 
-/// Draws the convergence figure for a recording of `duration` s as an SVG document.
-fn convergence_svg(runs: &[Convergence], duration: f64) -> anyhow::Result<String> {
-    let mut svg = String::new();
-    {
-        let root = SVGBackend::with_string(&mut svg, SIZE).into_drawing_area();
-        root.fill(&WHITE).map_err(plot_error)?;
-        // Room right of the end for the final estimates' markers.
-        let x_end = duration + 2.0 * final_offset(duration);
-        let truth_mm = TRUTH * 1e3;
-        let mut chart = ChartBuilder::on(&root)
-            .caption(
-                format!(
-                    "Paper's UKF, slider-crank, clearance at A: {duration} s recording, truth {truth_mm} mm, three starts"
-                ),
-                (FONT, 17),
-            )
-            .margin(10)
-            .margin_right(18)
-            .x_label_area_size(44)
-            .y_label_area_size(62)
-            .build_cartesian_2d(0.0..x_end, 0.0..y_max(runs))
-            .map_err(plot_error)?;
-        chart
-            .configure_mesh()
-            .x_desc("time: end of the 0.25 s window (s)")
-            .y_desc("clearance estimate at A (mm)")
-            .x_labels(10)
-            .y_labels(8)
-            .max_light_lines(1)
-            .x_label_formatter(&tick)
-            .y_label_formatter(&tick)
-            .label_style((FONT, 13))
-            .axis_desc_style((FONT, 14))
-            .bold_line_style(RGBColor(225, 225, 225))
-            .light_line_style(RGBColor(244, 244, 244))
-            .draw()
-            .map_err(plot_error)?;
-
-        // The band and the truth, under the estimates.
-        let band = BAND_COLOUR.stroke_width(1);
-        for (k, f) in [1.0 + BAND, 1.0 - BAND].into_iter().enumerate() {
-            let y = truth_mm * f;
-            let drawn =
-                chart.draw_series(DashedLineSeries::new([(0.0, y), (x_end, y)], 6, 4, band)).map_err(plot_error)?;
-            if k == 0 {
-                drawn
-                    .label(format!("±{:.0} % ({:.4} / {:.4} mm)", BAND * 100.0, truth_mm * (1.0 - BAND), y))
-                    .legend(move |(x, y)| DashedPathElement::new([(x, y), (x + 20, y)], 6, 4, band));
-            }
-        }
-        let truth = TRUTH_COLOUR.stroke_width(2);
-        chart
-            .draw_series(LineSeries::new([(0.0, truth_mm), (x_end, truth_mm)], truth))
-            .map_err(plot_error)?
-            .label(format!("truth {truth_mm} mm"))
-            .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], truth));
-
-        for (c, colour) in runs.iter().zip(COLOURS) {
-            // The start, then the estimate after each window (the release window, measured
-            // last, only predicts in its turn).
-            let path: Vec<(f64, f64)> = [(0.0, c.initial * 1e3)]
-                .into_iter()
-                .chain(c.run.steps.iter().map(|s| (s.t, s.clearance * 1e3)))
-                .collect();
-            let line = colour.stroke_width(2);
-            chart
-                .draw_series(LineSeries::new(path.iter().copied(), line))
-                .map_err(plot_error)?
-                .label(format!(
-                    "from {:.2} mm → {:.4} mm ({:+.1} %)",
-                    c.initial * 1e3,
-                    c.run.estimate * 1e3,
-                    (c.run.estimate / TRUTH - 1.0) * 100.0
-                ))
-                .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], line));
-            chart.draw_series(path.iter().map(|&p| Circle::new(p, 2, colour.filled()))).map_err(plot_error)?;
-            // The release-window update, made after the last window: from the last window's
-            // estimate to the final one, drawn a little right of the end.
-            let last = *path.last().unwrap_or(&(0.0, c.initial * 1e3));
-            let end = (duration + final_offset(duration), c.run.estimate * 1e3);
-            chart.draw_series(DashedLineSeries::new([last, end], 4, 3, colour.stroke_width(1))).map_err(plot_error)?;
-            chart
-                .draw_series([Circle::new(end, 5, colour.filled()), Circle::new(end, 5, TRUTH_COLOUR.stroke_width(1))])
-                .map_err(plot_error)?;
-        }
-        // A legend entry for the final markers (drawn off the plot: only its legend shows).
-        chart
-            .draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())
-            .map_err(plot_error)?
-            .label("final estimate (release window, measured last)")
-            .legend(|(x, y)| {
-                EmptyElement::at((x + 10, y))
-                    + Circle::new((0, 0), 5, BAND_COLOUR.filled())
-                    + Circle::new((0, 0), 5, TRUTH_COLOUR.stroke_width(1))
-            });
-
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::LowerRight)
-            .margin(12)
-            .label_font((FONT, 13))
-            .background_style(WHITE.mix(0.9))
-            .border_style(RGBColor(190, 190, 190))
-            .draw()
-            .map_err(plot_error)?;
-        root.present().map_err(plot_error)?;
-    }
-    let label = format!("UKF clearance estimates against time from three starts, {duration} s recording");
-    Ok(svg.replacen("<svg ", &format!("<svg role=\"img\" aria-label=\"{label}\" "), 1))
+/// A band of ±`half` about `centre`, lightly filled with dashed edges.
+fn band(name: String, centre: f64, half: f64) -> Band {
+    let edge = Stroke::dashed(BAND_COLOUR, 1, 6, 4);
+    Band { name, lo: centre - half, hi: centre + half, fill: BAND_FILL, edge }
 }
 
-/// A plotters error as an `anyhow` error (the backend's error type is not `Send + Sync`).
-fn plot_error<E: std::fmt::Display>(e: E) -> anyhow::Error {
-    anyhow::anyhow!("drawing the figure: {e}")
+/// Draws the convergence figure for a recording of `duration` s as an SVG document.
+fn convergence_svg(runs: &[Convergence], duration: f64) -> anyhow::Result<String> {
+    let truth_mm = TRUTH * 1e3;
+    let mut p = Panel::new("", "time: end of the 0.25 s window (s)", "clearance estimate at A (mm)");
+    // Room right of the end for the final estimates' markers.
+    p.x = Axis::Linear(0.0, duration + 2.0 * final_offset(duration));
+    p.y = Axis::Linear(0.0, y_max(runs));
+    p.mesh = Mesh { x_labels: 10, y_labels: 8, light_lines: 1, signed_y: false };
+
+    // The band and the truth, under the estimates.
+    let (lo, hi) = (truth_mm * (1.0 - BAND), truth_mm * (1.0 + BAND));
+    p.bands.push(band(format!("±{:.0} % ({lo:.4} / {hi:.4} mm)", BAND * 100.0), truth_mm, truth_mm * BAND));
+    p.lines.push(Line::horizontal(&format!("truth {truth_mm} mm"), TRUTH_COLOUR, p.x, truth_mm).width(2));
+
+    for (c, colour) in runs.iter().zip(COLOURS) {
+        // The start, then the estimate after each window (the release window, measured
+        // last, only predicts in its turn).
+        let path: Vec<(f64, f64)> =
+            [(0.0, c.initial * 1e3)].into_iter().chain(c.run.steps.iter().map(|s| (s.t, s.clearance * 1e3))).collect();
+        let name = format!(
+            "from {:.2} mm → {:.4} mm ({:+.1} %)",
+            c.initial * 1e3,
+            c.run.estimate * 1e3,
+            (c.run.estimate / TRUTH - 1.0) * 100.0
+        );
+        // The release-window update, made after the last window: from the last window's
+        // estimate to the final one, drawn a little right of the end.
+        let last = *path.last().unwrap_or(&(0.0, c.initial * 1e3));
+        let end = (duration + final_offset(duration), c.run.estimate * 1e3);
+        p.lines.push(Line::new(&name, colour, path.clone()).width(2));
+        p.lines.push(Line::new("", colour, vec![last, end]).dashed(4, 3));
+        p.markers.push(Markers::new("", Marker::new(Shape::Circle, 2, colour), path));
+        p.markers.push(Markers::new("", Marker::new(Shape::Circle, 5, colour).outlined(TRUTH_COLOUR), vec![end]));
+    }
+    // One legend entry for the three final markers.
+    let final_marker = Marker::new(Shape::Circle, 5, BAND_COLOUR).outlined(TRUTH_COLOUR);
+    p.legend_extra.push((Key::Marker(final_marker), "final estimate (release window, measured last)".into()));
+
+    let title =
+        format!("Paper's UKF, slider-crank, clearance at A: {duration} s recording, truth {truth_mm} mm, three starts");
+    let label = format!("UKF clearance estimates against time from three starts, {duration} s recording");
+    Figure::new(&label, SIZE, vec![p]).titled(&title).svg()
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -432,7 +358,7 @@ impl FastRun {
 
     /// The run's name, e.g. `A 0.1 mm`.
     fn name(&self) -> String {
-        format!("{} {} mm", self.run.joint, tick(&(self.run.clearance * 1e3)))
+        format!("{} {} mm", self.run.joint, tick(self.run.clearance * 1e3))
     }
 
     /// The last running estimate (the chip's report at the end of the recording).
@@ -580,43 +506,6 @@ fn fast_table(runs: &[FastRun]) -> String {
     s
 }
 
-/// Points of a polyline clipped to `lo ≤ y ≤ hi`: the pieces inside, each a polyline, cut
-/// where the line crosses a bound.
-fn clip_y(points: &[(f64, f64)], lo: f64, hi: f64) -> Vec<Vec<(f64, f64)>> {
-    let mut pieces: Vec<Vec<(f64, f64)>> = Vec::new();
-    let inside = |p: (f64, f64)| (lo..=hi).contains(&p.1);
-    if let [only] = points {
-        if inside(*only) {
-            pieces.push(vec![*only]);
-        }
-    }
-    for pair in points.windows(2) {
-        let (p, q) = (pair[0], pair[1]);
-        // Liang–Barsky in y: the parameter range of p + u (q − p) inside the bounds.
-        let (mut u0, mut u1) = (0.0f64, 1.0f64);
-        let dy = q.1 - p.1;
-        if dy == 0.0 {
-            if !inside(p) {
-                continue;
-            }
-        } else {
-            let (a, b) = ((lo - p.1) / dy, (hi - p.1) / dy);
-            u0 = u0.max(a.min(b));
-            u1 = u1.min(a.max(b));
-            if u0 > u1 {
-                continue;
-            }
-        }
-        let at = |u: f64| (p.0 + u * (q.0 - p.0), p.1 + u * dy);
-        let (a, b) = (at(u0), at(u1));
-        match pieces.last_mut() {
-            Some(last) if u0 == 0.0 && last.last() == Some(&p) => last.push(b),
-            _ => pieces.push(vec![a, b]),
-        }
-    }
-    pieces
-}
-
 /// A colour moved a fraction `f` of the way toward `to`.
 fn mix(c: RGBColor, to: RGBColor, f: f64) -> RGBColor {
     let m = |a: u8, b: u8| (a as f64 + (b as f64 - a as f64) * f).round() as u8;
@@ -627,225 +516,108 @@ fn mix(c: RGBColor, to: RGBColor, f: f64) -> RGBColor {
 fn fast_colour(joint: usize, clearance: usize) -> RGBColor {
     let base = COLOURS[joint % COLOURS.len()];
     match clearance {
-        0 => mix(base, BLACK, 0.35),
+        0 => mix(base, RGBColor(0, 0, 0), 0.35),
         1 => base,
-        _ => mix(base, WHITE, 0.35),
+        _ => mix(base, RGBColor(255, 255, 255), 0.35),
     }
 }
 
-/// Stroke and fill of a marker, hollow for the points beyond the axis (drawn at its edge).
-fn marker_style(colour: RGBColor, filled: bool) -> ShapeStyle {
-    if filled {
-        colour.filled()
-    } else {
-        colour.stroke_width(1)
-    }
+/// The marker of the `k`-th clearance: circle, triangle, square.
+fn fast_marker(k: usize, colour: RGBColor) -> Marker {
+    let shape = [Shape::Circle, Shape::Triangle, Shape::Square][k.min(2)];
+    Marker::new(shape, 3, colour)
 }
 
-/// Draws the markers `points` (position, inside the axis) in the shape of the `k`-th
-/// clearance: circle, triangle, square.
-fn draw_markers<DB: DrawingBackend, CT: CoordTranslate>(
-    area: &DrawingArea<DB, CT>,
-    points: &[(CT::From, bool)],
-    k: usize,
-    colour: RGBColor,
-) -> anyhow::Result<()>
-where
-    CT::From: Clone,
-{
-    for (p, filled) in points {
-        let style = marker_style(colour, *filled);
-        let p = p.clone();
-        match k {
-            0 => area.draw(&(EmptyElement::at(p) + Circle::new((0, 0), 3, style))),
-            // `TriangleMarker` is always filled: the hollow one is a closed path.
-            1 if !*filled => {
-                area.draw(&(EmptyElement::at(p) + PathElement::new([(0, -4), (-4, 3), (4, 3), (0, -4)], style)))
-            }
-            1 => area.draw(&(EmptyElement::at(p) + TriangleMarker::new((0, 0), 4, style))),
-            _ => area.draw(&(EmptyElement::at(p) + Rectangle::new([(-3, -3), (3, 3)], style))),
-        }
-        .map_err(plot_error)?;
-    }
-    Ok(())
+/// The grey ring around the windows no release law refined.
+fn ring() -> Marker {
+    Marker::new(Shape::Circle, 7, BAND_COLOUR).hollow()
 }
 
 /// One panel of the `fast` figure: `error(run, estimate)` (%; `None`: the estimate names
 /// another joint, drawn as a cross on the bottom edge) after each window, for every run; with
-/// `ring`, a grey ring around the windows no release law refined (the window features' value).
-fn fast_panel<DB: DrawingBackend>(
-    area: &DrawingArea<DB, plotters::coord::Shift>,
+/// `rings`, a grey ring around the windows no release law refined (the window features' value).
+fn fast_panel(
     caption: &str,
     runs: &[FastRun],
     error: impl Fn(&FastRun, &ClearanceEstimate<f64>) -> Option<f64>,
-    ring: bool,
-) -> anyhow::Result<()> {
-    let mut chart = ChartBuilder::on(area)
-        .caption(caption, (FONT, 15))
-        .margin(8)
-        .margin_right(14)
-        .x_label_area_size(40)
-        .y_label_area_size(58)
-        .build_cartesian_2d(0.0..FAST_DURATION, -FAST_CLIP..FAST_CLIP)
-        .map_err(plot_error)?;
-    chart
-        .configure_mesh()
-        .x_desc("time: end of the 0.25 s window (s)")
-        .y_desc("clearance error (%)")
-        .x_labels(11)
-        .y_labels(13)
-        .max_light_lines(1)
-        .x_label_formatter(&tick)
-        .y_label_formatter(&|v| format!("{}{}", if *v > 0.0 { "+" } else { "" }, tick(v)))
-        .label_style((FONT, 12))
-        .axis_desc_style((FONT, 13))
-        .bold_line_style(RGBColor(225, 225, 225))
-        .light_line_style(RGBColor(244, 244, 244))
-        .draw()
-        .map_err(plot_error)?;
-
-    // The ±3 % band (lightly filled, dashed edges) and zero, under the runs.
-    let band = FAST_BAND * 100.0;
-    chart
-        .draw_series([Rectangle::new([(0.0, -band), (FAST_DURATION, band)], RGBColor(236, 236, 236).filled())])
-        .map_err(plot_error)?;
-    for y in [band, -band] {
-        chart
-            .draw_series(DashedLineSeries::new([(0.0, y), (FAST_DURATION, y)], 6, 4, BAND_COLOUR.stroke_width(1)))
-            .map_err(plot_error)?;
-    }
-    chart
-        .draw_series(LineSeries::new([(0.0, 0.0), (FAST_DURATION, 0.0)], TRUTH_COLOUR.stroke_width(1)))
-        .map_err(plot_error)?;
-
-    let plot = chart.plotting_area();
+    rings: bool,
+) -> Panel {
+    let mut p = Panel::new(caption, "time: end of the 0.25 s window (s)", "clearance error (%)");
+    p.x = Axis::Linear(0.0, FAST_DURATION);
+    p.y = Axis::Linear(-FAST_CLIP, FAST_CLIP);
+    p.mesh = Mesh { x_labels: 11, y_labels: 13, light_lines: 1, signed_y: true };
+    // The ±3 % band and zero, under the runs.
+    p.bands.push(band(String::new(), 0.0, FAST_BAND * 100.0));
+    p.lines.push(Line::horizontal("", TRUTH_COLOUR, p.x, 0.0));
     for f in runs {
         let (j, k) = (f.joint(), f.clearance_index());
         let colour = fast_colour(j, k);
-        let points: Vec<(f64, Option<f64>)> = f.windows.iter().map(|w| (w.t, error(f, &w.estimate))).collect();
-        let unrefined = f.windows.iter().map(|w| ring && w.estimate.release.is_none());
-        // The line through the windows that name the true joint, broken where one does not.
-        for named in points.split(|(_, e)| e.is_none()) {
-            let path: Vec<(f64, f64)> = named.iter().filter_map(|&(t, e)| e.map(|e| (t, e))).collect();
-            for piece in clip_y(&path, -FAST_CLIP, FAST_CLIP) {
-                plot.draw(&PathElement::new(piece, colour.stroke_width(2))).map_err(plot_error)?;
-            }
-        }
-        // Markers: filled inside the axis, hollow at its edge beyond; a cross on the bottom
-        // edge where the estimate names another joint.
-        let mut markers = Vec::new();
-        for (&(t, e), unrefined) in points.iter().zip(unrefined) {
-            match e {
-                Some(e) => {
-                    let y = e.clamp(-FAST_CLIP, FAST_CLIP);
-                    markers.push(((t, y), y == e));
-                    if unrefined {
-                        plot.draw(&Circle::new((t, y), 7, BAND_COLOUR.stroke_width(1))).map_err(plot_error)?;
-                    }
-                }
-                None => plot.draw(&Cross::new((t, -FAST_CLIP), 5, colour.stroke_width(2))).map_err(plot_error)?,
-            }
-        }
-        draw_markers(plot, &markers, k, colour)?;
+        // NaN where the estimate names another joint: the line breaks there.
+        let points: Vec<(f64, f64)> =
+            f.windows.iter().map(|w| (w.t, error(f, &w.estimate).unwrap_or(f64::NAN))).collect();
+        let elsewhere = points.iter().filter(|p| p.1.is_nan()).map(|p| (p.0, -FAST_CLIP)).collect();
+        let unrefined = points.iter().zip(&f.windows).filter(|(_, w)| rings && w.estimate.release.is_none());
+        p.lines.push(Line::new("", colour, points.clone()).width(2));
+        p.markers.push(Markers::new("", ring(), unrefined.map(|(p, _)| *p).collect()).at_edge());
+        p.markers.push(Markers::new("", Marker::new(Shape::Cross, 5, colour), elsewhere));
+        // Filled inside the axis, hollow at its edge beyond.
+        p.markers.push(Markers::new("", fast_marker(k, colour), points).at_edge());
     }
-    Ok(())
+    p
 }
 
 /// Draws the `fast` figure: the running estimate (top) and the window features' alone
 /// (bottom), with a legend column right of them.
 fn fast_svg(runs: &[FastRun]) -> anyhow::Result<String> {
-    let mut svg = String::new();
-    {
-        let root = SVGBackend::with_string(&mut svg, FAST_SIZE).into_drawing_area();
-        root.fill(&WHITE).map_err(plot_error)?;
-        let root = root
-            .titled(
-                &format!(
-                    "Fast estimator on the chip's streaming code: {} unseen {} s runs (joints A, B, C × {} clearances)",
-                    runs.len(),
-                    FAST_DURATION,
-                    FAST_CLEARANCES.len()
-                ),
-                (FONT, 17),
-            )
-            .map_err(plot_error)?;
-        let (panels, legend) = root.split_horizontally(FAST_SIZE.0 - FAST_LEGEND_WIDTH);
-        let (top, bottom) = panels.split_vertically(panels.dim_in_pixel().1 / 2);
-        fast_panel(
-            &top,
-            "Running estimate after each window, with the release stage (what the chip reports)",
-            runs,
-            |f, e| f.error(e),
-            true,
-        )?;
-        fast_panel(
-            &bottom,
-            "Window features only (the true joint's regression, before the release stage)",
-            runs,
-            |f, e| Some(f.features_error(e)),
-            false,
-        )?;
-        fast_legend(&legend, runs)?;
-        root.present().map_err(plot_error)?;
-    }
+    let title = format!(
+        "Fast estimator on the chip's streaming code: {} unseen {} s runs (joints A, B, C × {} clearances)",
+        runs.len(),
+        FAST_DURATION,
+        FAST_CLEARANCES.len()
+    );
+    let running = fast_panel(
+        "Running estimate after each window, with the release stage (what the chip reports)",
+        runs,
+        |f, e| f.error(e),
+        true,
+    );
+    let features = fast_panel(
+        "Window features only (the true joint's regression, before the release stage)",
+        runs,
+        |f, e| Some(f.features_error(e)),
+        false,
+    );
     let label = format!(
         "Relative clearance error against time of the fast estimator's running estimate on {} runs, with and without its release stage",
         runs.len()
     );
-    Ok(svg.replacen("<svg ", &format!("<svg role=\"img\" aria-label=\"{label}\" "), 1))
+    Figure::new(&label, FAST_SIZE, vec![running, features]).titled(&title).with_legend(fast_legend(runs)).svg()
 }
 
 /// The legend column of the `fast` figure: one entry per run with its final error, then the
 /// band and the marker conventions.
-fn fast_legend<DB: DrawingBackend>(
-    area: &DrawingArea<DB, plotters::coord::Shift>,
-    runs: &[FastRun],
-) -> anyhow::Result<()> {
-    let text = |s: &str, x: i32, y: i32, size: f64| {
-        area.draw(&Text::new(s.to_string(), (x, y), (FONT, size).into_font().color(&TRUTH_COLOUR))).map_err(plot_error)
-    };
-    let mut y = 52;
-    text("run: final error", 6, y, 14.0)?;
-    text("(features only)", 6, y + 16, 12.0)?;
-    y += 42;
+fn fast_legend(runs: &[FastRun]) -> LegendColumn {
+    let mut entries = vec![Entry::heading(&["run: final error", "(features only)"])];
     for f in runs {
         let (j, k) = (f.joint(), f.clearance_index());
         let colour = fast_colour(j, k);
-        area.draw(&PathElement::new([(6, y), (30, y)], colour.stroke_width(2))).map_err(plot_error)?;
-        draw_markers(area, &[((18, y), true)], k, colour)?;
         let (err, feat) =
             f.last().map_or((f64::NAN, f64::NAN), |e| (f.error(e).unwrap_or(-100.0), f.features_error(e)));
-        text(&format!("{}: {err:+.1} %", f.name()), 38, y - 8, 13.0)?;
-        text(&format!("({feat:+.1} %)"), 38, y + 7, 11.0)?;
-        y += 36;
+        let key = Key::LineMarker(Stroke::solid(colour, 2), fast_marker(k, colour));
+        entries.push(Entry::new(key, &[&format!("{}: {err:+.1} %", f.name()), &format!("({feat:+.1} %)")]));
     }
-    y += 8;
-    area.draw(&Rectangle::new([(6, y - 6), (30, y + 6)], RGBColor(236, 236, 236).filled())).map_err(plot_error)?;
-    area.draw(&DashedPathElement::new([(6, y - 6), (30, y - 6)], 4, 3, BAND_COLOUR.stroke_width(1)))
-        .map_err(plot_error)?;
-    area.draw(&DashedPathElement::new([(6, y + 6), (30, y + 6)], 4, 3, BAND_COLOUR.stroke_width(1)))
-        .map_err(plot_error)?;
-    text(&format!("±{:.0} %", FAST_BAND * 100.0), 38, y - 7, 13.0)?;
-    y += 26;
-    draw_markers(area, &[((18, y), false)], 0, BAND_COLOUR)?;
-    text(&format!("beyond ±{FAST_CLIP:.0} %,"), 38, y - 8, 12.0)?;
-    text("drawn at the edge", 38, y + 6, 12.0)?;
-    y += 30;
-    area.draw(&Circle::new((18, y), 7, BAND_COLOUR.stroke_width(1))).map_err(plot_error)?;
-    text("no release law accepted:", 38, y - 8, 12.0)?;
-    text("window features' value", 38, y + 6, 12.0)?;
-    y += 30;
+    let b = band(String::new(), 0.0, FAST_BAND * 100.0);
+    entries.push(Entry::new(Key::Band(b.fill, b.edge), &[&format!("±{:.0} %", FAST_BAND * 100.0)]));
+    let beyond = fast_marker(0, BAND_COLOUR).hollow();
+    entries.push(Entry::new(Key::Marker(beyond), &[&format!("beyond ±{FAST_CLIP:.0} %:"), "drawn hollow at the edge"]));
+    entries.push(Entry::new(Key::Marker(ring()), &["no release law:", "window features' value"]));
     if runs.iter().any(|f| f.windows.iter().any(|w| w.estimate.joint != f.joint())) {
-        area.draw(&Cross::new((18, y), 5, BAND_COLOUR.stroke_width(2))).map_err(plot_error)?;
-        text("another joint named", 38, y - 7, 12.0)?;
-        y += 30;
+        entries.push(Entry::new(Key::Marker(Marker::new(Shape::Cross, 5, BAND_COLOUR)), &["another joint named"]));
     }
     for (k, c) in FAST_CLEARANCES.iter().enumerate() {
-        draw_markers(area, &[((18, y), true)], k, BAND_COLOUR)?;
-        text(&format!("{} mm", tick(&(c * 1e3))), 38, y - 7, 12.0)?;
-        y += 18;
+        entries.push(Entry::new(Key::Marker(fast_marker(k, BAND_COLOUR)), &[&format!("{} mm", tick(c * 1e3))]));
     }
-    Ok(())
+    LegendColumn { width: FAST_LEGEND_WIDTH, entries }
 }
 
 /// The `fast` figure: simulate the runs, run the streaming and whole-recording estimators,
