@@ -189,7 +189,7 @@ mod tests {
                 location: "n5_x".into(),
                 value: 1.05,
                 unit: "1".into(),
-                detail: Default::default(),
+                detail: crate::residual_loop::search::EffectDetail { onset_s: Some(2.4), ..Default::default() },
                 explains: vec![14.0],
                 delta_log_likelihood: 100.0,
                 bic_penalty: 4.7,
@@ -229,6 +229,7 @@ mod tests {
         assert!(html.contains(">\n1x &amp; &lt;friends&gt;\n</text>"), "the peak's class labels its marker");
         assert!(html.contains("<td>a &quot;line&quot; &lt;here&gt;</td>"));
         assert!(html.contains("<td class=\"num\">1.050 (+5.0 %)</td>"));
+        assert!(html.contains("from 2.400 s"), "a change-point effect shows its onset");
         assert!(html.contains("<td class=\"num\">2.000</td><td class=\"num better\">1.000</td>"));
         assert!(!html.contains("<script") && !html.contains("src=") && !html.contains("href="));
     }
