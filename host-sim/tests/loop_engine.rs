@@ -215,7 +215,7 @@ fn toy_loop(
     let text = std::fs::read_to_string(&request.config)?;
     let cfg: toml::Table = text.parse()?;
     anyhow::ensure!(cfg.get("frequency_hz").and_then(|v| v.as_float()) == Some(FREQ_HZ), "a 20 Hz toy only");
-    let data = edgekf_sim::cli::registry::read_data(&request.data, &["q"], RATE)?;
+    let data = edgekf_sim::cli::registry::read_data(&request.data, &["q"], RATE, &Default::default())?;
     let column = |name: &str| data.column(name).map(<[f64]>::to_vec).ok_or_else(|| anyhow::anyhow!("no {name}"));
     let sys = Oscillator { t: data.t.clone(), y: column("q")?, truth: column("truth_q")? };
     search(&sys, &request.options)

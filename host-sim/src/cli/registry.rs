@@ -52,11 +52,31 @@ pub fn dispatch<C: FromArgMatches>(m: &ArgMatches, run: fn(C) -> Result<()>) -> 
     run(C::from_arg_matches(m).map_err(|e| anyhow::anyhow!("{e}"))?)
 }
 
-/// Reads `path` as a data file whose channels are `known` (notices to standard error) and
-/// checks that it is sampled at `rate` Hz (within 1 %).
-pub fn read_data(path: &Path, known: &[&str], rate: f64) -> Result<crate::io::data::DataFile> {
+/// Reads `path` as a data file whose channels are `known` (notices to standard error), checks
+/// that it is sampled at `rate` Hz (within 1 %) and puts it on one timeline
+/// ([`crate::io::timeline`]): lost samples become missing ones. The loop needs one stretch, so a
+/// gap too long to bridge is an error.
+pub fn read_data(
+    path: &Path,
+    known: &[&str],
+    rate: f64,
+    timeline: &crate::io::timeline::TimelineOptions,
+) -> Result<crate::io::data::DataFile> {
+    use crate::io::timeline::bridge;
     let (file, notes) = crate::io::data::read(path, known)?;
     eprintln!("{}: {notes}", path.display());
+    let (file, timeline) = bridge(&file, &notes.timing, timeline);
+    for n in timeline.notices() {
+        eprintln!("notice: {n}");
+    }
+    if let Some(r) = timeline.restarts.first() {
+        anyhow::bail!(
+            "{}: a {:.3} s gap before t = {:.6} s is too long to bridge (timeline.max_gap_s); close the loop on each stretch",
+            path.display(),
+            r.gap_s,
+            r.t
+        );
+    }
     if (notes.timing.sample_rate - rate).abs() > 0.01 * rate {
         anyhow::bail!(
             "{}: sampled at {:.3} Hz, the configuration says {rate} Hz",

@@ -6,12 +6,14 @@ use serde::de::DeserializeOwned;
 
 /// A TOML text that does not parse into the expected configuration.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("line {line}, column {column}: {message}")]
+#[error("line {line}, column {column} (`{text}`): {message}")]
 pub struct TomlError {
     /// 1-based line of the problem.
     pub line: usize,
     /// 1-based column (in characters).
     pub column: usize,
+    /// That line of the file (trimmed, at most 60 characters): it names the key.
+    pub text: String,
     /// What is wrong, one line.
     pub message: String,
 }
@@ -25,6 +27,7 @@ pub struct TomlError {
 /// struct Sensor { rate: f64 }
 /// let e = parse_toml::<Sensor>("# a sensor\nrate = \"fast\"\n").unwrap_err();
 /// assert_eq!((e.line, e.column), (2, 8));
+/// assert_eq!(e.to_string(), "line 2, column 8 (`rate = \"fast\"`): invalid type: string \"fast\", expected f64");
 /// assert!(!e.to_string().contains('\n'));
 /// assert_eq!(parse_toml::<Sensor>("rate = 100.0").unwrap().rate, 100.0);
 /// ```
@@ -35,6 +38,7 @@ pub fn parse_toml<T: DeserializeOwned>(text: &str) -> Result<T, TomlError> {
         let line = before.matches('\n').count() + 1;
         let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
         let message = e.message().split_whitespace().collect::<Vec<_>>().join(" ");
-        TomlError { line, column, message }
+        let text: String = text.lines().nth(line - 1).unwrap_or("").trim().chars().take(60).collect();
+        TomlError { line, column, text, message }
     })
 }

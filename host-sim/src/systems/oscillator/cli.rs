@@ -110,8 +110,12 @@ pub fn run(command: OscillatorCommand) -> anyhow::Result<()> {
             let s = scenario(config.as_deref())?;
             let (data, report) = data::read(&path, &KNOWN_CHANNELS)?;
             eprintln!("{}: {report}", path.display());
-            let opts =
-                EstimateOptions { settle_s: settle, clip_level: Some(s.sensor.range_m_s2()), ..Default::default() };
+            let opts = EstimateOptions {
+                settle_s: settle,
+                clip_level: Some(s.sensor.range_m_s2()),
+                timeline: s.timeline,
+                ..Default::default()
+            };
             let params = s.estimator_params();
             let (name, est) = match precision {
                 Precision::F64 => ("f64", estimate::run::<f64>(&data, &params, &opts)),
@@ -163,6 +167,6 @@ pub fn close_loop(
     _: &clap::ArgMatches,
 ) -> anyhow::Result<crate::residual_loop::LoopReport> {
     let s = Scenario::load(&request.config)?;
-    let file = crate::cli::registry::read_data(&request.data, &KNOWN_CHANNELS, s.sensor.odr_hz)?;
+    let file = crate::cli::registry::read_data(&request.data, &KNOWN_CHANNELS, s.sensor.odr_hz, &s.timeline)?;
     super::loop_system::close_loop(&s, &file, &request.options)
 }

@@ -4,8 +4,9 @@
 //!
 //! Input handling, all counted in [`InputCounts`]:
 //! * an empty/NaN `ax` cell is a missing sample: the filter predicts across it;
-//! * a gap in the time column (see [`TimingReport`](crate::io::data::TimingReport)) is bridged by
-//!   `round(dt / dt_median) − 1` predict-only steps, so the filter's clock stays on the data's;
+//! * a gap in the time column is bridged by the shared timeline ([`crate::io::timeline`]): its
+//!   lost samples become rows the filter predicts through, and the estimates have a row for each;
+//!   after a gap longer than `max_gap_s` the filter starts again;
 //! * with [`EstimateOptions::clip_level`] set, a reading at or beyond it (a clipped sensor) is
 //!   missing too, rather than a wrong number;
 //! * the `fault_*` columns are instructions for the virtual device of the hardware-in-the-loop
@@ -22,6 +23,7 @@
 //! ```
 
 use crate::io::data::{self, DataError, DataFile};
+use crate::io::timeline::{bridge, TimelineOptions};
 use edgekf::residual::{NisBounds, RunningStats};
 use edgekf::systems::oscillator::{EstimatorCounters, HarmonicForceEstimator, HarmonicForceParams};
 use edgekf::Real;
@@ -41,13 +43,15 @@ pub struct EstimateOptions {
     pub clip_level: Option<f64>,
     /// Largest accepted relative difference between the file's sample rate and the filter's.
     pub rate_tolerance: f64,
+    /// How gaps in the time column are bridged.
+    pub timeline: TimelineOptions,
 }
 
 impl Default for EstimateOptions {
     /// 2 s settling (five decay time constants of the demo mode), no clip level, 1 % rate
     /// tolerance.
     fn default() -> Self {
-        Self { settle_s: 2.0, clip_level: None, rate_tolerance: 0.01 }
+        Self { settle_s: 2.0, clip_level: None, rate_tolerance: 0.01, timeline: TimelineOptions::default() }
     }
 }
 
@@ -58,8 +62,11 @@ pub struct InputCounts {
     pub nan: usize,
     /// Readings at or beyond the clip level.
     pub clipped: usize,
-    /// Predict-only steps inserted for gaps in the time column.
+    /// Predict-only steps for samples lost in gaps of the time column
+    /// ([`bridge`](crate::io::timeline::bridge)).
     pub gap_steps: usize,
+    /// Restarts of the filter after gaps longer than `timeline.max_gap_s`.
+    pub restarts: usize,
 }
 
 /// RMS errors against the truth columns, over `t ≥ from_t` (`None` when the file has no such
@@ -241,8 +248,15 @@ pub fn run<T: Real>(
             params.sample_rate_hz
         );
     }
-    let mut est = HarmonicForceEstimator::<T>::new(params)
-        .map_err(|e| anyhow::anyhow!("cannot build the harmonic-force estimator: {e:?}"))?;
+    let (bridged, timeline) = bridge(data, &timing, &opts.timeline);
+    let data = &bridged;
+    let ax = data.column("ax").unwrap_or_default();
+    let new_estimator = || {
+        HarmonicForceEstimator::<T>::new(params)
+            .map_err(|e| anyhow::anyhow!("cannot build the harmonic-force estimator: {e:?}"))
+    };
+    let mut est = new_estimator()?;
+    let mut counters = EstimatorCounters::default();
 
     let n = data.len();
     let mut out = Estimates {
@@ -264,15 +278,16 @@ pub fn run<T: Real>(
     };
     let from_t = out.error_rms.from_t;
     let (mut innovations, mut nis) = (RunningStats::<f64>::new(), RunningStats::<f64>::new());
-    let mut gaps = timing.gaps.iter().peekable();
     for (k, &a) in ax.iter().enumerate() {
-        if let Some(gap) = gaps.next_if(|g| g.index == k) {
-            for _ in 0..timing.samples_lost_in(gap) {
-                est.step(None);
-                out.input.gap_steps += 1;
-            }
+        if timeline.restarts_at(k) {
+            counters = sum(counters, est.counters());
+            est = new_estimator()?;
+            out.input.restarts += 1;
         }
-        let input = if a.is_nan() {
+        let input = if timeline.is_filled(k) {
+            out.input.gap_steps += 1;
+            None
+        } else if a.is_nan() {
             out.input.nan += 1;
             None
         } else if opts.clip_level.is_some_and(|c| a.abs() >= c) {
@@ -299,7 +314,7 @@ pub fn run<T: Real>(
         out.nis.push(r.nis.map_or(f64::NAN, Real::as_f64));
         out.accepted.push(accepted);
     }
-    out.counters = est.counters();
+    out.counters = sum(counters, est.counters());
     out.innovation_rms = innovations.rms();
     out.nis_mean = nis.mean();
     out.nis_count = nis.count() as usize;
@@ -307,6 +322,14 @@ pub fn run<T: Real>(
         data.column("truth_force_amplitude").and_then(|tr| rms_error(&out.t, &out.force_amplitude, tr, from_t));
     out.error_rms.displacement = data.column("truth_x").and_then(|tr| rms_error(&out.t, &out.displacement, tr, from_t));
     Ok(out)
+}
+
+/// The counters of two runs of the estimator (before and after a restart) together.
+fn sum(a: EstimatorCounters, b: EstimatorCounters) -> EstimatorCounters {
+    let mut filter = a.filter;
+    filter.covariance_resets += b.filter.covariance_resets;
+    filter.refused_updates += b.filter.refused_updates;
+    EstimatorCounters { steps: a.steps + b.steps, missing: a.missing + b.missing, gated: a.gated + b.gated, filter }
 }
 
 /// RMS of `est − truth` over `t ≥ from_t`, skipping NaN truth.

@@ -69,6 +69,9 @@ pub struct RotorConfig {
     /// built-in tuning's.
     #[serde(default)]
     pub filter: FilterConfig,
+    /// How gaps in a recording's time column are bridged (`[timeline]`).
+    #[serde(default)]
+    pub timeline: crate::io::timeline::TimelineOptions,
 }
 
 /// The virtual-sensing filter's noise levels for a machine (`[filter]`), e.g. from `edgekf
@@ -534,6 +537,7 @@ impl RotorConfig {
         let cfg: RotorConfig = crate::io::config::parse_toml(text)
             .map_err(|e| RotorError::Config { origin: None, message: e.to_string() })?;
         cfg.validate()?;
+        cfg.timeline.validate().map_err(|message| RotorError::Config { origin: None, message })?;
         Ok(cfg)
     }
 

@@ -50,6 +50,7 @@ pub mod ukf;
 use super::simulate::CrankRecording;
 use super::Joint;
 use crate::io::data::{self, DataError};
+use crate::io::timeline::{bridge, TimelineOptions};
 use std::path::Path;
 
 /// The measured channel of a recording.
@@ -82,6 +83,14 @@ impl Recording {
         let names = ["crank_alpha", "truth_clearance_A", "truth_clearance_B", "truth_clearance_C"];
         // The data error already names its cause and file.
         let (file, report) = data::read(path, &names).map_err(|e| anyhow::anyhow!("{e}"))?;
+        let (file, timeline) = bridge(&file, &report.timing, &TimelineOptions::default());
+        if let Some(gap) = timeline.filled.first().map(|r| r.start).or(timeline.restarts.first().map(|r| r.row)) {
+            anyhow::bail!(
+                "{}: samples are lost in the time column before t = {:.6} s; the spectra need every sample",
+                path.display(),
+                file.t.get(gap).copied().unwrap_or(f64::NAN)
+            );
+        }
         let alpha =
             file.column("crank_alpha").ok_or_else(|| anyhow::anyhow!("{}: no column `crank_alpha`", path.display()))?;
         if alpha.iter().any(|v| !v.is_finite()) {

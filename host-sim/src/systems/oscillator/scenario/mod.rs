@@ -114,6 +114,8 @@ pub struct Scenario {
     pub filter: FilterTuning,
     /// RK4 sub-steps per output sample of the reference simulation.
     pub substeps: u32,
+    /// How gaps in a recording's time column are bridged (`[timeline]`).
+    pub timeline: crate::io::timeline::TimelineOptions,
 }
 
 impl Default for Scenario {
@@ -127,6 +129,7 @@ impl Default for Scenario {
             faults: vec![],
             filter: FilterTuning::default(),
             substeps: DEFAULT_SUBSTEPS,
+            timeline: Default::default(),
         }
     }
 }
@@ -136,6 +139,7 @@ impl Scenario {
     pub fn from_toml_str(text: &str) -> anyhow::Result<Self> {
         let s: Scenario = crate::io::config::parse_toml(text)?;
         s.validate()?;
+        s.timeline.validate().map_err(anyhow::Error::msg)?;
         Ok(s)
     }
 

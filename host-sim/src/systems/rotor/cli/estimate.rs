@@ -2,6 +2,7 @@
 //! argument parsing lives with the other rotor commands).
 
 use crate::io::data::{self, DataFile};
+use crate::io::timeline::bridge;
 use crate::systems::rotor::estimate::filter::{discrete, run_with, Estimates, FilterPrecision, RunOptions};
 use crate::systems::rotor::estimate::reduce::{reduce, ForceModel, ReducedRotor, Tuning};
 use crate::systems::rotor::{RotorConfig, RotorModel};
@@ -72,14 +73,46 @@ pub fn estimate(config: &Path, data_path: &Path, out: Option<&Path>, options: &E
             report.timing.sample_rate
         );
     }
+    let (file, timeline) = bridge(&file, &report.timing, &model.config().timeline);
+    for n in timeline.notices() {
+        eprintln!("notice: {n}");
+    }
     let precision = if options.f32 { FilterPrecision::F32 } else { FilterPrecision::F64 };
-    let est = run_with(&red, &file, precision, &RunOptions { steady_after: options.steady_after })?;
+    let run_options = RunOptions { steady_after: options.steady_after };
+    let est = run_stretches(&red, &file, &timeline.stretches(file.len()), precision, &run_options)?;
     print_summary(&model, &red, &file, &est, precision);
     if let Some(out) = out {
         write_estimates(out, &est)?;
         println!("wrote {}", out.display());
     }
     Ok(())
+}
+
+/// The filter over each stretch between restarts (a fresh filter each), the estimates
+/// concatenated; the steady-state switch counts from each stretch's start.
+fn run_stretches(
+    red: &ReducedRotor,
+    file: &DataFile,
+    stretches: &[std::ops::Range<usize>],
+    precision: FilterPrecision,
+    options: &RunOptions,
+) -> Result<Estimates> {
+    let mut all: Option<Estimates> = None;
+    for r in stretches {
+        let part = DataFile {
+            names: file.names.clone(),
+            t: file.t[r.clone()].to_vec(),
+            columns: file.columns.iter().map(|c| c[r.clone()].to_vec()).collect(),
+        };
+        let t0 = part.t.first().copied().unwrap_or(0.0) - file.t.first().copied().unwrap_or(0.0);
+        let shifted = RunOptions { steady_after: options.steady_after.map(|s| s + t0) };
+        let est = run_with(red, &part, precision, &shifted)?;
+        match all.as_mut() {
+            None => all = Some(est),
+            Some(a) => a.append(est),
+        }
+    }
+    all.ok_or_else(|| anyhow::anyhow!("no samples to estimate"))
 }
 
 fn print_summary(model: &RotorModel, red: &ReducedRotor, file: &DataFile, est: &Estimates, precision: FilterPrecision) {

@@ -396,7 +396,7 @@ pub fn close_loop(
     let model = RotorModel::from_config(&cfg)?;
     let channels: Vec<String> = cfg.sensors.iter().map(|s| s.channel_name()).collect();
     let known: Vec<&str> = channels.iter().map(String::as_str).collect();
-    let file = crate::cli::registry::read_data(&request.data, &known, cfg.operation.sample_rate)?;
+    let file = crate::cli::registry::read_data(&request.data, &known, cfg.operation.sample_rate, &cfg.timeline)?;
     let rotor = super::loop_system::RotorLoopOptions { speed_band: args.estimate_speed, ..Default::default() };
     super::loop_system::close_loop(&model, &file, &request.options, &rotor)
 }

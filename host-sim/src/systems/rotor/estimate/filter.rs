@@ -47,6 +47,25 @@ pub struct Estimates {
     pub repairs: (u32, u32),
 }
 
+impl Estimates {
+    /// Appends the estimates of the next stretch of the same recording (after a restart).
+    pub fn append(&mut self, next: Estimates) {
+        self.t.extend(next.t);
+        let pairs = [(&mut self.displacement, next.displacement), (&mut self.force, next.force)];
+        for (mine, theirs) in
+            pairs.into_iter().chain([(&mut self.sensor, next.sensor), (&mut self.innovation, next.innovation)])
+        {
+            for (m, t) in mine.iter_mut().zip(theirs) {
+                m.extend(t);
+            }
+        }
+        self.nis.extend(next.nis);
+        self.log_det_s.extend(next.log_det_s);
+        self.missing += next.missing;
+        self.repairs = (self.repairs.0 + next.repairs.0, self.repairs.1 + next.repairs.1);
+    }
+}
+
 fn fixed<const R: usize, const C: usize>(m: &DMatrix<f64>) -> Result<SMatrix<f64, R, C>> {
     if m.nrows() != R || m.ncols() != C {
         bail!("matrix is {}×{}, expected {R}×{C}", m.nrows(), m.ncols());
