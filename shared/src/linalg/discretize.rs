@@ -189,7 +189,10 @@ mod tests {
         // Shapes that do not fit are errors, not panics.
         let rect = DMatrix::<f64>::zeros(3, 2);
         assert_eq!(van_loan_with(&rect, &rect, 1.0, Dyn(6)).unwrap_err(), LinalgError::SizeMismatch);
-        assert_eq!(van_loan_with(&dyn_of(&a), &DMatrix::zeros(2, 2), 1.0, Dyn(6)).unwrap_err(), LinalgError::SizeMismatch);
+        assert_eq!(
+            van_loan_with(&dyn_of(&a), &DMatrix::zeros(2, 2), 1.0, Dyn(6)).unwrap_err(),
+            LinalgError::SizeMismatch
+        );
         assert_eq!(zoh_with(&dyn_of(&a), &DMatrix::zeros(2, 1), 1.0, Dyn(4)).unwrap_err(), LinalgError::SizeMismatch);
         assert!(super::super::solve(&rect, &DMatrix::<f64>::zeros(3, 1)).is_none());
         assert!(super::super::solve(&dyn_of(&a), &DMatrix::<f64>::zeros(2, 1)).is_none());

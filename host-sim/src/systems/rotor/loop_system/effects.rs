@@ -6,13 +6,13 @@
 //! or delay, a component parameter, a mode's frequency), some both. Each says which residual
 //! signatures point to it ([`Effect::signature`]).
 
-use edgekf::linalg::expm;
 pub use crate::residual_loop::optimize::ScalarRange;
 use crate::residual_loop::search::EffectKind;
 use crate::systems::rotor::bearing_geometry::BearingLine;
 use crate::systems::rotor::estimate::ReducedRotor;
 use crate::systems::rotor::{dof, RotorConfig, RotorModel, SensorKind};
 use anyhow::{anyhow, bail, Context, Result};
+use edgekf::linalg::expm;
 use nalgebra::DMatrix;
 
 /// A component of the rotor whose declared parameter may be wrong.
