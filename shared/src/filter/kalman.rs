@@ -642,4 +642,99 @@ mod tests {
         assert_eq!(kf.health().covariance_resets, 1);
         assert_eq!(*kf.covariance(), p0);
     }
+
+    /// One filter, two builds: with dynamic sizes it computes what it computes with fixed ones.
+    /// (At these sizes nalgebra's products take the same path for both, so the bits agree.)
+    #[cfg(feature = "alloc")]
+    #[test]
+    fn dynamic_sizes_run_the_fixed_size_filter() {
+        use crate::filter::{solve_riccati, DKalmanFilter, DLinearModel, DSteadyStateFilter, SteadyStateFilter};
+        use nalgebra::{DMatrix, DVector, Matrix3, Matrix3x2};
+        let dt = 0.01;
+        let fixed = LinearModel {
+            a: Matrix3::new(1.0, dt, 0.0, -0.4 * dt, 0.99, dt, 0.0, 0.0, 1.0),
+            c: Matrix3x2::new(1.0, 0.0, 0.0, 1.0, 0.0, 0.5).transpose(),
+            q: Matrix3::from_diagonal(&nalgebra::Vector3::new(1e-6, 1e-4, 1e-3)),
+            r: Matrix2::new(0.04, 0.0, 0.0, 0.09),
+        };
+        let d = |m: &[f64], r: usize, c: usize| DMatrix::from_column_slice(r, c, m);
+        let dynamic = DLinearModel {
+            a: d(fixed.a.as_slice(), 3, 3),
+            c: d(fixed.c.as_slice(), 2, 3),
+            q: d(fixed.q.as_slice(), 3, 3),
+            r: d(fixed.r.as_slice(), 2, 2),
+        };
+        let p0 = Matrix3::identity() * 2.0;
+        let mut kf = KalmanFilter::new(fixed.clone(), nalgebra::Vector3::zeros(), p0);
+        let mut dkf = DKalmanFilter::try_new(dynamic.clone(), DVector::zeros(3), d(p0.as_slice(), 3, 3)).unwrap();
+        for k in 0..300 {
+            let y = Vector2::new((0.1 * k as f64).sin(), (0.07 * k as f64).cos());
+            kf.predict();
+            dkf.predict();
+            let (a, b) = if k % 3 == 0 {
+                let (a, b) = (
+                    kf.update_sequential(&y).unwrap(),
+                    dkf.update_sequential(&DVector::from_column_slice(y.as_slice())).unwrap(),
+                );
+                (a.residual.as_slice().to_vec(), b.residual.as_slice().to_vec())
+            } else {
+                let (a, b) = (kf.update(&y).unwrap(), dkf.update(&DVector::from_column_slice(y.as_slice())).unwrap());
+                assert_eq!(a.nis.to_bits(), b.nis.to_bits());
+                (a.residual.as_slice().to_vec(), b.residual.as_slice().to_vec())
+            };
+            assert_eq!(a, b, "step {k}");
+        }
+        assert_eq!(kf.covariance().as_slice(), dkf.covariance().as_slice());
+        assert_eq!(kf.state().as_slice(), dkf.state().as_slice());
+
+        let (ss, dss) =
+            (solve_riccati(&fixed, 1e-12, 100_000).unwrap(), solve_riccati(&dynamic, 1e-12, 100_000).unwrap());
+        assert_eq!((ss.gain.as_slice(), ss.iterations), (dss.gain.as_slice(), dss.iterations));
+        let mut f = SteadyStateFilter::<f32, 3, 2>::from_steady_state(&fixed, &ss, nalgebra::Vector3::zeros()).unwrap();
+        let mut df = DSteadyStateFilter::<f32>::from_steady_state(&dynamic, &dss, DVector::zeros(3)).unwrap();
+        let y = Vector2::new(0.5f32, -0.25);
+        f.predict();
+        df.predict();
+        let (a, b) = (f.update(&y).unwrap(), df.update(&DVector::from_column_slice(y.as_slice())).unwrap());
+        assert_eq!((a.0.as_slice(), a.1), (b.0.as_slice(), b.1));
+    }
+
+    /// A dynamic model, state or measurement whose shape does not fit is an error, never a panic.
+    #[cfg(feature = "alloc")]
+    #[test]
+    fn dynamic_shapes_that_disagree_are_refused() {
+        use crate::filter::{solve_riccati, DKalmanFilter, DLinearModel, DSteadyStateFilter, RiccatiError};
+        use nalgebra::{DMatrix, DVector};
+        let good = DLinearModel {
+            a: DMatrix::<f64>::identity(2, 2) * 0.5,
+            c: DMatrix::from_element(1, 2, 1.0),
+            q: DMatrix::identity(2, 2),
+            r: DMatrix::identity(1, 1),
+        };
+        let wide_c = DLinearModel { c: DMatrix::from_element(1, 3, 1.0), ..good.clone() };
+        let p0 = DMatrix::identity(2, 2);
+        assert_eq!(
+            DKalmanFilter::try_new(wide_c.clone(), DVector::zeros(2), p0.clone()).unwrap_err(),
+            FilterError::SizeMismatch
+        );
+        assert_eq!(
+            DKalmanFilter::try_new(good.clone(), DVector::zeros(3), p0.clone()).unwrap_err(),
+            FilterError::SizeMismatch
+        );
+        assert_eq!(
+            DKalmanFilter::try_new(good.clone(), DVector::zeros(2), DMatrix::identity(2, 3)).unwrap_err(),
+            FilterError::SizeMismatch
+        );
+        let mut kf = DKalmanFilter::try_new(good.clone(), DVector::zeros(2), p0).unwrap();
+        assert_eq!(kf.update(&DVector::zeros(2)).unwrap_err(), FilterError::SizeMismatch);
+        assert_eq!(kf.update_sequential(&DVector::zeros(0)).unwrap_err(), FilterError::SizeMismatch);
+        assert!(kf.innovation(&DVector::zeros(3)).is_none());
+        assert_eq!(kf.health().refused_updates, 2);
+        assert_eq!(solve_riccati(&wide_c, 1e-12, 10).unwrap_err(), RiccatiError::SizeMismatch);
+        let ss = solve_riccati(&good, 1e-12, 10_000).unwrap();
+        let bad_x0 = DSteadyStateFilter::<f64>::from_steady_state(&good, &ss, DVector::zeros(1));
+        assert_eq!(bad_x0.unwrap_err(), RiccatiError::SizeMismatch);
+        let mut f = DSteadyStateFilter::<f64>::from_steady_state(&good, &ss, DVector::zeros(2)).unwrap();
+        assert!(f.update(&DVector::zeros(2)).is_none() && f.innovation(&DVector::zeros(2)).is_none());
+    }
 }
