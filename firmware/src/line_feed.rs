@@ -8,6 +8,7 @@
 //! and counted, never silently lost.
 
 use crate::virtual_adxl355::{CsvColumns, CsvError, FeedSample, SampleFeed};
+use edgekf::csv_header::Header;
 
 /// Anything that yields bytes in chunks.
 pub trait ByteSource {
@@ -130,7 +131,7 @@ pub enum FeedError {
     Empty,
     /// The header line was longer than [`MAX_LINE`] or not UTF-8.
     BadHeader,
-    /// The header lacks a required column or has too many.
+    /// The header breaks the header rules or lacks a required column.
     Columns(CsvError),
 }
 
@@ -202,30 +203,21 @@ pub struct ChannelReader<S: ByteSource, const M: usize> {
 }
 
 impl<S: ByteSource, const M: usize> ChannelReader<S, M> {
-    /// Reads the header and locates `names` in it.
+    /// Reads the header and locates `names` in it, by the shared header rules
+    /// ([`edgekf::csv_header`]: `t` first, no repeated names, at most [`MAX_COLUMNS`] columns).
     pub fn new(source: S, names: [&'static str; M]) -> Result<Self, FeedError> {
         let mut reader = LineReader::new(source);
-        let mut index = [u8::MAX; M];
-        let width = match reader.next_line() {
+        let (index, width) = match reader.next_line() {
             None => return Err(FeedError::Empty),
             Some(Err(BadLine)) => return Err(FeedError::BadHeader),
-            Some(Ok(header)) => {
-                let mut width = 0;
-                for (i, field) in header.split(',').enumerate() {
-                    if i >= MAX_COLUMNS {
-                        return Err(FeedError::Columns(CsvError::TooManyColumns));
-                    }
-                    if let Some(k) = names.iter().position(|n| *n == field.trim()) {
-                        index[k] = i as u8;
-                    }
-                    width = i + 1;
-                }
-                width
+            Some(Ok(line)) => {
+                let columns = |e| FeedError::Columns(CsvError::Header(e));
+                let header = Header::parse(line.split(','), MAX_COLUMNS).map_err(columns)?;
+                // Indices are below MAX_COLUMNS (128): they fit a u8.
+                let index = header.find_all(names).map_err(columns)?.map(|i| u8::try_from(i).unwrap_or(u8::MAX));
+                (index, header.width())
             }
         };
-        if let Some(k) = index.iter().position(|&i| i == u8::MAX) {
-            return Err(FeedError::Columns(CsvError::MissingColumn(names[k])));
-        }
         Ok(Self { reader, index, width, ignored: width.saturating_sub(M), bad_lines: 0 })
     }
 
@@ -270,5 +262,78 @@ impl<S: ByteSource, const M: usize> ChannelReader<S, M> {
     /// Lines that did not parse.
     pub fn bad_lines(&self) -> u32 {
         self.bad_lines
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use edgekf::csv_header::{ColumnName, HeaderError};
+
+    fn channels(text: &str) -> Result<ChannelReader<&[u8], 2>, FeedError> {
+        ChannelReader::new(text.as_bytes(), ["n5_x", "n32_x"])
+    }
+
+    fn refused(e: HeaderError) -> Option<FeedError> {
+        Some(FeedError::Columns(CsvError::Header(e)))
+    }
+
+    #[test]
+    fn channel_headers_follow_the_shared_rules() {
+        // A BOM before `t`, spaces around names.
+        let mut r = channels("\u{feff}t, n32_x ,truth_n5_x,n5_x\r\n0,2,9,1\r\n").unwrap();
+        assert_eq!(r.next_values(), Some(Ok([1.0, 2.0])));
+        assert_eq!(r.ignored_columns(), 2);
+        let name = ColumnName::new;
+        // A repeated channel used to be read from its last column; now it is refused, naming both.
+        assert_eq!(
+            channels("t,n5_x,n32_x,n5_x\n0,1,2,3\n").err(),
+            refused(HeaderError::Duplicate { name: name("n5_x"), first: 2, second: 4 })
+        );
+        assert_eq!(channels("t,n5_x\n0,1\n").err(), refused(HeaderError::MissingChannel { name: name("n32_x") }));
+        assert_eq!(
+            channels("n5_x,n32_x,t\n1,2,0\n").err(),
+            refused(HeaderError::FirstColumnNotTime { found: name("n5_x") })
+        );
+        assert_eq!(channels("").err(), Some(FeedError::Empty));
+        let wide: std::string::String = (0..MAX_COLUMNS).map(|i| std::format!(",c{i}")).collect();
+        assert_eq!(
+            channels(&(std::string::String::from("t,n5_x,n32_x") + &wide)).err(),
+            refused(HeaderError::TooManyColumns { max: MAX_COLUMNS })
+        );
+    }
+
+    #[test]
+    fn the_adxl_feed_refuses_a_repeated_axis() {
+        let e = LineFeed::new(&b"t,ax,ay,az,az\n0,1,2,3,4\n"[..]).err();
+        let dup = HeaderError::Duplicate { name: ColumnName::new("az"), first: 4, second: 5 };
+        assert_eq!(e, refused(dup));
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::test_runner::Config { cases: 512, failure_persistence: None, ..Default::default() })]
+
+        /// No header, however broken (any characters, BOMs, empty and repeated names, too many
+        /// columns, invalid UTF-8), makes a reader panic; one it accepts yields its channels.
+        #[test]
+        fn no_header_makes_a_reader_panic(
+            header in proptest::collection::vec(proptest::prop_oneof![
+                proptest::strategy::Just(b"t".to_vec()),
+                proptest::strategy::Just(b"n5_x".to_vec()),
+                proptest::strategy::Just(b"ax".to_vec()),
+                proptest::strategy::Just("\u{feff}".as_bytes().to_vec()),
+                proptest::collection::vec(proptest::num::u8::ANY, 0..6),
+            ], 0..200),
+        ) {
+            let mut line: std::vec::Vec<u8> = header.join(&b","[..]);
+            line.extend_from_slice(b"\n0,1,2\n");
+            if let Ok(mut r) = ChannelReader::new(line.as_slice(), ["n5_x", "t"]) {
+                proptest::prop_assert!(r.next_values().is_some());
+            }
+            let _ = LineFeed::new(line.as_slice());
+            if let Ok(text) = core::str::from_utf8(&line) {
+                let _ = crate::virtual_adxl355::CsvTextFeed::new(text);
+            }
+        }
     }
 }

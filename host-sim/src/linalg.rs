@@ -1,6 +1,14 @@
 //! Dense host linear algebra beyond what [`faer`] offers directly: balancing, the matrix
-//! exponential of large systems (the rotor's ~300 states, the loop's Van Loan blocks), and
-//! solves that report failure instead of producing NaN.
+//! exponential of large systems (the rotor's ~300 states), and solves that report failure
+//! instead of producing NaN.
+//!
+//! This is the reference simulator's own linear algebra, used only by the full finite-element
+//! rotor (`systems::rotor::{simulate, modal, response}` and `loop_system::inject`, which drives
+//! that model). Reduced models, whatever their size, are discretised by the shared core
+//! ([`edgekf::linalg`]: [6/6] Padé, the chip's arithmetic). The two are kept apart on purpose: a
+//! reference must not share code with the reduced model it checks, or a fault in that code would
+//! agree with itself. A different algorithm here (balancing, [13/13] Padé, faer's products) is
+//! what makes the comparison an independent one.
 //!
 //! Why balancing: a rotor's first-order matrix `[[0, I], [−M⁻¹K, −M⁻¹C]]` mixes metres and
 //! metres per second, radians and newtons; its entries span twenty orders of magnitude (the

@@ -173,3 +173,49 @@ fn switching_to_the_steady_state_gain_after_start_up() {
         assert!(sw_rms <= 2.0 * tv_rms + 0.1e-6, "{name}: switched {sw_rms} vs time-varying {tv_rms}");
     }
 }
+
+/// The oracle that ties the two builds of shared's one Kalman filter: at a chip size (20 states
+/// × 4 probes) the dynamic-size filter, which runs every size no build compiles in, gives the
+/// fixed-size filter's innovations, through the time-varying phase and the switch to the
+/// steady-state gain.
+#[test]
+fn the_dynamic_size_filter_gives_the_fixed_size_innovations() {
+    use edgekf_sim::systems::rotor::estimate::filter::run_dynamic;
+    use edgekf_sim::systems::rotor::estimate::{run_with, RunOptions};
+    let model = paper();
+    let rec = model.simulate(&SimOptions { duration: 1.0, seed: 5, ..SimOptions::default() }).unwrap();
+    let mut data = rec.to_data_file();
+    // A missing sample in each phase: both filters must bridge it the same way.
+    let probe = data.names.iter().position(|n| n == "n5_x").unwrap();
+    data.columns[probe][100] = f64::NAN;
+    data.columns[probe][700] = f64::NAN;
+    let red = reduce(&model, model.config().operation.speed, &Tuning::default()).unwrap();
+    assert_eq!((red.states(), red.c.nrows()), (20, 4));
+    let options = RunOptions { steady_after: Some(0.5) };
+    let fixed = run_with(&red, &data, FilterPrecision::F64, &options).unwrap();
+    let dynamic = run_dynamic(&red, &data, options).unwrap();
+    assert_eq!((fixed.missing, dynamic.missing), (2, 2));
+    let mut worst = 0.0f64;
+    for (f, d) in fixed.innovation.iter().zip(&dynamic.innovation) {
+        let scale = f.iter().filter(|v| v.is_finite()).fold(0.0f64, |m, v| m.max(v.abs()));
+        assert!(scale > 0.0);
+        for (a, b) in f.iter().zip(d) {
+            assert_eq!(a.is_nan(), b.is_nan());
+            if a.is_finite() {
+                worst = worst.max((a - b).abs() / scale);
+            }
+        }
+    }
+    let nis_worst = fixed
+        .nis
+        .iter()
+        .zip(&dynamic.nis)
+        .filter(|(a, _)| a.is_finite())
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    eprintln!(
+        "dynamic vs fixed size: innovations within {worst:.1e} of their largest value, NIS within {nis_worst:.1e}"
+    );
+    assert!(worst <= 1e-9, "innovations differ by {worst:e} relative");
+    assert!(nis_worst <= 1e-6, "NIS differs by {nis_worst:e}");
+}

@@ -6,6 +6,7 @@ use std::process::{Command, Output};
 
 const PAPER: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/configs/rotor_paper.toml");
 const PAPER_ACCEL: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/configs/rotor_paper_accel.toml");
+const RIG: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/configs/rotor_rig_bearing.toml");
 
 fn edgekf(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_edgekf")).args(args).env_remove("RUST_BACKTRACE").output().expect("run edgekf")
@@ -151,4 +152,42 @@ fn campbell_and_unbalance_commands() {
     let row = stdout.lines().find(|l| l.split_whitespace().take(2).eq(["5", "x"])).unwrap();
     assert!(row.contains("11.5621") && row.contains("50.29"), "{row}");
     assert!(stdout.contains("largest orbit: node 19"), "{stdout}");
+}
+
+/// The rig of rotor_rig_bearing.toml gives 22 states × 2 accelerometers, a size no build compiles
+/// in: `rotor estimate` runs it with the dynamic-size filter (f64) and finds the disk's motion,
+/// which no sensor measures; `--f32`, the chip's arithmetic, is refused with the chip's sizes.
+#[test]
+fn estimate_runs_a_size_no_build_compiles_in() {
+    let dir = scratch("rig");
+    let (csv, est) = (dir.join("rig.csv"), dir.join("est.csv"));
+    let (csv_s, est_s) = (csv.to_str().unwrap(), est.to_str().unwrap());
+    let out = edgekf(&["rotor", "simulate", "--config", RIG, "--duration", "2", "--out", csv_s, "--seed", "4"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let out = edgekf(&["rotor", "estimate", "--config", RIG, "--data", csv_s, "--out", est_s]);
+    let stdout = text(&out.stdout);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(stdout.contains("22 states"), "{stdout}");
+
+    let (truth, _) = data::read(&csv, &[]).unwrap();
+    let (estimate, _) = data::read(&est, &["n6_x", "n6_y"]).unwrap();
+    for axis in ["x", "y"] {
+        let (e, t) =
+            (estimate.column(&format!("n6_{axis}")).unwrap(), truth.column(&format!("truth_n6_{axis}")).unwrap());
+        let late = |k: &usize| truth.t[*k] >= 1.0;
+        let rms = |f: &dyn Fn(usize) -> f64| {
+            let v: Vec<f64> = (0..t.len()).filter(late).map(f).collect();
+            (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt()
+        };
+        let (error, motion) = (rms(&|k| e[k] - t[k]), rms(&|k| t[k]));
+        eprintln!("rig disk n6_{axis}: RMS error {:.3} µm of {:.3} µm RMS motion", error * 1e6, motion * 1e6);
+        // The disk moves about 3 µm RMS; a broken filter (or none: an estimate of zero) is off
+        // by about as much.
+        assert!(motion > 2e-6 && error < 0.15 * motion, "n6_{axis}: error {error:e} for motion {motion:e}");
+    }
+
+    let out = edgekf(&["rotor", "estimate", "--config", RIG, "--data", csv_s, "--f32"]);
+    let stderr = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("the chip's sizes") && stderr.contains("22 states × 2 sensors"), "{stderr}");
 }

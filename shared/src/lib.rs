@@ -13,6 +13,8 @@
 //!   inputs on structures, synthetic benchmark systems;
 //! * [`systems`]: each system's chip code, one folder per system: the harmonic-force oscillator
 //!   ([`systems::oscillator`]) and the slider-crank's joint clearance ([`systems::crank`]);
+//! * [`csv_header`]: the data contract's header rules (BOM, `t` first, no repeated names), one
+//!   parser for the host's reader and the node's;
 //! * [`export`]: models and steady-state gains written as Rust constants for the firmware;
 //! * [`residual`]: innovation diagnostics cheap enough for the chip: running mean and variance,
 //!   NIS with exact χ² bounds, Ljung–Box whiteness over a window, a Welch innovation spectrum
@@ -33,6 +35,7 @@
 #![deny(missing_docs)]
 #![forbid(unsafe_code)]
 
+pub mod csv_header;
 pub mod export;
 pub mod filter;
 pub mod linalg;

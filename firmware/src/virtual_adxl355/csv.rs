@@ -1,11 +1,15 @@
 //! The CSV sample format shared by the QEMU image and the host tests.
 //!
-//! One header line names the columns; the order is free. Required: `t` (s), `ax`, `ay`, `az`
-//! (m/s²). Optional: `fault_nack` (transactions to NACK, an integer 0..=255) and `fault_stuck`
-//! (0 or 1). Any other column (e.g. the simulator's `truth_*` columns) is ignored, so one file
-//! can carry both the sensor input and the answers the tests check against.
+//! One header line names the columns, under the data contract's header rules
+//! ([`edgekf::csv_header`], the host reader's too): `t` (s) first, then in any order `ax`, `ay`,
+//! `az` (m/s², required), `fault_nack` (transactions to NACK, an integer 0..=255) and
+//! `fault_stuck` (0 or 1), both optional. Any other column (e.g. the simulator's `truth_*`
+//! columns) is ignored, so one file can carry both the sensor input and the answers the tests
+//! check against. A repeated name is refused, as on the host.
 
 use core::fmt;
+
+use edgekf::csv_header::{Header, HeaderError};
 
 use super::feed::FeedSample;
 
@@ -16,24 +20,22 @@ pub const MAX_CSV_COLUMNS: usize = 64;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum CsvError {
-    /// The header lacks this required column.
-    MissingColumn(&'static str),
+    /// The header breaks the header rules or lacks a required column (see
+    /// [`edgekf::csv_header`]).
+    Header(HeaderError),
     /// The field in this column (0-based) is missing, unparsable, NaN or infinite; also
     /// reported for a line with more fields than the header (at the first extra one).
     BadField {
         /// 0-based column index.
         column: u8,
     },
-    /// The header has more than [`MAX_CSV_COLUMNS`] columns.
-    TooManyColumns,
 }
 
 impl fmt::Display for CsvError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            CsvError::MissingColumn(name) => write!(f, "CSV header lacks column `{name}`"),
+            CsvError::Header(e) => write!(f, "CSV header: {e}"),
             CsvError::BadField { column } => write!(f, "bad CSV field in column {column}"),
-            CsvError::TooManyColumns => write!(f, "CSV header has more than {MAX_CSV_COLUMNS} columns"),
         }
     }
 }
@@ -43,18 +45,19 @@ impl core::error::Error for CsvError {}
 /// Where the used columns sit in a CSV file, learned from its header.
 ///
 /// ```
+/// use edgekf::csv_header::{ColumnName, HeaderError};
 /// use edgekf_firmware::virtual_adxl355::{CsvColumns, CsvError};
 /// let cols = CsvColumns::from_header("t,truth_x,ax,ay,az,fault_nack\r").unwrap();
 /// assert_eq!(cols.ignored(), 1);
 /// let s = cols.parse_line("0.5, 7.0, 1.0, -2.0, 9.81, 3\r").unwrap();
 /// assert_eq!((s.accel, s.nack, s.stuck), ([1.0, -2.0, 9.81], 3, false));
 /// assert_eq!(cols.parse_line("0.5,7.0,NaN,-2.0,9.81,0"), Err(CsvError::BadField { column: 2 }));
-/// assert_eq!(CsvColumns::from_header("t,ax,ay").unwrap_err(), CsvError::MissingColumn("az"));
+/// let missing = HeaderError::MissingChannel { name: ColumnName::new("az") };
+/// assert_eq!(CsvColumns::from_header("t,ax,ay").unwrap_err(), CsvError::Header(missing));
 /// ```
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct CsvColumns {
-    t: u8,
     accel: [u8; 3],
     fault_nack: Option<u8>,
     fault_stuck: Option<u8>,
@@ -73,49 +76,22 @@ enum Role {
 }
 
 impl CsvColumns {
-    /// Learns the layout from the header line. Names are matched exactly after trimming
-    /// whitespace (and a UTF-8 byte-order mark); if a name repeats, the first one is used and
-    /// the others are ignored.
+    /// Learns the layout from the header line, by the shared header rules (a BOM and spaces
+    /// dropped, `t` first, no repeated names) and at most [`MAX_CSV_COLUMNS`] columns.
     pub fn from_header(line: &str) -> Result<Self, CsvError> {
-        let line = line.strip_prefix('\u{feff}').unwrap_or(line);
-        let mut t = None;
-        let mut accel = [None; 3];
-        let mut fault_nack = None;
-        let mut fault_stuck = None;
-        let mut count: u8 = 0;
-        let mut ignored: u8 = 0;
-        for (index, name) in line.split(',').enumerate() {
-            if index >= MAX_CSV_COLUMNS {
-                return Err(CsvError::TooManyColumns);
-            }
-            let index = u8::try_from(index).map_err(|_| CsvError::TooManyColumns)?;
-            count = index.saturating_add(1);
-            let slot = match name.trim() {
-                "t" => &mut t,
-                "ax" => &mut accel[0],
-                "ay" => &mut accel[1],
-                "az" => &mut accel[2],
-                "fault_nack" => &mut fault_nack,
-                "fault_stuck" => &mut fault_stuck,
-                _ => {
-                    ignored = ignored.saturating_add(1);
-                    continue;
-                }
-            };
-            if slot.is_none() {
-                *slot = Some(index);
-            } else {
-                ignored = ignored.saturating_add(1);
-            }
-        }
-        let t = t.ok_or(CsvError::MissingColumn("t"))?;
-        let [ax, ay, az] = accel;
-        let accel = [
-            ax.ok_or(CsvError::MissingColumn("ax"))?,
-            ay.ok_or(CsvError::MissingColumn("ay"))?,
-            az.ok_or(CsvError::MissingColumn("az"))?,
-        ];
-        Ok(CsvColumns { t, accel, fault_nack, fault_stuck, count, ignored })
+        let header = Header::parse(line.split(','), MAX_CSV_COLUMNS).map_err(CsvError::Header)?;
+        let accel = header.find_all(["ax", "ay", "az"]).map_err(CsvError::Header)?;
+        let (fault_nack, fault_stuck) = (header.position("fault_nack"), header.position("fault_stuck"));
+        let used = 1 + accel.len() + usize::from(fault_nack.is_some()) + usize::from(fault_stuck.is_some());
+        // Every index and count is below MAX_CSV_COLUMNS (64), so the conversions are exact.
+        let small = |v: usize| u8::try_from(v).unwrap_or(u8::MAX);
+        Ok(CsvColumns {
+            accel: accel.map(small),
+            fault_nack: fault_nack.map(small),
+            fault_stuck: fault_stuck.map(small),
+            count: small(header.width()),
+            ignored: small(header.width().saturating_sub(used)),
+        })
     }
 
     /// Number of columns in the header.
@@ -134,7 +110,7 @@ impl CsvColumns {
     }
 
     fn role(&self, column: u8) -> Role {
-        if column == self.t {
+        if column == 0 {
             Role::Time
         } else if let Some(axis) = self.accel.iter().position(|&c| c == column) {
             Role::Accel(axis)
@@ -187,7 +163,7 @@ impl CsvColumns {
         if fields < self.count {
             return Err(CsvError::BadField { column: fields });
         }
-        let t = t.ok_or(CsvError::BadField { column: self.t })?;
+        let t = t.ok_or(CsvError::BadField { column: 0 })?;
         for ((slot, value), column) in sample.accel.iter_mut().zip(accel).zip(self.accel) {
             *slot = value.ok_or(CsvError::BadField { column })?;
         }

@@ -7,6 +7,7 @@ use embedded_hal::i2c::{Error as _, ErrorKind, I2c as _, NoAcknowledgeSource};
 
 use super::*;
 use crate::adxl355::{is_nack, Adxl355, Config, Error, I2cInterface, OutputDataRate, RawSample, RAW_MAX, RAW_MIN};
+use edgekf::csv_header::{ColumnName, HeaderError};
 
 type Driver<'a> = Adxl355<I2cInterface<VirtualAdxl355<SliceFeed<'a>>>>;
 
@@ -238,26 +239,43 @@ fn overrun_discards_oldest_and_sets_flag() {
     assert!(device(&adxl).is_exhausted());
 }
 
+fn header_error(e: HeaderError) -> Result<CsvColumns, CsvError> {
+    Err(CsvError::Header(e))
+}
+
 #[test]
 fn csv_header_columns() {
     let cols = CsvColumns::from_header("t,ax,ay,az").unwrap();
     assert_eq!((cols.column_count(), cols.ignored(), cols.has_faults()), (4, 0, false));
+    // A BOM before `t` and spaces around names are dropped (the shared header rules).
     let cols =
-        CsvColumns::from_header("\u{feff}truth_force, t ,az,ay,ax,truth_phase,fault_stuck,fault_nack\r\n").unwrap();
+        CsvColumns::from_header("\u{feff} t ,truth_force,az,ay,ax,truth_phase,fault_stuck,fault_nack\r\n").unwrap();
     assert_eq!((cols.column_count(), cols.ignored(), cols.has_faults()), (8, 2, true));
-    let s = cols.parse_line("1.0, 0.5, 3, 2, 1, 9.9, 1, 4\r").unwrap();
+    let s = cols.parse_line("0.5, 1.0, 3, 2, 1, 9.9, 1, 4\r").unwrap();
     assert_eq!(s, FeedSample { accel: [1.0, 2.0, 3.0], nack: 4, stuck: true });
-    assert_eq!(cols.parse_record("1.0,0.5,3,2,1,9.9,0,").unwrap(), (0.5, FeedSample::new([1.0, 2.0, 3.0])));
+    assert_eq!(cols.parse_record("0.5,1.0,3,2,1,9.9,0,").unwrap(), (0.5, FeedSample::new([1.0, 2.0, 3.0])));
 
-    assert_eq!(CsvColumns::from_header("ax,ay,az"), Err(CsvError::MissingColumn("t")));
-    assert_eq!(CsvColumns::from_header("t,ay,az"), Err(CsvError::MissingColumn("ax")));
-    assert_eq!(CsvColumns::from_header(""), Err(CsvError::MissingColumn("t")));
-    let wide: std::string::String = (0..70).map(|i| std::format!("c{i},")).collect();
-    assert_eq!(CsvColumns::from_header(&(wide + "t,ax,ay,az")), Err(CsvError::TooManyColumns));
-    // A repeated name: the first wins, the second is ignored.
-    let cols = CsvColumns::from_header("t,ax,ay,az,ax").unwrap();
-    assert_eq!(cols.ignored(), 1);
-    assert_eq!(cols.parse_line("0,1,2,3,99").unwrap().accel, [1.0, 2.0, 3.0]);
+    let name = ColumnName::new;
+    assert_eq!(
+        CsvColumns::from_header("ax,ay,az"),
+        header_error(HeaderError::FirstColumnNotTime { found: name("ax") })
+    );
+    // `t` anywhere but first is refused, as on the host.
+    assert_eq!(
+        CsvColumns::from_header("truth_x,t,ax,ay,az"),
+        header_error(HeaderError::FirstColumnNotTime { found: name("truth_x") })
+    );
+    assert_eq!(CsvColumns::from_header("t,ay,az"), header_error(HeaderError::MissingChannel { name: name("ax") }));
+    assert_eq!(CsvColumns::from_header(""), header_error(HeaderError::FirstColumnNotTime { found: name("") }));
+    let wide: std::string::String = (0..70).map(|i| std::format!(",c{i}")).collect();
+    assert_eq!(
+        CsvColumns::from_header(&(std::string::String::from("t,ax,ay,az") + &wide)),
+        header_error(HeaderError::TooManyColumns { max: MAX_CSV_COLUMNS })
+    );
+    // A repeated name is refused with both columns (it used to keep the first one).
+    let dup = CsvColumns::from_header("t,ax,ay,az,ax").unwrap_err();
+    assert_eq!(dup, CsvError::Header(HeaderError::Duplicate { name: name("ax"), first: 2, second: 5 }));
+    assert_eq!(std::format!("{dup}"), "CSV header: duplicate column name `ax`: columns 2 and 5");
 }
 
 #[test]
@@ -304,5 +322,6 @@ fn csv_text_feed_drives_the_device() {
     let dev = adxl.interface().bus();
     assert!(dev.is_exhausted());
     assert_eq!(dev.feed().bad_lines(), 1);
-    assert_eq!(CsvTextFeed::new("\n\nt,ax,ay\n").unwrap_err(), CsvError::MissingColumn("az"));
+    let missing = HeaderError::MissingChannel { name: ColumnName::new("az") };
+    assert_eq!(CsvTextFeed::new("\n\nt,ax,ay\n").unwrap_err(), CsvError::Header(missing));
 }

@@ -2,10 +2,9 @@
 //! time-varying gain until the covariance has converged, then that gain frozen (the model is
 //! time-invariant, so this is the steady-state filter and costs `O(n²)` per sample).
 
-use crate::linalg::expm;
 use anyhow::{anyhow, Result};
-use faer::Mat;
-use nalgebra::{DMatrix, DVector};
+use edgekf::linalg::van_loan_with;
+use nalgebra::{DMatrix, DVector, Dyn};
 
 /// The discrete model.
 #[derive(Debug, Clone)]
@@ -16,21 +15,12 @@ pub struct Discrete {
     pub q: DMatrix<f64>,
 }
 
-/// Exact discretisation of `a`, `qc` over `dt` (Van Loan).
+/// Exact discretisation of `a`, `qc` over `dt` (Van Loan), by the shared core's
+/// [`van_loan_with`]: the reduced model the loop diagnoses is discretised by the same code as
+/// the filters of `rotor estimate` and the node.
 pub fn discretise(a: &DMatrix<f64>, qc: &DMatrix<f64>, dt: f64) -> Result<Discrete> {
-    let n = a.nrows();
-    let m = Mat::<f64>::from_fn(2 * n, 2 * n, |i, j| match (i < n, j < n) {
-        (true, true) => -a[(i, j)] * dt,
-        (true, false) => qc[(i, j - n)] * dt,
-        (false, false) => a[(j - n, i - n)] * dt,
-        (false, true) => 0.0,
-    });
-    let e = expm(m.as_ref()).map_err(|e| anyhow!("cannot discretise: {e}"))?;
-    let ad = DMatrix::from_fn(n, n, |i, j| e[(n + j, n + i)]);
-    let e12 = DMatrix::from_fn(n, n, |i, j| e[(i, n + j)]);
-    let mut q = &ad * e12;
-    q = (&q + q.transpose()) * 0.5;
-    Ok(Discrete { a: ad, q })
+    let (a, q) = van_loan_with(a, qc, dt, Dyn(2 * a.nrows())).map_err(|e| anyhow!("cannot discretise: {e}"))?;
+    Ok(Discrete { a, q })
 }
 
 /// The converged filter: gain, diagonal of `S`, `S⁻¹`, `ln det S`.

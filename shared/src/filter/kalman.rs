@@ -1,39 +1,224 @@
-use crate::linalg::{column, mul_tr, mul_tr_add};
+use crate::linalg::{mul_tr, mul_tr_add};
 use crate::Real;
-use nalgebra::{SMatrix, SVector};
+use nalgebra::allocator::Allocator;
+use nalgebra::{Const, DefaultAllocator, Dim, OMatrix, OVector, SMatrix, SVector, U1};
 
-/// A discrete linear time-invariant model `x' = A x + w`, `y = C x + v` with
-/// `w ~ N(0, Q)`, `v ~ N(0, R)`.
-#[derive(Debug, Clone, PartialEq)]
-pub struct LinearModel<T: Real, const N: usize, const M: usize> {
-    /// State transition `A` (N × N).
-    pub a: SMatrix<T, N, N>,
-    /// Measurement matrix `C` (M × N).
-    pub c: SMatrix<T, M, N>,
-    /// Process-noise covariance `Q` (N × N).
-    pub q: SMatrix<T, N, N>,
-    /// Measurement-noise covariance `R` (M × M).
-    pub r: SMatrix<T, M, M>,
+/// The nalgebra allocations of a filter with `N` states and `M` measurements. Every pair of
+/// fixed sizes has them, and with the `alloc` feature `(Dyn, Dyn)` too; one bound instead of six
+/// on every generic item.
+pub trait FilterAllocator<N: Dim, M: Dim>:
+    Allocator<N, N>
+    + Allocator<N, M>
+    + Allocator<M, N>
+    + Allocator<M, M>
+    + Allocator<N>
+    + Allocator<M>
+    + Allocator<U1, N>
+    + Allocator<U1, M>
+{
 }
 
-impl<T: Real, const N: usize, const M: usize> LinearModel<T, N, M> {
+impl<N: Dim, M: Dim, A> FilterAllocator<N, M> for A where
+    A: Allocator<N, N>
+        + Allocator<N, M>
+        + Allocator<M, N>
+        + Allocator<M, M>
+        + Allocator<N>
+        + Allocator<M>
+        + Allocator<U1, N>
+        + Allocator<U1, M>
+{
+}
+
+/// How a filter with `Self` states and `M` measurements forms the products `aᵀ b` of its
+/// covariance recursion, the only place where fixed and dynamic sizes need different code.
+///
+/// Fixed sizes (`Const<N>`, the chip) use the register-blocked kernels of [`crate::linalg`]
+/// ([`mul_tr`], [`mul_tr_add`]), which need the column length as a compile-time constant to be
+/// fast (see `dot4x2`). Dynamic sizes (`Dyn`, the host, with the `alloc` feature) use plain
+/// loops. Both sum every element in the same order, `k` ascending, so they give the same bits.
+// The allocator bound sits on the trait, not on its methods: a method-level bound would shadow
+// nalgebra's impls inside the fixed-size impl, and `OMatrix<T, Const<N>, Const<N>>` would no
+// longer be known there as the `SMatrix` the kernels take.
+pub trait FilterDim<M: Dim>: Dim
+where
+    DefaultAllocator: FilterAllocator<Self, M>,
+{
+    /// `out = aᵀ b` (`out += aᵀ b` when `add`), for `N × N` operands; only the upper triangle
+    /// (and at most one row below it) when `upper`.
+    fn mul_tr_nn<T: Real>(
+        a: &OMatrix<T, Self, Self>,
+        b: &OMatrix<T, Self, Self>,
+        out: &mut OMatrix<T, Self, Self>,
+        upper: bool,
+        add: bool,
+    );
+
+    /// `out = aᵀ b` for an `N × N` `a` and an `N × M` `b`.
+    fn mul_tr_nm<T: Real>(a: &OMatrix<T, Self, Self>, b: &OMatrix<T, Self, M>, out: &mut OMatrix<T, Self, M>);
+
+    /// `out = aᵀ b` for `N × M` operands.
+    fn mul_tr_mm<T: Real>(a: &OMatrix<T, Self, M>, b: &OMatrix<T, Self, M>, out: &mut OMatrix<T, M, M>);
+}
+
+impl<const N: usize, const M: usize> FilterDim<Const<M>> for Const<N> {
+    #[inline]
+    fn mul_tr_nn<T: Real>(
+        a: &SMatrix<T, N, N>,
+        b: &SMatrix<T, N, N>,
+        out: &mut SMatrix<T, N, N>,
+        upper: bool,
+        add: bool,
+    ) {
+        if add {
+            mul_tr_add(a, b, out, upper);
+        } else {
+            mul_tr(a, b, out, upper);
+        }
+    }
+
+    #[inline]
+    fn mul_tr_nm<T: Real>(a: &SMatrix<T, N, N>, b: &SMatrix<T, N, M>, out: &mut SMatrix<T, N, M>) {
+        mul_tr(a, b, out, false);
+    }
+
+    #[inline]
+    fn mul_tr_mm<T: Real>(a: &SMatrix<T, N, M>, b: &SMatrix<T, N, M>, out: &mut SMatrix<T, M, M>) {
+        mul_tr(a, b, out, false);
+    }
+}
+
+#[cfg(feature = "alloc")]
+impl FilterDim<nalgebra::Dyn> for nalgebra::Dyn {
+    fn mul_tr_nn<T: Real>(
+        a: &nalgebra::DMatrix<T>,
+        b: &nalgebra::DMatrix<T>,
+        out: &mut nalgebra::DMatrix<T>,
+        upper: bool,
+        add: bool,
+    ) {
+        mul_tr_loops(a, b, out, upper, add);
+    }
+
+    fn mul_tr_nm<T: Real>(a: &nalgebra::DMatrix<T>, b: &nalgebra::DMatrix<T>, out: &mut nalgebra::DMatrix<T>) {
+        mul_tr_loops(a, b, out, false, false);
+    }
+
+    fn mul_tr_mm<T: Real>(a: &nalgebra::DMatrix<T>, b: &nalgebra::DMatrix<T>, out: &mut nalgebra::DMatrix<T>) {
+        mul_tr_loops(a, b, out, false, false);
+    }
+}
+
+/// `out (+)= aᵀ b` by plain loops, each element summed with `k` ascending (the order of the
+/// fixed-size kernels); on the upper triangle only when `upper`. Shapes the caller has checked.
+#[cfg(feature = "alloc")]
+fn mul_tr_loops<T: Real>(
+    a: &nalgebra::DMatrix<T>,
+    b: &nalgebra::DMatrix<T>,
+    out: &mut nalgebra::DMatrix<T>,
+    upper: bool,
+    add: bool,
+) {
+    let (k_len, rows, cols) = (a.nrows().min(b.nrows()), a.ncols().min(out.nrows()), b.ncols().min(out.ncols()));
+    for j in 0..cols {
+        let (bj, last) = (b.column(j), if upper { (j + 1).min(rows) } else { rows });
+        for i in 0..last {
+            let ai = a.column(i);
+            let mut s = T::zero();
+            for k in 0..k_len {
+                s += ai[k] * bj[k];
+            }
+            if add {
+                out[(i, j)] += s;
+            } else {
+                out[(i, j)] = s;
+            }
+        }
+    }
+}
+
+/// A discrete linear time-invariant model `x' = A x + w`, `y = C x + v` with
+/// `w ~ N(0, Q)`, `v ~ N(0, R)`, for any nalgebra dimensions; [`LinearModel`] is its fixed-size
+/// form (the chip's), [`DLinearModel`] the dynamic one (the host's, `alloc`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct GenericLinearModel<T: Real, N: Dim, M: Dim>
+where
+    DefaultAllocator: FilterAllocator<N, M>,
+{
+    /// State transition `A` (N × N).
+    pub a: OMatrix<T, N, N>,
+    /// Measurement matrix `C` (M × N).
+    pub c: OMatrix<T, M, N>,
+    /// Process-noise covariance `Q` (N × N).
+    pub q: OMatrix<T, N, N>,
+    /// Measurement-noise covariance `R` (M × M).
+    pub r: OMatrix<T, M, M>,
+}
+
+/// A linear model with `N` states and `M` measurements fixed at compile time.
+pub type LinearModel<T, const N: usize, const M: usize> = GenericLinearModel<T, Const<N>, Const<M>>;
+
+/// A linear model with sizes known at run time (host, `alloc` feature).
+#[cfg(feature = "alloc")]
+pub type DLinearModel<T> = GenericLinearModel<T, nalgebra::Dyn, nalgebra::Dyn>;
+
+impl<T: Real, N: Dim, M: Dim> GenericLinearModel<T, N, M>
+where
+    DefaultAllocator: FilterAllocator<N, M>,
+{
     /// Converts an `f64` model (as built on the host or at start-up) to another precision.
-    pub fn cast<U: Real>(&self) -> LinearModel<U, N, M> {
+    pub fn cast<U: Real>(&self) -> GenericLinearModel<U, N, M> {
         let f = |v: T| U::of_f64(v.as_f64());
-        LinearModel { a: self.a.map(f), c: self.c.map(f), q: self.q.map(f), r: self.r.map(f) }
+        GenericLinearModel { a: self.a.map(f), c: self.c.map(f), q: self.q.map(f), r: self.r.map(f) }
+    }
+
+    /// Whether the four matrices have the shapes of one model (`A`, `Q` square, `C` as wide as
+    /// `A`, `R` as tall as `C`). Always true for fixed sizes; a dynamic model is checked by
+    /// every constructor so that a wrong shape is an error, not a panic.
+    ///
+    /// ```
+    /// # #[cfg(feature = "alloc")] {
+    /// use edgekf::filter::DLinearModel;
+    /// use nalgebra::DMatrix;
+    /// let m = DLinearModel { a: DMatrix::<f64>::identity(2, 2), c: DMatrix::zeros(1, 2), q: DMatrix::zeros(2, 2), r: DMatrix::zeros(1, 1) };
+    /// assert!(m.sizes_agree());
+    /// assert!(!DLinearModel { c: DMatrix::zeros(1, 3), ..m }.sizes_agree());
+    /// # }
+    /// ```
+    pub fn sizes_agree(&self) -> bool {
+        let (n, m) = (self.a.nrows(), self.c.nrows());
+        self.a.ncols() == n && self.c.ncols() == n && self.q.shape() == (n, n) && self.r.shape() == (m, m)
+    }
+
+    /// Number of states `N`.
+    pub fn states(&self) -> usize {
+        self.a.nrows()
+    }
+
+    /// Number of measurements `M`.
+    pub fn measurements(&self) -> usize {
+        self.c.nrows()
     }
 }
 
 /// The innovation of one measurement update: what the model could not predict.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Innovation<T: Real, const M: usize> {
+#[derive(Debug, Clone, PartialEq)]
+pub struct GenericInnovation<T: Real, M: Dim>
+where
+    DefaultAllocator: Allocator<M> + Allocator<M, M>,
+{
     /// `y − C x⁻`.
-    pub residual: SVector<T, M>,
+    pub residual: OVector<T, M>,
     /// Its predicted covariance `S = C P⁻ Cᵀ + R`.
-    pub s: SMatrix<T, M, M>,
+    pub s: OMatrix<T, M, M>,
     /// Normalised innovation squared `rᵀ S⁻¹ r`; χ²(M) distributed when the filter is consistent.
     pub nis: T,
 }
+
+/// The innovation of a filter with `M` measurements fixed at compile time.
+pub type Innovation<T, const M: usize> = GenericInnovation<T, Const<M>>;
+
+impl<T: Real, const M: usize> Copy for GenericInnovation<T, Const<M>> {}
 
 /// Counters of everything the filter had to repair or refuse. All zero in a healthy run.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -57,18 +242,32 @@ pub enum FilterError {
     InnovationCovariance,
     /// A sequential update was asked for with a non-diagonal `R`.
     CorrelatedNoise,
+    /// The shapes of the model, state, covariance or measurement disagree (possible only with
+    /// dynamic sizes).
+    SizeMismatch,
 }
 
 /// What a sequential (scalar-by-scalar) update used.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct SequentialInnovation<T: Real, const M: usize> {
+#[derive(Debug, Clone, PartialEq)]
+pub struct GenericSequentialInnovation<T: Real, M: Dim>
+where
+    DefaultAllocator: Allocator<M>,
+{
     /// `y − C x⁻`, against the prediction before the first scalar update.
-    pub residual: SVector<T, M>,
+    pub residual: OVector<T, M>,
     /// Sum of the scalar NIS values; equals `rᵀ S⁻¹ r` of the joint update.
     pub nis: T,
 }
 
-/// Linear Kalman filter with `N` states and `M` measurements.
+/// What a sequential update used, `M` fixed at compile time.
+pub type SequentialInnovation<T, const M: usize> = GenericSequentialInnovation<T, Const<M>>;
+
+impl<T: Real, const M: usize> Copy for GenericSequentialInnovation<T, Const<M>> {}
+
+/// Linear Kalman filter with `N` states and `M` measurements, for any nalgebra dimensions:
+/// [`KalmanFilter`] (sizes fixed at compile time) on the chip, [`DKalmanFilter`] (sizes known at
+/// run time, `alloc` feature) on the host. One implementation: the host runs a model of any size
+/// with the chip's algorithm, and a fixed size gives the same result either way.
 ///
 /// Covariance update in Joseph form `P = (I − K C) P (I − K C)ᵀ + K R Kᵀ`, which stays symmetric
 /// positive semi-definite under round-off far better than `(I − K C) P`, followed by explicit
@@ -87,39 +286,90 @@ pub struct SequentialInnovation<T: Real, const M: usize> {
 /// assert!((kf.state()[0] - 2.0).abs() < 1e-5);
 /// ```
 #[derive(Debug, Clone)]
-pub struct KalmanFilter<T: Real, const N: usize, const M: usize> {
-    model: LinearModel<T, N, M>,
+pub struct GenericKalmanFilter<T: Real, N: FilterDim<M>, M: Dim>
+where
+    DefaultAllocator: FilterAllocator<N, M>,
+{
+    model: GenericLinearModel<T, N, M>,
     /// `Aᵀ` and `Cᵀ`, kept so that every product below is a dot product of contiguous columns
     /// (nalgebra stores column-major): on the Cortex-M4 that halves the instruction count.
-    at: SMatrix<T, N, N>,
-    ct: SMatrix<T, N, M>,
-    x: SVector<T, N>,
-    p: SMatrix<T, N, N>,
-    x_reset: SVector<T, N>,
-    p_reset: SMatrix<T, N, N>,
+    at: OMatrix<T, N, N>,
+    ct: OMatrix<T, N, M>,
+    x: OVector<T, N>,
+    p: OMatrix<T, N, N>,
+    x_reset: OVector<T, N>,
+    p_reset: OMatrix<T, N, N>,
     health: FilterHealth,
 }
 
+/// A Kalman filter with `N` states and `M` measurements fixed at compile time (the chip's).
+pub type KalmanFilter<T, const N: usize, const M: usize> = GenericKalmanFilter<T, Const<N>, Const<M>>;
+
+/// A Kalman filter with sizes known at run time (host, `alloc` feature).
+///
+/// ```
+/// use edgekf::filter::{DKalmanFilter, DLinearModel};
+/// use nalgebra::{DMatrix, DVector};
+/// let model = DLinearModel {
+///     a: DMatrix::identity(1, 1),
+///     c: DMatrix::identity(1, 1),
+///     q: DMatrix::zeros(1, 1),
+///     r: DMatrix::from_element(1, 1, 1.0f64),
+/// };
+/// let mut kf = DKalmanFilter::try_new(model, DVector::zeros(1), DMatrix::from_element(1, 1, 1e6)).unwrap();
+/// for y in [1.0, 3.0, 2.0] {
+///     kf.predict();
+///     kf.update(&DVector::from_element(1, y)).unwrap();
+/// }
+/// assert!((kf.state()[0] - 2.0).abs() < 1e-5);
+/// // A measurement of the wrong length is refused, not a panic.
+/// assert!(kf.update(&DVector::zeros(2)).is_err());
+/// ```
+#[cfg(feature = "alloc")]
+pub type DKalmanFilter<T> = GenericKalmanFilter<T, nalgebra::Dyn, nalgebra::Dyn>;
+
 impl<T: Real, const N: usize, const M: usize> KalmanFilter<T, N, M> {
     /// A filter starting at `x0` with covariance `p0`; `x0, p0` are also the reset values the
-    /// covariance guard falls back to.
+    /// covariance guard falls back to. (Fixed sizes cannot disagree; for dynamic ones see
+    /// [`GenericKalmanFilter::try_new`].)
     pub fn new(model: LinearModel<T, N, M>, x0: SVector<T, N>, p0: SMatrix<T, N, N>) -> Self {
         let (at, ct) = (model.a.transpose(), model.c.transpose());
         Self { model, at, ct, x: x0, p: p0, x_reset: x0, p_reset: p0, health: FilterHealth::default() }
     }
+}
+
+impl<T: Real, N: FilterDim<M>, M: Dim> GenericKalmanFilter<T, N, M>
+where
+    DefaultAllocator: FilterAllocator<N, M>,
+{
+    /// Like [`KalmanFilter::new`], for any sizes: [`FilterError::SizeMismatch`] if the model,
+    /// `x0` and `p0` do not fit together.
+    pub fn try_new(
+        model: GenericLinearModel<T, N, M>,
+        x0: OVector<T, N>,
+        p0: OMatrix<T, N, N>,
+    ) -> Result<Self, FilterError> {
+        let n = model.states();
+        if !model.sizes_agree() || x0.nrows() != n || p0.shape() != (n, n) {
+            return Err(FilterError::SizeMismatch);
+        }
+        let (at, ct) = (model.a.transpose(), model.c.transpose());
+        let (x_reset, p_reset) = (x0.clone(), p0.clone());
+        Ok(Self { model, at, ct, x: x0, p: p0, x_reset, p_reset, health: FilterHealth::default() })
+    }
 
     /// The model in use.
-    pub fn model(&self) -> &LinearModel<T, N, M> {
+    pub fn model(&self) -> &GenericLinearModel<T, N, M> {
         &self.model
     }
 
     /// Current state estimate.
-    pub fn state(&self) -> &SVector<T, N> {
+    pub fn state(&self) -> &OVector<T, N> {
         &self.x
     }
 
     /// Current state covariance.
-    pub fn covariance(&self) -> &SMatrix<T, N, N> {
+    pub fn covariance(&self) -> &OMatrix<T, N, N> {
         &self.p
     }
 
@@ -133,19 +383,20 @@ impl<T: Real, const N: usize, const M: usize> KalmanFilter<T, N, M> {
     /// `U = P Aᵀ` then `P⁻ = A U + Q` on the upper triangle only, mirrored: `1.5 N³`
     /// multiply-adds instead of `2 N³`, and P comes out exactly symmetric.
     pub fn predict(&mut self) {
-        self.x = self.model.a * self.x;
+        self.x = &self.model.a * &self.x;
         // U = P Aᵀ = Pᵀ Aᵀ (P symmetric), then P⁻ = A U + Q = (Aᵀ)ᵀ U + Q on the upper triangle.
-        let mut u = SMatrix::<T, N, N>::zeros();
-        mul_tr(&self.p, &self.at, &mut u, false);
-        self.p = self.model.q;
-        mul_tr_add(&self.at, &u, &mut self.p, true);
+        let (n, _) = self.p.shape_generic();
+        let mut u = OMatrix::<T, N, N>::zeros_generic(n, n);
+        N::mul_tr_nn(&self.p, &self.at, &mut u, false, false);
+        self.p.copy_from(&self.model.q);
+        N::mul_tr_nn(&self.at, &u, &mut self.p, true, true);
         self.mirror_upper();
         self.guard();
     }
 
     /// Copies the upper triangle of P onto the lower one.
     fn mirror_upper(&mut self) {
-        for j in 0..N {
+        for j in 0..self.p.ncols() {
             for i in 0..j {
                 self.p[(j, i)] = self.p[(i, j)];
             }
@@ -154,56 +405,71 @@ impl<T: Real, const N: usize, const M: usize> KalmanFilter<T, N, M> {
 
     /// Innovation of `y` against the current prediction, without changing the filter.
     ///
-    /// Returns `None` if `S` is not positive definite.
-    pub fn innovation(&self, y: &SVector<T, M>) -> Option<Innovation<T, M>> {
-        let residual = y - self.model.c * self.x;
-        let s = self.model.c * self.p * self.model.c.transpose() + self.model.r;
-        let chol = s.cholesky()?;
+    /// Returns `None` if `S` is not positive definite (or `y` has the wrong length).
+    pub fn innovation(&self, y: &OVector<T, M>) -> Option<GenericInnovation<T, M>> {
+        if y.nrows() != self.model.measurements() {
+            return None;
+        }
+        let residual = y - &self.model.c * &self.x;
+        let s = &self.model.c * &self.p * self.model.c.transpose() + &self.model.r;
+        let chol = s.clone().cholesky()?;
         let white = chol.l().solve_lower_triangular(&residual)?;
-        Some(Innovation { residual, s, nis: white.norm_squared() })
+        Some(GenericInnovation { residual, s, nis: white.norm_squared() })
     }
 
     /// Measurement update with `y`. Returns the innovation it used.
     ///
-    /// A non-finite `y` or a non-positive-definite `S` leaves the filter unchanged, is counted
-    /// in [`FilterHealth::refused_updates`] and is returned as an error.
-    pub fn update(&mut self, y: &SVector<T, M>) -> Result<Innovation<T, M>, FilterError> {
+    /// A non-finite `y` (or one of the wrong length) or a non-positive-definite `S` leaves the
+    /// filter unchanged, is counted in [`FilterHealth::refused_updates`] and is returned as an
+    /// error.
+    pub fn update(&mut self, y: &OVector<T, M>) -> Result<GenericInnovation<T, M>, FilterError> {
+        if y.nrows() != self.model.measurements() {
+            self.health.refused_updates += 1;
+            return Err(FilterError::SizeMismatch);
+        }
         if y.iter().any(|v| !v.is_finite()) {
             self.health.refused_updates += 1;
             return Err(FilterError::NonFiniteMeasurement);
         }
-        let residual = y - self.model.c * self.x;
+        let residual = y - &self.model.c * &self.x;
         // P Cᵀ (N × M) and S = C P Cᵀ + R, as dot products of contiguous columns.
-        let mut pct = SMatrix::<T, N, M>::zeros();
-        mul_tr(&self.p, &self.ct, &mut pct, false);
-        let mut cpct = SMatrix::<T, M, M>::zeros();
-        mul_tr(&self.ct, &pct, &mut cpct, false);
-        let s = self.model.r + (cpct + cpct.transpose()) * T::of_f64(0.5);
-        let Some(chol) = s.cholesky() else {
+        let (n, m) = self.ct.shape_generic();
+        let mut pct = OMatrix::<T, N, M>::zeros_generic(n, m);
+        N::mul_tr_nm(&self.p, &self.ct, &mut pct);
+        let mut cpct = OMatrix::<T, M, M>::zeros_generic(m, m);
+        N::mul_tr_mm(&self.ct, &pct, &mut cpct);
+        let s = &self.model.r + (&cpct + cpct.transpose()) * T::of_f64(0.5);
+        let Some(chol) = s.clone().cholesky() else {
             self.health.refused_updates += 1;
             return Err(FilterError::InnovationCovariance);
         };
         // K = P Cᵀ S⁻¹, computed as (S⁻¹ C P)ᵀ since S and P are symmetric.
         let gain = chol.solve(&pct.transpose()).transpose();
         let nis = chol.l().solve_lower_triangular(&residual).map(|w| w.norm_squared()).unwrap_or_else(T::zero);
-        self.x += gain * residual;
+        self.x += &gain * &residual;
         // Joseph form, expanded: (I − KC) P (I − KC)ᵀ + K R Kᵀ = P − K (PCᵀ)ᵀ − PCᵀ Kᵀ + (K S) Kᵀ.
         // The same first-order insensitivity to rounding in K (the K-terms cancel at the
         // optimum), at O(N² M) instead of O(N³); the upper triangle is computed and mirrored.
-        let ks = gain * s;
-        for m in 0..M {
-            let (kc, gc, pc) = (column(&ks, m), column(&gain, m), column(&pct, m));
-            for j in 0..N {
+        let ks = &gain * &s;
+        let rows = n.value();
+        let (kss, gs, ps) = (ks.as_slice(), gain.as_slice(), pct.as_slice());
+        let p = self.p.as_mut_slice();
+        for col in 0..m.value() {
+            let range = col * rows..(col + 1) * rows;
+            let (Some(kc), Some(gc), Some(pc)) = (kss.get(range.clone()), gs.get(range.clone()), ps.get(range)) else {
+                break;
+            };
+            for j in 0..rows {
                 let (g_j, p_j) = (gc[j], pc[j]);
-                let upper = &mut self.p.as_mut_slice()[j * N..j * N + j + 1];
-                for (((v, k), g), p) in upper.iter_mut().zip(kc).zip(gc).zip(pc) {
-                    *v += *k * g_j - *g * p_j - *p * g_j;
+                let upper = &mut p[j * rows..j * rows + j + 1];
+                for (((v, k), g), pv) in upper.iter_mut().zip(kc).zip(gc).zip(pc) {
+                    *v += *k * g_j - *g * p_j - *pv * g_j;
                 }
             }
         }
         self.mirror_upper();
         self.guard();
-        Ok(Innovation { residual, s, nis })
+        Ok(GenericInnovation { residual, s, nis })
     }
 
     /// Measurement update one channel at a time, for a diagonal `R`: `M` scalar updates of
@@ -212,8 +478,9 @@ impl<T: Real, const N: usize, const M: usize> KalmanFilter<T, N, M> {
     /// corrections, `P − k φᵀ − φ kᵀ + s k kᵀ` with `φ = P hᵀ`, `s = h φ + r`, `k = φ / s`,
     /// which keeps its first-order insensitivity to rounding in the gain.
     ///
-    /// Gives the same result as [`KalmanFilter::update`] up to rounding. A non-finite `y`, a
-    /// non-diagonal `R` or a non-positive `s` leaves the filter unchanged and is counted.
+    /// Gives the same result as [`GenericKalmanFilter::update`] up to rounding. A non-finite `y`
+    /// (or one of the wrong length), a non-diagonal `R` or a non-positive `s` leaves the filter
+    /// unchanged and is counted.
     ///
     /// ```
     /// use edgekf::filter::{KalmanFilter, LinearModel};
@@ -226,32 +493,38 @@ impl<T: Real, const N: usize, const M: usize> KalmanFilter<T, N, M> {
     /// assert!((a.state() - b.state()).abs().max() < 1e-15);
     /// assert!((a.covariance() - b.covariance()).abs().max() < 1e-15);
     /// ```
-    pub fn update_sequential(&mut self, y: &SVector<T, M>) -> Result<SequentialInnovation<T, M>, FilterError> {
+    pub fn update_sequential(&mut self, y: &OVector<T, M>) -> Result<GenericSequentialInnovation<T, M>, FilterError> {
+        let m = self.model.measurements();
+        if y.nrows() != m {
+            self.health.refused_updates += 1;
+            return Err(FilterError::SizeMismatch);
+        }
         if y.iter().any(|v| !v.is_finite()) {
             self.health.refused_updates += 1;
             return Err(FilterError::NonFiniteMeasurement);
         }
         let r = &self.model.r;
-        if (0..M).any(|i| (0..M).any(|j| i != j && r[(i, j)] != T::zero())) {
+        if (0..m).any(|i| (0..m).any(|j| i != j && r[(i, j)] != T::zero())) {
             self.health.refused_updates += 1;
             return Err(FilterError::CorrelatedNoise);
         }
-        let residual = y - self.model.c * self.x;
-        let (mut x, mut p) = (self.x, self.p);
+        let residual = y - &self.model.c * &self.x;
+        let (mut x, mut p) = (self.x.clone(), self.p.clone());
+        let n = x.nrows();
         let mut nis = T::zero();
-        for i in 0..M {
+        for i in 0..m {
             let h = self.model.c.row(i);
-            let phi = p * h.transpose();
-            let s = (h * phi)[(0, 0)] + r[(i, i)];
+            let phi = &p * h.transpose();
+            let s = (h * &phi)[(0, 0)] + r[(i, i)];
             if !s.is_finite() || s <= T::zero() {
                 self.health.refused_updates += 1;
                 return Err(FilterError::InnovationCovariance);
             }
-            let e = y[i] - (h * x)[(0, 0)];
-            let k = phi / s;
-            x += k * e;
-            for a in 0..N {
-                for b in a..N {
+            let e = y[i] - (h * &x)[(0, 0)];
+            let k = &phi / s;
+            x += &k * e;
+            for a in 0..n {
+                for b in a..n {
                     let v = p[(a, b)] - k[a] * phi[b] - phi[a] * k[b] + s * k[a] * k[b];
                     p[(a, b)] = v;
                     p[(b, a)] = v;
@@ -262,7 +535,7 @@ impl<T: Real, const N: usize, const M: usize> KalmanFilter<T, N, M> {
         self.x = x;
         self.p = p;
         self.guard();
-        Ok(SequentialInnovation { residual, nis })
+        Ok(GenericSequentialInnovation { residual, nis })
     }
 
     /// Resets a broken covariance (non-finite, or a non-positive diagonal) or state. The
@@ -273,12 +546,12 @@ impl<T: Real, const N: usize, const M: usize> KalmanFilter<T, N, M> {
         // that is broken in practice anyway.)
         let sum = self.p.iter().fold(T::zero(), |s, v| s + *v) + self.x.iter().fold(T::zero(), |s, v| s + *v);
         // A finite sum means no NaN anywhere, so a plain comparison suffices for the diagonal.
-        let broken = !sum.is_finite() || (0..N).any(|i| self.p[(i, i)] <= T::zero());
+        let broken = !sum.is_finite() || (0..self.p.nrows()).any(|i| self.p[(i, i)] <= T::zero());
         if broken {
             self.health.covariance_resets += 1;
-            self.p = self.p_reset;
+            self.p.copy_from(&self.p_reset);
             if self.x.iter().any(|v| !v.is_finite()) {
-                self.x = self.x_reset;
+                self.x.copy_from(&self.x_reset);
             }
         }
     }
@@ -368,5 +641,100 @@ mod tests {
         kf.predict();
         assert_eq!(kf.health().covariance_resets, 1);
         assert_eq!(*kf.covariance(), p0);
+    }
+
+    /// One filter, two builds: with dynamic sizes it computes what it computes with fixed ones.
+    /// (At these sizes nalgebra's products take the same path for both, so the bits agree.)
+    #[cfg(feature = "alloc")]
+    #[test]
+    fn dynamic_sizes_run_the_fixed_size_filter() {
+        use crate::filter::{solve_riccati, DKalmanFilter, DLinearModel, DSteadyStateFilter, SteadyStateFilter};
+        use nalgebra::{DMatrix, DVector, Matrix3, Matrix3x2};
+        let dt = 0.01;
+        let fixed = LinearModel {
+            a: Matrix3::new(1.0, dt, 0.0, -0.4 * dt, 0.99, dt, 0.0, 0.0, 1.0),
+            c: Matrix3x2::new(1.0, 0.0, 0.0, 1.0, 0.0, 0.5).transpose(),
+            q: Matrix3::from_diagonal(&nalgebra::Vector3::new(1e-6, 1e-4, 1e-3)),
+            r: Matrix2::new(0.04, 0.0, 0.0, 0.09),
+        };
+        let d = |m: &[f64], r: usize, c: usize| DMatrix::from_column_slice(r, c, m);
+        let dynamic = DLinearModel {
+            a: d(fixed.a.as_slice(), 3, 3),
+            c: d(fixed.c.as_slice(), 2, 3),
+            q: d(fixed.q.as_slice(), 3, 3),
+            r: d(fixed.r.as_slice(), 2, 2),
+        };
+        let p0 = Matrix3::identity() * 2.0;
+        let mut kf = KalmanFilter::new(fixed.clone(), nalgebra::Vector3::zeros(), p0);
+        let mut dkf = DKalmanFilter::try_new(dynamic.clone(), DVector::zeros(3), d(p0.as_slice(), 3, 3)).unwrap();
+        for k in 0..300 {
+            let y = Vector2::new((0.1 * k as f64).sin(), (0.07 * k as f64).cos());
+            kf.predict();
+            dkf.predict();
+            let (a, b) = if k % 3 == 0 {
+                let (a, b) = (
+                    kf.update_sequential(&y).unwrap(),
+                    dkf.update_sequential(&DVector::from_column_slice(y.as_slice())).unwrap(),
+                );
+                (a.residual.as_slice().to_vec(), b.residual.as_slice().to_vec())
+            } else {
+                let (a, b) = (kf.update(&y).unwrap(), dkf.update(&DVector::from_column_slice(y.as_slice())).unwrap());
+                assert_eq!(a.nis.to_bits(), b.nis.to_bits());
+                (a.residual.as_slice().to_vec(), b.residual.as_slice().to_vec())
+            };
+            assert_eq!(a, b, "step {k}");
+        }
+        assert_eq!(kf.covariance().as_slice(), dkf.covariance().as_slice());
+        assert_eq!(kf.state().as_slice(), dkf.state().as_slice());
+
+        let (ss, dss) =
+            (solve_riccati(&fixed, 1e-12, 100_000).unwrap(), solve_riccati(&dynamic, 1e-12, 100_000).unwrap());
+        assert_eq!((ss.gain.as_slice(), ss.iterations), (dss.gain.as_slice(), dss.iterations));
+        let mut f = SteadyStateFilter::<f32, 3, 2>::from_steady_state(&fixed, &ss, nalgebra::Vector3::zeros()).unwrap();
+        let mut df = DSteadyStateFilter::<f32>::from_steady_state(&dynamic, &dss, DVector::zeros(3)).unwrap();
+        let y = Vector2::new(0.5f32, -0.25);
+        f.predict();
+        df.predict();
+        let (a, b) = (f.update(&y).unwrap(), df.update(&DVector::from_column_slice(y.as_slice())).unwrap());
+        assert_eq!((a.0.as_slice(), a.1), (b.0.as_slice(), b.1));
+    }
+
+    /// A dynamic model, state or measurement whose shape does not fit is an error, never a panic.
+    #[cfg(feature = "alloc")]
+    #[test]
+    fn dynamic_shapes_that_disagree_are_refused() {
+        use crate::filter::{solve_riccati, DKalmanFilter, DLinearModel, DSteadyStateFilter, RiccatiError};
+        use nalgebra::{DMatrix, DVector};
+        let good = DLinearModel {
+            a: DMatrix::<f64>::identity(2, 2) * 0.5,
+            c: DMatrix::from_element(1, 2, 1.0),
+            q: DMatrix::identity(2, 2),
+            r: DMatrix::identity(1, 1),
+        };
+        let wide_c = DLinearModel { c: DMatrix::from_element(1, 3, 1.0), ..good.clone() };
+        let p0 = DMatrix::identity(2, 2);
+        assert_eq!(
+            DKalmanFilter::try_new(wide_c.clone(), DVector::zeros(2), p0.clone()).unwrap_err(),
+            FilterError::SizeMismatch
+        );
+        assert_eq!(
+            DKalmanFilter::try_new(good.clone(), DVector::zeros(3), p0.clone()).unwrap_err(),
+            FilterError::SizeMismatch
+        );
+        assert_eq!(
+            DKalmanFilter::try_new(good.clone(), DVector::zeros(2), DMatrix::identity(2, 3)).unwrap_err(),
+            FilterError::SizeMismatch
+        );
+        let mut kf = DKalmanFilter::try_new(good.clone(), DVector::zeros(2), p0).unwrap();
+        assert_eq!(kf.update(&DVector::zeros(2)).unwrap_err(), FilterError::SizeMismatch);
+        assert_eq!(kf.update_sequential(&DVector::zeros(0)).unwrap_err(), FilterError::SizeMismatch);
+        assert!(kf.innovation(&DVector::zeros(3)).is_none());
+        assert_eq!(kf.health().refused_updates, 2);
+        assert_eq!(solve_riccati(&wide_c, 1e-12, 10).unwrap_err(), RiccatiError::SizeMismatch);
+        let ss = solve_riccati(&good, 1e-12, 10_000).unwrap();
+        let bad_x0 = DSteadyStateFilter::<f64>::from_steady_state(&good, &ss, DVector::zeros(1));
+        assert_eq!(bad_x0.unwrap_err(), RiccatiError::SizeMismatch);
+        let mut f = DSteadyStateFilter::<f64>::from_steady_state(&good, &ss, DVector::zeros(2)).unwrap();
+        assert!(f.update(&DVector::zeros(2)).is_none() && f.innovation(&DVector::zeros(2)).is_none());
     }
 }

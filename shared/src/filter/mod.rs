@@ -1,4 +1,10 @@
-//! Kalman-family filters with fixed sizes.
+//! Kalman-family filters.
+//!
+//! The linear filters ([`GenericKalmanFilter`], [`GenericSteadyStateFilter`],
+//! [`solve_riccati`]) are generic over nalgebra's dimensions: [`KalmanFilter`] and
+//! [`SteadyStateFilter`] with sizes fixed at compile time on the chip, and with the `alloc`
+//! feature [`DKalmanFilter`] and [`DSteadyStateFilter`] with sizes known at run time on the host,
+//! one implementation for both. The unscented filter has fixed sizes only.
 //!
 //! The filters never panic and never return a silent NaN: every step checks the covariance
 //! (finite, positive diagonal), and a broken one is replaced by the stated reset value and
@@ -11,6 +17,15 @@ mod steady;
 mod ukf;
 
 pub use joint::{JointModel, ParameterEstimate, ParametricModel};
-pub use kalman::{FilterError, FilterHealth, Innovation, KalmanFilter, LinearModel, SequentialInnovation};
-pub use steady::{solve_riccati, RiccatiError, SteadyState, SteadyStateFilter};
+#[cfg(feature = "alloc")]
+pub use kalman::{DKalmanFilter, DLinearModel};
+pub use kalman::{
+    FilterAllocator, FilterDim, FilterError, FilterHealth, GenericInnovation, GenericKalmanFilter, GenericLinearModel,
+    GenericSequentialInnovation, Innovation, KalmanFilter, LinearModel, SequentialInnovation,
+};
+pub use steady::{
+    solve_riccati, GenericSteadyState, GenericSteadyStateFilter, RiccatiError, SteadyState, SteadyStateFilter,
+};
+#[cfg(feature = "alloc")]
+pub use steady::{DSteadyState, DSteadyStateFilter};
 pub use ukf::{MerweSigmaPoints, SigmaWeights, UkfError, UkfModel, UnscentedKalmanFilter};

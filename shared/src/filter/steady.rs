@@ -1,7 +1,7 @@
-use super::kalman::LinearModel;
+use super::kalman::{FilterAllocator, GenericLinearModel};
 use crate::linalg::solve;
 use crate::Real;
-use nalgebra::{SMatrix, SVector};
+use nalgebra::{Const, DefaultAllocator, Dim, OMatrix, OVector, SMatrix, SVector};
 
 /// Why a steady-state gain could not be computed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -12,27 +12,43 @@ pub enum RiccatiError {
     NotConverged,
     /// The innovation covariance was singular or a value was not finite.
     Singular,
+    /// The shapes of the model, gain or state disagree (possible only with dynamic sizes).
+    SizeMismatch,
 }
 
 /// The steady state of a linear Kalman filter: the solution of the discrete algebraic Riccati
-/// equation for the predicted covariance, with its gain and innovation covariance.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct SteadyState<const N: usize, const M: usize> {
+/// equation for the predicted covariance, with its gain and innovation covariance; for any
+/// nalgebra dimensions ([`SteadyState`] fixed, [`DSteadyState`] dynamic).
+#[derive(Debug, Clone, PartialEq)]
+pub struct GenericSteadyState<N: Dim, M: Dim>
+where
+    DefaultAllocator: FilterAllocator<N, M>,
+{
     /// Predicted (a-priori) covariance `P⁻`.
-    pub predicted: SMatrix<f64, N, N>,
+    pub predicted: OMatrix<f64, N, N>,
     /// Filtered (a-posteriori) covariance `P⁺`.
-    pub filtered: SMatrix<f64, N, N>,
+    pub filtered: OMatrix<f64, N, N>,
     /// Gain `K = P⁻ Cᵀ S⁻¹`.
-    pub gain: SMatrix<f64, N, M>,
+    pub gain: OMatrix<f64, N, M>,
     /// Innovation covariance `S = C P⁻ Cᵀ + R`.
-    pub innovation: SMatrix<f64, M, M>,
+    pub innovation: OMatrix<f64, M, M>,
     /// Riccati iterations it took.
     pub iterations: u32,
 }
 
+/// The steady state of a filter with sizes fixed at compile time.
+pub type SteadyState<const N: usize, const M: usize> = GenericSteadyState<Const<N>, Const<M>>;
+
+/// The steady state of a filter with sizes known at run time (host, `alloc` feature).
+#[cfg(feature = "alloc")]
+pub type DSteadyState = GenericSteadyState<nalgebra::Dyn, nalgebra::Dyn>;
+
+impl<const N: usize, const M: usize> Copy for SteadyState<N, M> {}
+
 /// Solves the filter's discrete algebraic Riccati equation by iterating the covariance
 /// recursion in `f64` (Joseph form) from `P = Q` until the gain changes by less than `tol`
-/// relative, or `max_iter` is reached.
+/// relative, or `max_iter` is reached. Any nalgebra dimensions; a dynamic model whose shapes
+/// disagree is [`RiccatiError::SizeMismatch`].
 ///
 /// Uses only arithmetic and comparisons, so the chip (at start-up, in software `f64`) and the
 /// host compute the same bits.
@@ -47,34 +63,42 @@ pub struct SteadyState<const N: usize, const M: usize> {
 /// ```
 // Out of line for the same reason as `expm`: start-up temporaries must not stay in `main`'s frame.
 #[inline(never)]
-pub fn solve_riccati<const N: usize, const M: usize>(
-    model: &LinearModel<f64, N, M>,
+pub fn solve_riccati<N: Dim, M: Dim>(
+    model: &GenericLinearModel<f64, N, M>,
     tol: f64,
     max_iter: u32,
-) -> Result<SteadyState<N, M>, RiccatiError> {
+) -> Result<GenericSteadyState<N, M>, RiccatiError>
+where
+    DefaultAllocator: FilterAllocator<N, M>,
+{
+    if !model.sizes_agree() {
+        return Err(RiccatiError::SizeMismatch);
+    }
     let (a, c, q, r) = (&model.a, &model.c, &model.q, &model.r);
-    let eye = SMatrix::<f64, N, N>::identity();
-    let mut filtered = *q;
-    let mut prev_gain = SMatrix::<f64, N, M>::zeros();
+    let (n, _) = a.shape_generic();
+    let (m, _) = r.shape_generic();
+    let eye = OMatrix::<f64, N, N>::identity_generic(n, n);
+    let mut filtered = q.clone();
+    let mut prev_gain = OMatrix::<f64, N, M>::zeros_generic(n, m);
     for it in 1..=max_iter {
-        let predicted = a * filtered * a.transpose() + q;
-        let pct = predicted * c.transpose();
-        let s = c * pct + r;
+        let predicted = a * &filtered * a.transpose() + q;
+        let pct = &predicted * c.transpose();
+        let s = c * &pct + r;
         let gain = solve(&s, &pct.transpose()).ok_or(RiccatiError::Singular)?.transpose();
-        let i_kc = eye - gain * c;
-        let next = i_kc * predicted * i_kc.transpose() + gain * r * gain.transpose();
-        let next = (next + next.transpose()) * 0.5;
+        let i_kc = &eye - &gain * c;
+        let next = &i_kc * &predicted * i_kc.transpose() + &gain * r * gain.transpose();
+        let next = (&next + next.transpose()) * 0.5;
         if next.iter().any(|v| !v.is_finite()) {
             return Err(RiccatiError::Singular);
         }
         // Both the gain and the covariance must settle: an unobservable unstable mode leaves
         // the gain fixed while its variance grows without bound.
-        let gain_change = (gain - prev_gain).abs().max() / gain.abs().max().max(f64::MIN_POSITIVE);
-        let cov_change = (next - filtered).abs().max() / next.abs().max().max(f64::MIN_POSITIVE);
+        let gain_change = (&gain - &prev_gain).abs().max() / gain.abs().max().max(f64::MIN_POSITIVE);
+        let cov_change = (&next - &filtered).abs().max() / next.abs().max().max(f64::MIN_POSITIVE);
         prev_gain = gain;
         filtered = next;
         if it > 1 && gain_change <= tol && cov_change <= tol {
-            return Ok(SteadyState { predicted, filtered, gain, innovation: s, iterations: it });
+            return Ok(GenericSteadyState { predicted, filtered, gain: prev_gain, innovation: s, iterations: it });
         }
     }
     Err(RiccatiError::NotConverged)
@@ -82,7 +106,8 @@ pub fn solve_riccati<const N: usize, const M: usize>(
 
 /// A Kalman filter frozen at its steady state: `x = A x`, `x += K (y − C x)`. The cheapest
 /// per-sample cost there is (no covariance arithmetic), and numerically trivial in `f32`, where
-/// a full covariance recursion on a stiff model can lose positive definiteness.
+/// a full covariance recursion on a stiff model can lose positive definiteness. Any nalgebra
+/// dimensions ([`SteadyStateFilter`] fixed, [`DSteadyStateFilter`] dynamic).
 ///
 /// The gain is optimal once the time-varying filter would have converged; after a gap in the
 /// data it re-converges at the steady-state rate rather than faster.
@@ -96,51 +121,32 @@ pub fn solve_riccati<const N: usize, const M: usize>(
 /// assert!((f.state()[0] - 3.0).abs() < 1e-3);
 /// ```
 #[derive(Debug, Clone)]
-pub struct SteadyStateFilter<T: Real, const N: usize, const M: usize> {
-    a: SMatrix<T, N, N>,
-    c: SMatrix<T, M, N>,
-    gain: SMatrix<T, N, M>,
-    s_inv: SMatrix<T, M, M>,
-    x: SVector<T, N>,
-    x0: SVector<T, N>,
+pub struct GenericSteadyStateFilter<T: Real, N: Dim, M: Dim>
+where
+    DefaultAllocator: FilterAllocator<N, M>,
+{
+    a: OMatrix<T, N, N>,
+    c: OMatrix<T, M, N>,
+    gain: OMatrix<T, N, M>,
+    s_inv: OMatrix<T, M, M>,
+    x: OVector<T, N>,
+    x0: OVector<T, N>,
     resets: u32,
 }
 
+/// A steady-state filter with sizes fixed at compile time (the chip's).
+pub type SteadyStateFilter<T, const N: usize, const M: usize> = GenericSteadyStateFilter<T, Const<N>, Const<M>>;
+
+/// A steady-state filter with sizes known at run time (host, `alloc` feature).
+#[cfg(feature = "alloc")]
+pub type DSteadyStateFilter<T> = GenericSteadyStateFilter<T, nalgebra::Dyn, nalgebra::Dyn>;
+
 impl<T: Real, const N: usize, const M: usize> SteadyStateFilter<T, N, M> {
-    /// Solves the Riccati equation (tolerance 1e-12, at most 100 000 iterations) and keeps the
-    /// gain in precision `T`.
-    pub fn new(model: &LinearModel<f64, N, M>, x0: SVector<T, N>) -> Result<Self, RiccatiError> {
-        let ss = solve_riccati(model, 1e-12, 100_000)?;
-        Self::from_steady_state(model, &ss, x0)
-    }
-
-    /// Builds the filter from an already computed steady state (for example one solved on the
-    /// host and compiled in as constants).
-    pub fn from_steady_state(
-        model: &LinearModel<f64, N, M>,
-        ss: &SteadyState<N, M>,
-        x0: SVector<T, N>,
-    ) -> Result<Self, RiccatiError> {
-        Self::from_gain(model, &ss.gain, &ss.innovation, x0)
-    }
-
-    /// Builds the filter from a gain `K` and innovation covariance `S` alone (what
-    /// [`crate::export::write_steady_state`] writes).
-    pub fn from_gain(
-        model: &LinearModel<f64, N, M>,
-        gain: &SMatrix<f64, N, M>,
-        innovation: &SMatrix<f64, M, M>,
-        x0: SVector<T, N>,
-    ) -> Result<Self, RiccatiError> {
-        let cast = |v: f64| T::of_f64(v);
-        Self::from_parts(&model.a.map(cast), &model.c.map(cast), &gain.map(cast), innovation, x0)
-    }
-
     /// Builds the filter from `A`, `C` and `K` already in precision `T`, and `S` in `f64`
     /// (inverted here, in `f64`, then rounded to `T`). Gives the same bits as
-    /// [`SteadyStateFilter::from_gain`] on `A`, `C`, `K` rounded with [`Real::of_f64`], without
-    /// an `f64` model: a 20-state `f64` `A` and `Q` are 6.4 KB of stack on a chip that only
-    /// needs the `f32` `A` (for example one built straight from exported constants).
+    /// [`GenericSteadyStateFilter::from_gain`] on `A`, `C`, `K` rounded with [`Real::of_f64`],
+    /// without an `f64` model: a 20-state `f64` `A` and `Q` are 6.4 KB of stack on a chip that
+    /// only needs the `f32` `A` (for example one built straight from exported constants).
     ///
     /// ```
     /// use edgekf::filter::SteadyStateFilter;
@@ -160,41 +166,95 @@ impl<T: Real, const N: usize, const M: usize> SteadyStateFilter<T, N, M> {
         let s_inv = solve(innovation, &SMatrix::<f64, M, M>::identity()).ok_or(RiccatiError::Singular)?;
         Ok(Self { a: *a, c: *c, gain: *gain, s_inv: s_inv.map(T::of_f64), x: x0, x0, resets: 0 })
     }
+}
+
+impl<T: Real, N: Dim, M: Dim> GenericSteadyStateFilter<T, N, M>
+where
+    DefaultAllocator: FilterAllocator<N, M>,
+{
+    /// Solves the Riccati equation (tolerance 1e-12, at most 100 000 iterations) and keeps the
+    /// gain in precision `T`.
+    pub fn new(model: &GenericLinearModel<f64, N, M>, x0: OVector<T, N>) -> Result<Self, RiccatiError> {
+        let ss = solve_riccati(model, 1e-12, 100_000)?;
+        Self::from_steady_state(model, &ss, x0)
+    }
+
+    /// Builds the filter from an already computed steady state (for example one solved on the
+    /// host and compiled in as constants).
+    pub fn from_steady_state(
+        model: &GenericLinearModel<f64, N, M>,
+        ss: &GenericSteadyState<N, M>,
+        x0: OVector<T, N>,
+    ) -> Result<Self, RiccatiError> {
+        Self::from_gain(model, &ss.gain, &ss.innovation, x0)
+    }
+
+    /// Builds the filter from a gain `K` and innovation covariance `S` alone (what
+    /// [`crate::export::write_steady_state`] writes); shapes that do not fit the model are
+    /// [`RiccatiError::SizeMismatch`].
+    pub fn from_gain(
+        model: &GenericLinearModel<f64, N, M>,
+        gain: &OMatrix<f64, N, M>,
+        innovation: &OMatrix<f64, M, M>,
+        x0: OVector<T, N>,
+    ) -> Result<Self, RiccatiError> {
+        let (n, m) = (model.states(), model.measurements());
+        if !model.sizes_agree() || gain.shape() != (n, m) || innovation.shape() != (m, m) || x0.nrows() != n {
+            return Err(RiccatiError::SizeMismatch);
+        }
+        let cast = |v: f64| T::of_f64(v);
+        let (mdim, _) = innovation.shape_generic();
+        let eye = OMatrix::<f64, M, M>::identity_generic(mdim, mdim);
+        let s_inv = solve(innovation, &eye).ok_or(RiccatiError::Singular)?;
+        Ok(Self {
+            a: model.a.map(cast),
+            c: model.c.map(cast),
+            gain: gain.map(cast),
+            s_inv: s_inv.map(cast),
+            x: x0.clone(),
+            x0,
+            resets: 0,
+        })
+    }
 
     /// Time update `x = A x`.
     pub fn predict(&mut self) {
-        self.x = self.a * self.x;
+        self.x = &self.a * &self.x;
         self.guard();
     }
 
-    /// Measurement update; returns the residual and its NIS. A non-finite `y` is not used
-    /// (returns `None`).
-    pub fn update(&mut self, y: &SVector<T, M>) -> Option<(SVector<T, M>, T)> {
-        if y.iter().any(|v| !v.is_finite()) {
+    /// Measurement update; returns the residual and its NIS. A non-finite `y` (or one of the
+    /// wrong length) is not used (returns `None`).
+    pub fn update(&mut self, y: &OVector<T, M>) -> Option<(OVector<T, M>, T)> {
+        if y.nrows() != self.c.nrows() || y.iter().any(|v| !v.is_finite()) {
             return None;
         }
-        let r = y - self.c * self.x;
-        let nis = (r.transpose() * self.s_inv * r)[(0, 0)];
-        self.x += self.gain * r;
+        let r = y - &self.c * &self.x;
+        let nis = (r.transpose() * &self.s_inv * &r)[(0, 0)];
+        self.x += &self.gain * &r;
         self.guard();
         Some((r, nis))
     }
 
-    /// Residual and NIS of `y` without updating.
-    pub fn innovation(&self, y: &SVector<T, M>) -> (SVector<T, M>, T) {
-        let r = y - self.c * self.x;
-        (r, (r.transpose() * self.s_inv * r)[(0, 0)])
+    /// Residual and NIS of `y` without updating (`None` for a `y` of the wrong length).
+    pub fn innovation(&self, y: &OVector<T, M>) -> Option<(OVector<T, M>, T)> {
+        if y.nrows() != self.c.nrows() {
+            return None;
+        }
+        let r = y - &self.c * &self.x;
+        let nis = (r.transpose() * &self.s_inv * &r)[(0, 0)];
+        Some((r, nis))
     }
 
     fn guard(&mut self) {
         if self.x.iter().any(|v| !v.is_finite()) {
-            self.x = self.x0;
+            self.x.copy_from(&self.x0);
             self.resets += 1;
         }
     }
 
     /// Current state.
-    pub fn state(&self) -> &SVector<T, N> {
+    pub fn state(&self) -> &OVector<T, N> {
         &self.x
     }
 
@@ -207,7 +267,7 @@ impl<T: Real, const N: usize, const M: usize> SteadyStateFilter<T, N, M> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::filter::KalmanFilter;
+    use crate::filter::{KalmanFilter, LinearModel};
     use nalgebra::{Matrix1, Matrix2, RowVector2, Vector1, Vector2};
 
     #[test]

@@ -1,6 +1,7 @@
 use super::{expm, LinalgError};
 use crate::Real;
-use nalgebra::SMatrix;
+use nalgebra::allocator::Allocator;
+use nalgebra::{Const, DefaultAllocator, Dim, OMatrix, SMatrix};
 
 /// Exact zero-order-hold discretisation of `ẋ = A x + B u` over a step `dt`:
 /// `A_D = e^{A dt}`, `B_D = ∫₀^dt e^{A s} ds B`, both read from the exponential of the block
@@ -8,7 +9,7 @@ use nalgebra::SMatrix;
 /// modes and random-walk inputs are fine).
 ///
 /// `NM` must equal `N + M` (stable Rust cannot add const generics); otherwise
-/// [`LinalgError::SizeMismatch`].
+/// [`LinalgError::SizeMismatch`]. For any nalgebra dimensions (a `DMatrix`) see [`zoh_with`].
 ///
 /// ```
 /// use edgekf::linalg::zoh;
@@ -23,19 +24,49 @@ pub fn zoh<T: Real, const N: usize, const M: usize, const NM: usize>(
     b: &SMatrix<T, N, M>,
     dt: T,
 ) -> Result<(SMatrix<T, N, N>, SMatrix<T, N, M>), LinalgError> {
-    if NM != N + M {
+    zoh_with(a, b, dt, Const::<NM>)
+}
+
+/// [`zoh`] for any nalgebra dimensions: `block` is the dimension of the `(N + M)`-square block
+/// matrix, `Const::<{N + M}>` for fixed sizes or `Dyn(n + m)` for a `DMatrix` (nalgebra cannot
+/// add two generic dimensions for us). Shapes that do not fit are
+/// [`LinalgError::SizeMismatch`], never a panic.
+///
+/// ```
+/// # #[cfg(feature = "alloc")] {
+/// use edgekf::linalg::zoh_with;
+/// use nalgebra::{DMatrix, Dyn};
+/// let (a, b) = (DMatrix::from_element(1, 1, 0.0), DMatrix::from_element(1, 1, 1.0));
+/// let (ad, bd) = zoh_with(&a, &b, 0.25, Dyn(2)).unwrap();
+/// assert_eq!((ad[(0, 0)], bd[(0, 0)]), (1.0, 0.25));
+/// assert!(zoh_with(&a, &b, 0.25, Dyn(3)).is_err());
+/// # }
+/// ```
+#[allow(clippy::type_complexity)]
+pub fn zoh_with<T: Real, N: Dim, M: Dim, B: Dim>(
+    a: &OMatrix<T, N, N>,
+    b: &OMatrix<T, N, M>,
+    dt: T,
+    block: B,
+) -> Result<(OMatrix<T, N, N>, OMatrix<T, N, M>), LinalgError>
+where
+    DefaultAllocator: Allocator<N, N> + Allocator<N, M> + Allocator<B, B>,
+{
+    let (n, m) = b.shape_generic();
+    if a.nrows() != n.value() || a.ncols() != n.value() || block.value() != n.value() + m.value() {
         return Err(LinalgError::SizeMismatch);
     }
-    let mut block = SMatrix::<T, NM, NM>::zeros();
-    block.fixed_view_mut::<N, N>(0, 0).copy_from(&(a * dt));
-    block.fixed_view_mut::<N, M>(0, N).copy_from(&(b * dt));
-    let e = expm(&block)?;
-    Ok((e.fixed_view::<N, N>(0, 0).into_owned(), e.fixed_view::<N, M>(0, N).into_owned()))
+    let mut big = OMatrix::<T, B, B>::zeros_generic(block, block);
+    big.generic_view_mut((0, 0), (n, n)).copy_from(&(a * dt));
+    big.generic_view_mut((0, n.value()), (n, m)).copy_from(&(b * dt));
+    let e = expm(&big)?;
+    Ok((e.generic_view((0, 0), (n, n)).into_owned(), e.generic_view((0, n.value()), (n, m)).into_owned()))
 }
 
 /// Van Loan's method: the exact discrete process-noise covariance
 /// `Q_D = ∫₀^dt e^{A s} Q_c e^{Aᵀ s} ds` of a continuous white-noise model, together with
-/// `A_D = e^{A dt}`. `N2` must equal `2 N`.
+/// `A_D = e^{A dt}`. `N2` must equal `2 N`. For any nalgebra dimensions (a `DMatrix`) see
+/// [`van_loan_with`].
 ///
 /// The result is symmetrised, since round-off leaves it a few ulps off.
 ///
@@ -53,18 +84,52 @@ pub fn van_loan<T: Real, const N: usize, const N2: usize>(
     qc: &SMatrix<T, N, N>,
     dt: T,
 ) -> Result<(SMatrix<T, N, N>, SMatrix<T, N, N>), LinalgError> {
-    if N2 != 2 * N {
+    van_loan_with(a, qc, dt, Const::<N2>)
+}
+
+/// [`van_loan`] for any nalgebra dimensions: `block` is the dimension of the `2N`-square block
+/// matrix, `Const::<{2 N}>` for fixed sizes or `Dyn(2 n)` for a `DMatrix`. The host's reduced
+/// models of any size discretise here, by the chip's arithmetic. Shapes that do not fit are
+/// [`LinalgError::SizeMismatch`], never a panic.
+///
+/// ```
+/// # #[cfg(feature = "alloc")] {
+/// use edgekf::linalg::van_loan_with;
+/// use nalgebra::{DMatrix, Dyn};
+/// // ẍ = w with E[w w] = 2: Q_D = 2 [[dt³/3, dt²/2], [dt²/2, dt]].
+/// let a = DMatrix::from_row_slice(2, 2, &[0.0, 1.0, 0.0, 0.0]);
+/// let qc = DMatrix::from_row_slice(2, 2, &[0.0, 0.0, 0.0, 2.0]);
+/// let (ad, qd) = van_loan_with(&a, &qc, 0.5f64, Dyn(4)).unwrap();
+/// assert_eq!(ad[(0, 1)], 0.5);
+/// assert!((qd[(0, 0)] - 2.0 * 0.125 / 3.0).abs() < 1e-16 && (qd[(1, 1)] - 1.0).abs() < 1e-15);
+/// assert!(van_loan_with(&a, &qc, 0.5, Dyn(3)).is_err());
+/// # }
+/// ```
+#[allow(clippy::type_complexity)]
+pub fn van_loan_with<T: Real, N: Dim, B: Dim>(
+    a: &OMatrix<T, N, N>,
+    qc: &OMatrix<T, N, N>,
+    dt: T,
+    block: B,
+) -> Result<(OMatrix<T, N, N>, OMatrix<T, N, N>), LinalgError>
+where
+    DefaultAllocator: Allocator<N, N> + Allocator<B, B>,
+{
+    let (n, cols) = a.shape_generic();
+    let square = |m: &OMatrix<T, N, N>| m.nrows() == n.value() && m.ncols() == n.value();
+    if cols.value() != n.value() || !square(qc) || block.value() != 2 * n.value() {
         return Err(LinalgError::SizeMismatch);
     }
-    let mut block = SMatrix::<T, N2, N2>::zeros();
-    block.fixed_view_mut::<N, N>(0, 0).copy_from(&(-a * dt));
-    block.fixed_view_mut::<N, N>(0, N).copy_from(&(qc * dt));
-    block.fixed_view_mut::<N, N>(N, N).copy_from(&(a.transpose() * dt));
-    let e = expm(&block)?;
-    let ad = e.fixed_view::<N, N>(N, N).transpose();
-    let qd = ad * e.fixed_view::<N, N>(0, N);
+    let k = n.value();
+    let mut big = OMatrix::<T, B, B>::zeros_generic(block, block);
+    big.generic_view_mut((0, 0), (n, n)).copy_from(&(-a * dt));
+    big.generic_view_mut((0, k), (n, n)).copy_from(&(qc * dt));
+    big.generic_view_mut((k, k), (n, n)).copy_from(&(a.transpose() * dt));
+    let e = expm(&big)?;
+    let ad = e.generic_view((k, k), (n, n)).transpose();
+    let qd = &ad * e.generic_view((0, k), (n, n));
     let half = T::of_f64(0.5);
-    Ok((ad, (qd + qd.transpose()) * half))
+    Ok((ad, (&qd + qd.transpose()) * half))
 }
 
 #[cfg(test)]
@@ -99,5 +164,37 @@ mod tests {
         let a = Matrix2::<f64>::zeros();
         assert_eq!(van_loan::<f64, 2, 3>(&a, &a, 1.0), Err(LinalgError::SizeMismatch));
         assert_eq!(zoh::<f64, 2, 1, 4>(&a, &Vector2::zeros(), 1.0).unwrap_err(), LinalgError::SizeMismatch);
+    }
+
+    #[cfg(feature = "alloc")]
+    #[test]
+    fn dynamic_sizes_match_the_const_generic_forms() {
+        use nalgebra::{DMatrix, Dyn, Matrix3, Vector3};
+        // A damped mode with a random-walk force: the shape of the host's reduced models.
+        let a = Matrix3::new(0.0, 1.0, 0.0, -400.0, -2.0, 1.0, 0.0, 0.0, 0.0);
+        let qc = Matrix3::from_diagonal(&Vector3::new(0.0, 1e-3, 5.0));
+        let dyn_of = |m: &Matrix3<f64>| DMatrix::from_fn(3, 3, |i, j| m[(i, j)]);
+        let (ad, qd) = van_loan::<f64, 3, 6>(&a, &qc, 1e-3).unwrap();
+        let (ad_d, qd_d) = van_loan_with(&dyn_of(&a), &dyn_of(&qc), 1e-3, Dyn(6)).unwrap();
+        // The same algorithm; nalgebra's `std` products of a 6 × 6 `DMatrix` may sum in another
+        // order, so allow a few ulps.
+        let close = |f: &Matrix3<f64>, d: &DMatrix<f64>| {
+            (0..3).all(|i| (0..3).all(|j| (f[(i, j)] - d[(i, j)]).abs() <= 1e-14 * f.abs().max()))
+        };
+        assert!(close(&ad, &ad_d) && close(&qd, &qd_d), "{ad} {ad_d} {qd} {qd_d}");
+        let b = DMatrix::from_element(3, 1, 1.0);
+        let (_, bd) = zoh_with(&dyn_of(&a), &b, 1e-3, Dyn(4)).unwrap();
+        let (_, bd_f) = zoh::<f64, 3, 1, 4>(&a, &Vector3::repeat(1.0), 1e-3).unwrap();
+        assert!((0..3).all(|i| (bd[(i, 0)] - bd_f[i]).abs() <= 1e-15 * bd_f.abs().max()));
+        // Shapes that do not fit are errors, not panics.
+        let rect = DMatrix::<f64>::zeros(3, 2);
+        assert_eq!(van_loan_with(&rect, &rect, 1.0, Dyn(6)).unwrap_err(), LinalgError::SizeMismatch);
+        assert_eq!(
+            van_loan_with(&dyn_of(&a), &DMatrix::zeros(2, 2), 1.0, Dyn(6)).unwrap_err(),
+            LinalgError::SizeMismatch
+        );
+        assert_eq!(zoh_with(&dyn_of(&a), &DMatrix::zeros(2, 1), 1.0, Dyn(4)).unwrap_err(), LinalgError::SizeMismatch);
+        assert!(super::super::solve(&rect, &DMatrix::<f64>::zeros(3, 1)).is_none());
+        assert!(super::super::solve(&dyn_of(&a), &DMatrix::<f64>::zeros(2, 1)).is_none());
     }
 }

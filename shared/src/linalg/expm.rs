@@ -1,6 +1,7 @@
 use super::LinalgError;
 use crate::Real;
-use nalgebra::SMatrix;
+use nalgebra::allocator::Allocator;
+use nalgebra::{DefaultAllocator, Dim, OMatrix};
 
 /// Degree of the diagonal Padé approximant. With the argument scaled to an ∞-norm of at most
 /// 1/2 the truncation error of the [6/6] approximant is below 1e-16 relative, i.e. at f64
@@ -12,9 +13,13 @@ const NORM_TARGET: f64 = 0.5;
 /// Matrix exponential `e^A` by scaling and squaring with a [6/6] Padé approximant.
 ///
 /// Only arithmetic and comparisons are used, and the scaling is by exact powers of two, so the
-/// result is bit-identical on every IEEE-754 platform. Returns [`LinalgError::NonFinite`] for
-/// NaN or infinite input and [`LinalgError::Singular`] if the Padé denominator cannot be solved
-/// (which does not happen for finite input, but is reported rather than assumed).
+/// result is bit-identical on every IEEE-754 platform. Generic over nalgebra's dimensions: a
+/// fixed-size `SMatrix` on the chip, a `DMatrix` on the host (with the `alloc` feature), by the
+/// same algorithm (nalgebra's `std` products of `DMatrix`es wider than 5 sum in another order,
+/// so those can differ from the fixed-size result in the last bits). Returns [`LinalgError::NonFinite`] for NaN or
+/// infinite input, [`LinalgError::SizeMismatch`] for a non-square `DMatrix`, and
+/// [`LinalgError::Singular`] if the Padé denominator cannot be solved (which does not happen
+/// for finite input, but is reported rather than assumed).
 ///
 /// ```
 /// use edgekf::linalg::expm;
@@ -28,14 +33,22 @@ const NORM_TARGET: f64 = 0.5;
 // Kept out of line: its f64 temporaries would otherwise be inlined into (and stay reserved in)
 // the caller's stack frame on the chip, which for the firmware's `main` is the whole run.
 #[inline(never)]
-pub fn expm<T: Real, const N: usize>(a: &SMatrix<T, N, N>) -> Result<SMatrix<T, N, N>, LinalgError> {
+pub fn expm<T: Real, D: Dim>(a: &OMatrix<T, D, D>) -> Result<OMatrix<T, D, D>, LinalgError>
+where
+    DefaultAllocator: Allocator<D, D>,
+{
+    let (d, cols) = a.shape_generic();
+    if d.value() != cols.value() {
+        return Err(LinalgError::SizeMismatch);
+    }
+    let n = d.value();
     if a.iter().any(|v| !v.is_finite()) {
         return Err(LinalgError::NonFinite);
     }
     // ∞-norm (largest absolute row sum).
     let mut norm = T::zero();
-    for i in 0..N {
-        let row: T = (0..N).fold(T::zero(), |s, j| s + a[(i, j)].abs());
+    for i in 0..n {
+        let row: T = (0..n).fold(T::zero(), |s, j| s + a[(i, j)].abs());
         if row > norm {
             norm = row;
         }
@@ -54,23 +67,23 @@ pub fn expm<T: Real, const N: usize>(a: &SMatrix<T, N, N>) -> Result<SMatrix<T, 
     // Padé coefficients c_k = c_{k-1} (q − k + 1) / (k (2q − k + 1)).
     let q = PADE_DEGREE;
     let mut c = T::one();
-    let mut x_pow = SMatrix::<T, N, N>::identity();
-    let mut num = SMatrix::<T, N, N>::identity();
-    let mut den = SMatrix::<T, N, N>::identity();
+    let mut x_pow = OMatrix::<T, D, D>::identity_generic(d, d);
+    let mut num = x_pow.clone();
+    let mut den = x_pow.clone();
     for k in 1..=q {
         c = c * T::of_f64((q - k + 1) as f64) / T::of_f64((k * (2 * q - k + 1)) as f64);
-        x_pow *= x;
-        let term = x_pow * c;
-        num += term;
+        x_pow = &x_pow * &x;
+        let term = &x_pow * c;
+        num += &term;
         if k % 2 == 0 {
-            den += term;
+            den += &term;
         } else {
-            den -= term;
+            den -= &term;
         }
     }
     let mut e = super::solve(&den, &num).ok_or(LinalgError::Singular)?;
     for _ in 0..squarings {
-        e = e * e;
+        e = &e * &e;
     }
     if e.iter().any(|v| !v.is_finite()) {
         return Err(LinalgError::NonFinite);
@@ -117,5 +130,17 @@ mod tests {
     #[test]
     fn non_finite_input_is_an_error() {
         assert_eq!(expm(&Matrix2::new(f64::NAN, 0.0, 0.0, 0.0)), Err(LinalgError::NonFinite));
+    }
+
+    #[cfg(feature = "alloc")]
+    #[test]
+    fn dynamic_sizes_give_the_fixed_size_bits() {
+        use nalgebra::{DMatrix, Matrix4};
+        let a = Matrix4::from_fn(|i, j| ((3 * i + 7 * j) % 5) as f64 - 1.7 * f64::from(u8::from(i == j))) * 0.9;
+        let fixed = expm(&a).unwrap();
+        let dynamic = expm(&DMatrix::from_fn(4, 4, |i, j| a[(i, j)])).unwrap();
+        assert!(fixed.iter().zip(dynamic.iter()).all(|(f, d)| f.to_bits() == d.to_bits()));
+        assert_eq!(expm(&DMatrix::<f64>::zeros(2, 3)), Err(LinalgError::SizeMismatch));
+        assert_eq!(expm(&DMatrix::<f64>::zeros(0, 0)).map(|e| e.len()), Ok(0));
     }
 }

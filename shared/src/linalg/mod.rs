@@ -4,11 +4,16 @@
 //! These routines use only `+ − × ÷` and comparisons (no `exp`, `log` or `pow` from a maths
 //! library), so they produce identical bits on the Cortex-M4F and on x86-64. That is what lets a
 //! firmware run under QEMU be compared with a host run bit for bit.
+//!
+//! [`expm`], [`solve`], [`zoh_with`] and [`van_loan_with`] are generic over nalgebra's
+//! dimensions: fixed sizes on the chip, and with the `alloc` feature `DMatrix` on the host, so
+//! that every reduced model, of a size compiled in or not, is discretised by this one code.
+//! [`zoh`] and [`van_loan`] are their const-generic forms.
 
 mod discretize;
 mod expm;
 
-pub use discretize::{van_loan, zoh};
+pub use discretize::{van_loan, van_loan_with, zoh, zoh_with};
 pub use expm::expm;
 
 /// Why a linear-algebra routine could not produce a result.
@@ -19,8 +24,8 @@ pub enum LinalgError {
     Singular,
     /// An input held a NaN or an infinity.
     NonFinite,
-    /// The block size passed as a const generic does not match the blocks
-    /// (for example `NM != N + M` in [`zoh`]).
+    /// The sizes do not fit: a block size that does not match the blocks (for example
+    /// `NM != N + M` in [`zoh`]) or, for dynamic sizes, shapes that disagree.
     SizeMismatch,
 }
 

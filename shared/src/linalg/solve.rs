@@ -1,11 +1,13 @@
 use crate::Real;
-use nalgebra::SMatrix;
+use nalgebra::allocator::Allocator;
+use nalgebra::{DefaultAllocator, Dim, OMatrix};
 
 /// Solves `A X = B` by Gaussian elimination with partial pivoting.
 ///
-/// Returns `None` when a pivot is exactly zero or not finite. Used where the system is small and
-/// a factorisation object would only add trait bounds; like the rest of [`crate::linalg`] it uses
-/// only arithmetic and comparisons, so it is bit-reproducible across platforms.
+/// Returns `None` when a pivot is exactly zero or not finite, or (for dynamic sizes) when the
+/// shapes do not fit. Used where the system is small and a factorisation object would only add
+/// trait bounds; like the rest of [`crate::linalg`] it uses only arithmetic and comparisons, so
+/// it is bit-reproducible across platforms, and fixed and dynamic sizes give the same bits.
 ///
 /// ```
 /// use edgekf::linalg::solve;
@@ -13,15 +15,20 @@ use nalgebra::SMatrix;
 /// let x = solve(&Matrix2::new(0.0, 2.0, 4.0, 1.0), &Vector2::new(2.0, 9.0)).unwrap();
 /// assert_eq!(x, Vector2::new(2.0, 1.0));
 /// ```
-pub fn solve<T: Real, const N: usize, const K: usize>(
-    a: &SMatrix<T, N, N>,
-    b: &SMatrix<T, N, K>,
-) -> Option<SMatrix<T, N, K>> {
-    let mut a = *a;
-    let mut x = *b;
-    for col in 0..N {
+pub fn solve<T: Real, D: Dim, K: Dim>(a: &OMatrix<T, D, D>, b: &OMatrix<T, D, K>) -> Option<OMatrix<T, D, K>>
+where
+    DefaultAllocator: Allocator<D, D> + Allocator<D, K>,
+{
+    let n = a.nrows();
+    if a.ncols() != n || b.nrows() != n {
+        return None;
+    }
+    let k_cols = b.ncols();
+    let mut a = a.clone();
+    let mut x = b.clone();
+    for col in 0..n {
         let mut pivot = col;
-        for row in col + 1..N {
+        for row in col + 1..n {
             if a[(row, col)].abs() > a[(pivot, col)].abs() {
                 pivot = row;
             }
@@ -32,25 +39,25 @@ pub fn solve<T: Real, const N: usize, const K: usize>(
         }
         a.swap_rows(col, pivot);
         x.swap_rows(col, pivot);
-        for row in col + 1..N {
+        for row in col + 1..n {
             let f = a[(row, col)] / p;
             if f == T::zero() {
                 continue;
             }
-            for j in col..N {
+            for j in col..n {
                 let v = a[(col, j)];
                 a[(row, j)] -= f * v;
             }
-            for j in 0..K {
+            for j in 0..k_cols {
                 let v = x[(col, j)];
                 x[(row, j)] -= f * v;
             }
         }
     }
-    for col in (0..N).rev() {
-        for j in 0..K {
+    for col in (0..n).rev() {
+        for j in 0..k_cols {
             let mut s = x[(col, j)];
-            for k in col + 1..N {
+            for k in col + 1..n {
                 s -= a[(col, k)] * x[(k, j)];
             }
             x[(col, j)] = s / a[(col, col)];

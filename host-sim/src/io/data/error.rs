@@ -40,35 +40,16 @@ pub enum DataError {
         /// The file.
         path: PathBuf,
     },
-    /// The first column is not the time `t`.
-    #[error("{}:{line}: the first column must be `t` (time in seconds), found `{found}`", path.display())]
-    FirstColumnNotTime {
+    /// The header breaks the contract's header rules ([`edgekf::csv_header`], the same rules
+    /// the node applies): `t` first, no empty or repeated names, every required channel there.
+    #[error("{}:{line}: {error}", path.display())]
+    Header {
         /// The file.
         path: PathBuf,
         /// Line of the header.
         line: u64,
-        /// The first column's name.
-        found: String,
-    },
-    /// A header cell is empty.
-    #[error("{}:{line}: column {column} has an empty name", path.display())]
-    EmptyColumnName {
-        /// The file.
-        path: PathBuf,
-        /// Line of the header.
-        line: u64,
-        /// 1-based column number.
-        column: usize,
-    },
-    /// Two columns share a name.
-    #[error("{}:{line}: duplicate column name `{name}`", path.display())]
-    DuplicateColumn {
-        /// The file.
-        path: PathBuf,
-        /// Line of the header.
-        line: u64,
-        /// The repeated name.
-        name: String,
+        /// Which rule.
+        error: edgekf::csv_header::HeaderError,
     },
     /// A row has a different number of fields than the header.
     #[error("{}:{line}: {found} field(s), but the header has {expected}", path.display())]

@@ -32,6 +32,7 @@ mod timing;
 pub use error::DataError;
 pub use timing::{Gap, TimingReport, GAP_FACTOR, UNIFORM_JITTER};
 
+use edgekf::csv_header::Header;
 use std::fmt::{self, Write as _};
 use std::io::Read;
 use std::path::Path;
@@ -131,12 +132,41 @@ impl fmt::Display for DataReport {
 /// Reads a data file. `known` lists the channels the caller understands; `truth_` columns are
 /// always kept, anything else is dropped and reported.
 pub fn read(path: &Path, known: &[&str]) -> Result<(DataFile, DataReport), DataError> {
+    read_required(path, &[], known)
+}
+
+/// Like [`read`], and the header must hold every channel of `required` (kept like `known`):
+/// a missing one is refused with the header's line rather than found missing later.
+///
+/// ```
+/// use edgekf_sim::io::data::read_required;
+/// use std::path::Path;
+/// let dir = std::env::temp_dir().join(format!("edgekf-doc-req-{}", std::process::id()));
+/// std::fs::create_dir_all(&dir).unwrap();
+/// let path = dir.join("r.csv");
+/// std::fs::write(&path, "# probes\nt,n5_x\n0,1\n0.001,2\n").unwrap();
+/// let e = read_required(&path, &["n5_x", "n5_y"], &[]).unwrap_err();
+/// assert_eq!(e.to_string(), format!("{}:2: no column `n5_y`", path.display()));
+/// assert!(read_required(&path, &["n5_x"], &[]).is_ok());
+/// # std::fs::remove_dir_all(&dir).ok();
+/// ```
+pub fn read_required(path: &Path, required: &[&str], known: &[&str]) -> Result<(DataFile, DataReport), DataError> {
     let file = std::fs::File::open(path).map_err(|source| DataError::Io { path: path.to_owned(), source })?;
-    read_from(std::io::BufReader::new(file), path, known)
+    read_from_required(std::io::BufReader::new(file), path, required, known)
 }
 
 /// Like [`read`], from any reader; `path` is only used in messages.
-pub fn read_from<R: Read>(mut reader: R, path: &Path, known: &[&str]) -> Result<(DataFile, DataReport), DataError> {
+pub fn read_from<R: Read>(reader: R, path: &Path, known: &[&str]) -> Result<(DataFile, DataReport), DataError> {
+    read_from_required(reader, path, &[], known)
+}
+
+/// Like [`read_required`], from any reader; `path` is only used in messages.
+pub fn read_from_required<R: Read>(
+    mut reader: R,
+    path: &Path,
+    required: &[&str],
+    known: &[&str],
+) -> Result<(DataFile, DataReport), DataError> {
     // Read whole, so that line numbers can be counted from the bytes (see `LineIndex`).
     let mut bytes = Vec::new();
     reader.read_to_end(&mut bytes).map_err(|source| DataError::Io { path: path.to_owned(), source })?;
@@ -162,7 +192,7 @@ pub fn read_from<R: Read>(mut reader: R, path: &Path, known: &[&str]) -> Result<
         Some(r) => r.map_err(csv_err)?,
     };
     let header_line = header.position().map_or(1, |p| lines.line_of(p.byte()));
-    let layout = Layout::from_header(&header, header_line, path, known)?;
+    let layout = Layout::from_header(&header, header_line, path, required, known)?;
 
     let mut data = DataFile {
         names: layout.kept.iter().map(|(_, n)| n.clone()).collect(),
@@ -258,30 +288,29 @@ struct Layout {
 }
 
 impl Layout {
-    fn from_header(header: &csv::StringRecord, line: u64, path: &Path, known: &[&str]) -> Result<Self, DataError> {
-        let first = header.get(0).unwrap_or_default();
-        if first != "t" {
-            return Err(DataError::FirstColumnNotTime { path: path.to_owned(), line, found: first.to_owned() });
+    /// The header checked by the contract's rules ([`edgekf::csv_header`], shared with the
+    /// node), then split into kept (`required`, `known`, `truth_`) and ignored columns.
+    fn from_header(
+        header: &csv::StringRecord,
+        line: u64,
+        path: &Path,
+        required: &[&str],
+        known: &[&str],
+    ) -> Result<Self, DataError> {
+        let refused = |error| DataError::Header { path: path.to_owned(), line, error };
+        let checked = Header::parse(header.iter(), usize::MAX).map_err(refused)?;
+        for name in required {
+            checked.find(name).map_err(refused)?;
         }
-        let mut seen = std::collections::HashSet::new();
         let (mut kept, mut ignored) = (Vec::new(), Vec::new());
-        for (i, name) in header.iter().enumerate() {
-            if name.is_empty() {
-                return Err(DataError::EmptyColumnName { path: path.to_owned(), line, column: i + 1 });
-            }
-            if !seen.insert(name) {
-                return Err(DataError::DuplicateColumn { path: path.to_owned(), line, name: name.to_owned() });
-            }
-            if i == 0 {
-                continue;
-            }
-            if known.contains(&name) || name.starts_with(TRUTH_PREFIX) {
+        for (i, name) in checked.names().enumerate().skip(1) {
+            if required.contains(&name) || known.contains(&name) || name.starts_with(TRUTH_PREFIX) {
                 kept.push((i, name.to_owned()));
             } else {
                 ignored.push(name.to_owned());
             }
         }
-        Ok(Self { width: header.len(), kept, ignored })
+        Ok(Self { width: checked.width(), kept, ignored })
     }
 }
 

@@ -102,7 +102,7 @@ fn contract_violations_name_the_file_and_line() {
     assert_eq!(err("t,ax\n0,1\n0.001,1.2.3\n"), "test.csv:3: column `ax`: `1.2.3` is not a finite number");
     assert_eq!(err("t,ax\n0,1\n,2\n"), "test.csv:3: column `t`: `` is not a finite number");
     assert_eq!(err("t,ax\n0,inf\n1,2\n"), "test.csv:2: column `ax`: `inf` is not a finite number");
-    assert_eq!(err("t,ax,ax\n0,1,1\n1,2,2\n"), "test.csv:1: duplicate column name `ax`");
+    assert_eq!(err("t,ax,ax\n0,1,1\n1,2,2\n"), "test.csv:1: duplicate column name `ax`: columns 2 and 3");
     assert_eq!(err("t,,ax\n0,1,1\n1,2,2\n"), "test.csv:1: column 2 has an empty name");
     assert_eq!(err("t,ax\n0,1\n"), "test.csv: 1 data row(s); at least 2 are needed");
     assert_eq!(err("t,ax\n"), "test.csv: 0 data row(s); at least 2 are needed");
@@ -114,6 +114,27 @@ fn contract_violations_name_the_file_and_line() {
         err("t,ax\n0,1\n0.002,1\n0.001,1\n"),
         "test.csv:4: time does not increase: t = 0.001 s after t = 0.002 s"
     );
+}
+
+#[test]
+fn the_header_follows_the_shared_rules() {
+    // A BOM (as spreadsheet exports write) is not part of `t`.
+    let (d, r) = parse("\u{feff}t,ax,note\n0,1,a\n0.001,2,b\n", &["ax"]).unwrap();
+    assert_eq!(
+        (d.names.as_slice(), r.ignored_columns.as_slice()),
+        (&["ax".to_string()][..], &["note".to_string()][..])
+    );
+    // A repeated name is refused even in a column nobody reads, naming both columns, and after
+    // the comment lines the header's own line number.
+    assert_eq!(
+        err("# exported\nt,ax,truth_x, truth_x \n0,1,1,1\n1,2,2,2\n"),
+        "test.csv:2: duplicate column name `truth_x`: columns 3 and 4"
+    );
+    // A required channel that is absent is refused at the header.
+    let missing = read_from_required("t,n5_x\n0,1\n1,2\n".as_bytes(), Path::new("p.csv"), &["n5_x", "n32_x"], &[]);
+    assert_eq!(missing.unwrap_err().to_string(), "p.csv:1: no column `n32_x`");
+    let (d, _) = read_from_required("t,n5_x\n0,1\n1,2\n".as_bytes(), Path::new("p.csv"), &["n5_x"], &[]).unwrap();
+    assert_eq!(d.names, ["n5_x"]);
 }
 
 #[test]

@@ -234,7 +234,7 @@ impl<T: Real> Core<T> {
     /// `(residual, NIS)` of `y` against the prediction, without updating.
     fn innovation(&self, y: &Vector1<T>) -> Option<(T, T)> {
         match self {
-            Core::Steady(f) => Some(f.innovation(y)).map(|(r, n)| (r[0], n)),
+            Core::Steady(f) => f.innovation(y).map(|(r, n)| (r[0], n)),
             Core::Varying(f) => f.innovation(y).map(|i| (i.residual[0], i.nis)),
         }
     }

@@ -61,9 +61,8 @@ fn rms_error(t: &[f64], est: &[f64], truth: &[f64], t0: f64) -> f64 {
 pub fn estimate(config: &Path, data_path: &Path, out: Option<&Path>, options: &EstimateOptions) -> Result<()> {
     crate::io::output::check(&[out], &[Some(data_path), Some(config)])?;
     let (model, red) = load_tuned(config, options.modes, options.random_walk, options.robust)?;
-    let known: Vec<String> = red.channels.clone();
-    let known_refs: Vec<&str> = known.iter().map(String::as_str).collect();
-    let (file, report) = data::read(data_path, &known_refs)?;
+    let channels: Vec<&str> = red.channels.iter().map(String::as_str).collect();
+    let (file, report) = data::read_required(data_path, &channels, &[])?;
     eprintln!("{}: {report}", data_path.display());
     let expected = red.sample_rate;
     if (report.timing.sample_rate - expected).abs() > 0.01 * expected {

@@ -6,13 +6,13 @@
 //! or delay, a component parameter, a mode's frequency), some both. Each says which residual
 //! signatures point to it ([`Effect::signature`]).
 
-use crate::linalg::expm;
 pub use crate::residual_loop::optimize::ScalarRange;
 use crate::residual_loop::search::EffectKind;
 use crate::systems::rotor::bearing_geometry::BearingLine;
 use crate::systems::rotor::estimate::ReducedRotor;
 use crate::systems::rotor::{dof, RotorConfig, RotorModel, SensorKind};
 use anyhow::{anyhow, bail, Context, Result};
+use edgekf::linalg::expm;
 use nalgebra::DMatrix;
 
 /// A component of the rotor whose declared parameter may be wrong.
@@ -541,12 +541,10 @@ pub fn augment(
     Ok(AugmentedModel { a, qc, c, r: red.r.clone(), p0, displacement, effects: placed })
 }
 
-/// `e^{−Aτ}`: maps the state now to the state `τ` ago along the noise-free dynamics.
+/// `e^{−Aτ}`: maps the state now to the state `τ` ago along the noise-free dynamics (of the
+/// reduced model, so by the shared core's [`expm`]).
 fn delay_matrix(a: &DMatrix<f64>, tau: f64) -> Result<DMatrix<f64>> {
-    let n = a.nrows();
-    let m = faer::Mat::<f64>::from_fn(n, n, |i, j| -a[(i, j)] * tau);
-    let e = expm(m.as_ref()).map_err(|e| anyhow!("cannot form the delay: {e}"))?;
-    Ok(DMatrix::from_fn(n, n, |i, j| e[(i, j)]))
+    expm(&(a * -tau)).map_err(|e| anyhow!("cannot form the delay: {e}"))
 }
 
 /// The configuration with the `Parameter` effects of `effects` applied (their scalar is the
