@@ -17,7 +17,7 @@ pub struct Discrete {
 
 /// Exact discretisation of `a`, `qc` over `dt` (Van Loan), by the shared core's
 /// [`van_loan_with`]: the reduced model the loop diagnoses is discretised by the same code as
-/// the filters of `rotor estimate` and the node.
+/// the systems' estimators and the node.
 pub fn discretise(a: &DMatrix<f64>, qc: &DMatrix<f64>, dt: f64) -> Result<Discrete> {
     let (a, q) = van_loan_with(a, qc, dt, Dyn(2 * a.nrows())).map_err(|e| anyhow!("cannot discretise: {e}"))?;
     Ok(Discrete { a, q })
