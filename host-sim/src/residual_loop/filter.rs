@@ -121,8 +121,9 @@ pub fn run_state_space(
 /// use nalgebra::DMatrix;
 /// // A level observed directly that steps from 0 to 1 at sample 200, with a bias state that is
 /// // unobserved (decoupled) before it: the second model sees level + bias.
-/// let (a, qc, r) = (DMatrix::zeros(2, 2), DMatrix::from_diagonal(&nalgebra::dvector![1e-6, 0.0]), DMatrix::from_element(1, 1, 1e-4));
-/// let p0 = DMatrix::from_diagonal(&nalgebra::dvector![1.0, 4.0]);
+/// let diagonal = |d: &[f64]| DMatrix::from_diagonal(&nalgebra::DVector::from_row_slice(d));
+/// let (a, qc, r) = (DMatrix::zeros(2, 2), diagonal(&[1e-6, 0.0]), DMatrix::from_element(1, 1, 1e-4));
+/// let p0 = diagonal(&[1.0, 4.0]);
 /// let (before, after) = (DMatrix::from_row_slice(1, 2, &[1.0, 0.0]), DMatrix::from_row_slice(1, 2, &[1.0, 1.0]));
 /// let y: Vec<f64> = (0..400).map(|k| if k < 200 { 0.0 } else { 1.0 }).collect();
 /// let model = |c| StateSpace { a: &a, qc: &qc, c, r: &r, p0: &p0 };

@@ -55,7 +55,7 @@ pub const FEATURES: usize = model::FEATURES + 2;
 /// mean over the later windows.
 ///
 /// ```
-/// use edgekf_sim::systems::crank::estimate::identify2::FEATURE_NAMES;
+/// use edgekf_sim::systems::crank::studies::identify2::FEATURE_NAMES;
 /// assert_eq!((FEATURE_NAMES[0], FEATURE_NAMES[9]), ("ln_rms", "ln_diff_median"));
 /// assert_eq!(&FEATURE_NAMES[10..], ["ln_a_release", "ln_a_later"]);
 /// ```
