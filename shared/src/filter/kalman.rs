@@ -145,9 +145,15 @@ impl<T: Real, const N: usize, const M: usize> KalmanFilter<T, N, M> {
 
     /// Copies the upper triangle of P onto the lower one.
     fn mirror_upper(&mut self) {
+        // Copies through the column slices: no index check is left (no panic path).
+        let cols = &mut self.p.data.0;
         for j in 0..N {
             for i in 0..j {
-                self.p[(j, i)] = self.p[(i, j)];
+                if let Some(v) = cols.get(j).and_then(|c| c.get(i)).copied() {
+                    if let Some(d) = cols.get_mut(i).and_then(|c| c.get_mut(j)) {
+                        *d = v;
+                    }
+                }
             }
         }
     }
@@ -169,7 +175,7 @@ impl<T: Real, const N: usize, const M: usize> KalmanFilter<T, N, M> {
     /// in [`FilterHealth::refused_updates`] and is returned as an error.
     pub fn update(&mut self, y: &SVector<T, M>) -> Result<Innovation<T, M>, FilterError> {
         if y.iter().any(|v| !v.is_finite()) {
-            self.health.refused_updates += 1;
+            self.health.refused_updates = self.health.refused_updates.saturating_add(1);
             return Err(FilterError::NonFiniteMeasurement);
         }
         let residual = y - self.model.c * self.x;
@@ -180,7 +186,7 @@ impl<T: Real, const N: usize, const M: usize> KalmanFilter<T, N, M> {
         mul_tr(&self.ct, &pct, &mut cpct, false);
         let s = self.model.r + (cpct + cpct.transpose()) * T::of_f64(0.5);
         let Some(chol) = s.cholesky() else {
-            self.health.refused_updates += 1;
+            self.health.refused_updates = self.health.refused_updates.saturating_add(1);
             return Err(FilterError::InnovationCovariance);
         };
         // K = P Cᵀ S⁻¹, computed as (S⁻¹ C P)ᵀ since S and P are symmetric.
@@ -228,12 +234,13 @@ impl<T: Real, const N: usize, const M: usize> KalmanFilter<T, N, M> {
     /// ```
     pub fn update_sequential(&mut self, y: &SVector<T, M>) -> Result<SequentialInnovation<T, M>, FilterError> {
         if y.iter().any(|v| !v.is_finite()) {
-            self.health.refused_updates += 1;
+            self.health.refused_updates = self.health.refused_updates.saturating_add(1);
             return Err(FilterError::NonFiniteMeasurement);
         }
         let r = &self.model.r;
-        if (0..M).any(|i| (0..M).any(|j| i != j && r[(i, j)] != T::zero())) {
-            self.health.refused_updates += 1;
+        // Off-diagonal entries, by their column-major position (no indexing, no panic path).
+        if r.iter().enumerate().any(|(k, v)| k % (M + 1) != 0 && *v != T::zero()) {
+            self.health.refused_updates = self.health.refused_updates.saturating_add(1);
             return Err(FilterError::CorrelatedNoise);
         }
         let residual = y - self.model.c * self.x;
@@ -244,7 +251,7 @@ impl<T: Real, const N: usize, const M: usize> KalmanFilter<T, N, M> {
             let phi = p * h.transpose();
             let s = (h * phi)[(0, 0)] + r[(i, i)];
             if !s.is_finite() || s <= T::zero() {
-                self.health.refused_updates += 1;
+                self.health.refused_updates = self.health.refused_updates.saturating_add(1);
                 return Err(FilterError::InnovationCovariance);
             }
             let e = y[i] - (h * x)[(0, 0)];
@@ -275,7 +282,7 @@ impl<T: Real, const N: usize, const M: usize> KalmanFilter<T, N, M> {
         // A finite sum means no NaN anywhere, so a plain comparison suffices for the diagonal.
         let broken = !sum.is_finite() || (0..N).any(|i| self.p[(i, i)] <= T::zero());
         if broken {
-            self.health.covariance_resets += 1;
+            self.health.covariance_resets = self.health.covariance_resets.saturating_add(1);
             self.p = self.p_reset;
             if self.x.iter().any(|v| !v.is_finite()) {
                 self.x = self.x_reset;

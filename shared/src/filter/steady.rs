@@ -189,7 +189,7 @@ impl<T: Real, const N: usize, const M: usize> SteadyStateFilter<T, N, M> {
     fn guard(&mut self) {
         if self.x.iter().any(|v| !v.is_finite()) {
             self.x = self.x0;
-            self.resets += 1;
+            self.resets = self.resets.saturating_add(1);
         }
     }
 
