@@ -238,8 +238,8 @@ impl<T: Real, const N: usize, const M: usize> KalmanFilter<T, N, M> {
             return Err(FilterError::NonFiniteMeasurement);
         }
         let r = &self.model.r;
-        // Off-diagonal entries, by their column-major position (no indexing, no panic path).
-        if r.iter().enumerate().any(|(k, v)| k % (M + 1) != 0 && *v != T::zero()) {
+        // Off-diagonal entries, column by column from the storage (no indexing, no panic path).
+        if r.data.0.iter().enumerate().any(|(j, col)| col.iter().enumerate().any(|(i, v)| i != j && *v != T::zero())) {
             self.health.refused_updates = self.health.refused_updates.saturating_add(1);
             return Err(FilterError::CorrelatedNoise);
         }
