@@ -37,10 +37,8 @@ pub fn build(image: &Image) -> Result<PathBuf> {
                     image.bin
                 );
                 let elf = build_with(image, Proof::Ordinary).context("the ordinary build failed too")?;
-                if crate::panics::sites(&elf)?.is_empty() {
-                    return Err(e);
-                }
-                &[][..]
+                let sites = crate::panics::sites(&elf)?;
+                return if sites.is_empty() { Err(e) } else { surviving(image, &elf, &sites) };
             }
         },
         PanicProof::Except(allowed) => allowed,
@@ -51,16 +49,22 @@ pub fn build(image: &Image) -> Result<PathBuf> {
         .filter(|s| !allowed.iter().any(|a| s.function.starts_with(a)))
         .collect();
     if stray.is_empty() {
-        return Ok(elf);
+        Ok(elf)
+    } else {
+        surviving(image, &elf, &stray)
     }
+}
+
+/// The failed proof's message, with the panic paths that survived.
+fn surviving(image: &Image, elf: &Path, sites: &[crate::panics::Site]) -> Result<PathBuf> {
     eprintln!("panic paths in {} (source line, panic, function):", elf.display());
-    crate::panics::print(&stray);
+    crate::panics::print(sites);
     bail!(
         "{}: {} panic path(s) survived, listed above (the no-panic proof, see the README): remove \
          them (checked or `get` indexing, explicit wrapping/saturating/checked arithmetic, handled \
          errors); `cargo xtask panics{}` lists them again",
         image.bin,
-        stray.len(),
+        sites.len(),
         image.flag.map(|f| format!(" {f}")).unwrap_or_default()
     )
 }
