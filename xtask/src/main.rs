@@ -3,7 +3,7 @@
 //! * `cargo xtask test [--long]` — everything: provisioning, host tests, firmware cross-builds
 //!   (QEMU and board images) with their footprint, then the hardware-in-the-loop tests in QEMU.
 //! * `cargo xtask fw [--board | --rotor | --crank | --bench]` — cross-build an image
-//!   (`edgekf-qemu` without a flag) with the no-panic proof and print its flash/RAM use.
+//!   (`edgekf-qemu` without a flag), prove it panic-free and print its flash/RAM use.
 //! * `cargo xtask panics [--board | --rotor | --crank | --bench]` — build an image without the
 //!   proof and list its panic paths (source line, panic function, enclosing function).
 //! * `cargo xtask run [--data FILE.csv]` — run the QEMU image on a data file (default: the demo
@@ -12,8 +12,9 @@
 //!   QEMU (an instruction-counting TCG plugin), checked against the budgets.
 //! * `cargo xtask provision` — install what a fresh Debian machine lacks (as root), or say what.
 //!
-//! Every image is built with the no-panic proof (feature `no-panic-proof`): one whose link
-//! fails has a reachable panic, and the build lists where ([`panics`]).
+//! Every build proves its image panic-free as the table says ([`images::PanicProof`]): at link
+//! time (feature `no-panic-proof`), or for the HIL images by their disassembly, where only
+//! `core`'s CSV parsing may keep a panic path; a failed proof lists where ([`panics`]).
 //!
 //! The images, their flags, HIL tests and instruction budgets are one table, [`images::IMAGES`].
 
@@ -93,7 +94,7 @@ fn test(long: bool) -> Result<()> {
     hil.args(["test", "-p", "edgekf-tests", "--features", "hil"]);
     let mut tests: Vec<&str> = Vec::new();
     for image in IMAGES.iter().filter(|i| i.role != Role::Bench) {
-        step(&format!("firmware: cross-build {} with the no-panic proof", image.what));
+        step(&format!("firmware: cross-build {} and prove it panic-free", image.what));
         let elf = firmware::build(image)?;
         firmware::print_footprint(image, &elf)?;
         if let Role::Hil { env, tests: these } = image.role {
