@@ -17,6 +17,9 @@
 //! * [`hil`]: the HIL images' run, shared by the QEMU entry point and the host reference runs;
 //! * `semihost` (QEMU images only): host files, exit codes, the QEMU entry skeleton;
 //! * `stack` (chip only): stack high-water marks by painting.
+//!
+//! On the chip, feature `no-panic-proof` replaces the images' panic handlers by `panic-never`'s
+//! (see the README's firmware section): an image with a reachable panic then fails to link.
 
 pub mod adxl355;
 pub mod frame;
@@ -33,3 +36,8 @@ pub mod virtual_adxl355;
 
 #[cfg(test)]
 extern crate std;
+
+// The no-panic proof (feature `no-panic-proof`): `panic-never`'s handler refers to a symbol
+// defined nowhere, so an image links only if no panic path survives optimisation.
+#[cfg(all(target_os = "none", feature = "no-panic-proof"))]
+use panic_never as _;

@@ -64,14 +64,15 @@ impl<S: ByteSource, const L: usize> LineReader<S, L> {
             if self.eof {
                 return None;
             }
-            self.chunk_len = self.source.read_bytes(&mut self.chunk);
+            // A source that claims more than the chunk holds is clamped to it.
+            self.chunk_len = self.source.read_bytes(&mut self.chunk).min(self.chunk.len());
             self.chunk_pos = 0;
             if self.chunk_len == 0 {
                 self.eof = true;
                 return None;
             }
         }
-        let b = self.chunk[self.chunk_pos];
+        let b = *self.chunk.get(self.chunk_pos)?;
         self.chunk_pos += 1;
         Some(b)
     }
@@ -99,7 +100,8 @@ impl<S: ByteSource, const L: usize> LineReader<S, L> {
         if overflow {
             return Some(Err(BadLine));
         }
-        let text = core::str::from_utf8(&self.line[..len]).map_err(|_| BadLine);
+        let Some(bytes) = self.line.get(..len) else { return Some(Err(BadLine)) };
+        let text = core::str::from_utf8(bytes).map_err(|_| BadLine);
         Some(text.map(|t| t.strip_suffix('\r').unwrap_or(t)))
     }
 }
@@ -171,7 +173,7 @@ impl<S: ByteSource> SampleFeed for LineFeed<S> {
                 Ok(text) => self.columns.parse_line(text).ok(),
                 Err(BadLine) => None,
             };
-            self.lines += 1;
+            self.lines = self.lines.saturating_add(1);
             match parsed {
                 Some(sample) => return Some(sample),
                 None => self.bad_lines += 1,
@@ -228,7 +230,7 @@ impl<S: ByteSource, const M: usize> ChannelReader<S, M> {
                 Ok(text) if text.trim().is_empty() => continue,
                 Ok(text) => text,
                 Err(BadLine) => {
-                    self.bad_lines += 1;
+                    self.bad_lines = self.bad_lines.saturating_add(1);
                     return Some(Err(BadLine));
                 }
             };
@@ -240,14 +242,14 @@ impl<S: ByteSource, const M: usize> ChannelReader<S, M> {
                     match field.trim().parse::<f32>() {
                         Ok(v) if v.is_finite() => values[k] = v,
                         _ => {
-                            self.bad_lines += 1;
+                            self.bad_lines = self.bad_lines.saturating_add(1);
                             return Some(Err(BadLine));
                         }
                     }
                 }
             }
             if fields != self.width {
-                self.bad_lines += 1;
+                self.bad_lines = self.bad_lines.saturating_add(1);
                 return Some(Err(BadLine));
             }
             return Some(Ok(values));

@@ -125,7 +125,7 @@ impl<S: SampleSource, E: NodeEstimator<Input = S::Sample>> Node<S, E> {
     /// One period: read what the source delivered, run the estimator over it, report.
     pub fn poll(&mut self) -> Option<E::Frame> {
         let block = self.health.blocks;
-        self.health.blocks += 1;
+        self.health.blocks = self.health.blocks.saturating_add(1);
         let (estimator, health) = (&mut self.estimator, &mut self.health);
         let (mut innovations, mut nis) = (RunningStats::new(), RunningStats::new());
         let (mut missing, mut used) = (0u16, 0u32);

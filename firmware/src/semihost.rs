@@ -107,11 +107,10 @@ where
 }
 
 /// Defines a QEMU image: its entry point ([`run_image`] over the [`HilImage`] `$image`) and its
-/// fault handlers. The binary must depend on `cortex-m`, `cortex-m-rt`,
-/// `cortex-m-semihosting` and a defmt logger (the `qemu` feature brings them).
+/// fault handlers. The binary must depend on `cortex-m`, `cortex-m-rt` and
+/// `cortex-m-semihosting` (the `qemu` feature brings them); the defmt logger is this module's.
 ///
 /// ```ignore
-/// use defmt_semihosting as _;
 /// edgekf_firmware::qemu_image!(edgekf_firmware::systems::rotor::RotorImage);
 /// ```
 #[macro_export]
@@ -137,6 +136,8 @@ macro_rules! qemu_image {
 #[macro_export]
 macro_rules! semihost_fault_handlers {
     ($name:expr) => {
+        // Under the no-panic proof, `panic-never` supplies the handler.
+        #[cfg(not(feature = "no-panic-proof"))]
         #[panic_handler]
         fn panic(info: &core::panic::PanicInfo) -> ! {
             ::cortex_m::interrupt::disable();
@@ -150,4 +151,106 @@ macro_rules! semihost_fault_handlers {
             $crate::semihost::exit(102)
         }
     };
+}
+
+/// The QEMU images' defmt global logger: defmt frames to semihosting stdout, as
+/// `defmt-semihosting` writes them, but without its panics (a frame begun inside another, by a
+/// defmt call in a `Format` impl, is dropped; an unpaired call is ignored), so that the images
+/// pass the no-panic proof.
+mod logger {
+    use core::cell::UnsafeCell;
+    use core::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+    use cortex_m::register::primask;
+    use cortex_m_semihosting::hio::{hstdout, HostStream};
+
+    #[defmt::global_logger]
+    struct Logger;
+
+    /// The encoder, its output and the interrupt state to restore; only touched between
+    /// `acquire` and `release`, with interrupts off.
+    struct State {
+        encoder: defmt::Encoder,
+        out: Option<HostStream>,
+        interrupts_were_on: bool,
+    }
+
+    struct Shared {
+        taken: AtomicBool,
+        /// Frames begun while `taken`, being dropped.
+        nested: AtomicUsize,
+        state: UnsafeCell<State>,
+    }
+
+    // SAFETY: `state` is accessed only by the holder of `taken`, with interrupts disabled, on a
+    // single core.
+    unsafe impl Sync for Shared {}
+
+    static SHARED: Shared = Shared {
+        taken: AtomicBool::new(false),
+        nested: AtomicUsize::new(0),
+        state: UnsafeCell::new(State { encoder: defmt::Encoder::new(), out: None, interrupts_were_on: false }),
+    };
+
+    fn emit(out: &mut Option<HostStream>, bytes: &[u8]) {
+        if let Some(h) = out {
+            let _ = h.write_all(bytes);
+        }
+    }
+
+    // SAFETY: frames are serialised by `taken` with interrupts disabled.
+    unsafe impl defmt::Logger for Logger {
+        fn acquire() {
+            let interrupts_were_on = primask::read().is_active();
+            cortex_m::interrupt::disable();
+            if SHARED.taken.load(Ordering::Relaxed) {
+                // Re-entered: the outer frame keeps the logger (and interrupts off), this one
+                // is dropped.
+                let n = SHARED.nested.load(Ordering::Relaxed);
+                SHARED.nested.store(n.wrapping_add(1), Ordering::Relaxed);
+                return;
+            }
+            SHARED.taken.store(true, Ordering::Relaxed);
+            // SAFETY: we hold `taken` with interrupts disabled.
+            let s = unsafe { &mut *SHARED.state.get() };
+            s.interrupts_were_on = interrupts_were_on;
+            if s.out.is_none() {
+                s.out = hstdout().ok();
+            }
+            let State { encoder, out, .. } = s;
+            encoder.start_frame(|b| emit(out, b));
+        }
+
+        unsafe fn flush() {}
+
+        unsafe fn release() {
+            let n = SHARED.nested.load(Ordering::Relaxed);
+            if n != 0 {
+                SHARED.nested.store(n - 1, Ordering::Relaxed);
+                return;
+            }
+            if !SHARED.taken.load(Ordering::Relaxed) {
+                return;
+            }
+            // SAFETY: we hold `taken` with interrupts disabled.
+            let s = unsafe { &mut *SHARED.state.get() };
+            let State { encoder, out, interrupts_were_on } = s;
+            encoder.end_frame(|b| emit(out, b));
+            let restore = *interrupts_were_on;
+            SHARED.taken.store(false, Ordering::Relaxed);
+            if restore {
+                // SAFETY: restores the state `acquire` found.
+                unsafe { cortex_m::interrupt::enable() }
+            }
+        }
+
+        unsafe fn write(bytes: &[u8]) {
+            if !SHARED.taken.load(Ordering::Relaxed) || SHARED.nested.load(Ordering::Relaxed) != 0 {
+                return;
+            }
+            // SAFETY: we hold `taken` with interrupts disabled.
+            let s = unsafe { &mut *SHARED.state.get() };
+            let State { encoder, out, .. } = s;
+            encoder.write(bytes, |b| emit(out, b));
+        }
+    }
 }

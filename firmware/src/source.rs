@@ -111,13 +111,13 @@ impl<IF: Interface> Adxl355Source<IF> {
         let frozen = self.previous == Some(raw);
         self.previous = Some(raw);
         if raw.is_saturated() {
-            health.saturated += 1;
+            health.saturated = health.saturated.saturating_add(1);
             return None;
         }
         if frozen {
             // A 20-bit sensor with ~100 LSB of noise repeating all three codes exactly is frozen
             // (probability ~1e-7 per sample for a live part).
-            health.stuck += 1;
+            health.stuck = health.stuck.saturating_add(1);
             return None;
         }
         self.sensor.to_mps2(raw).get(self.settings.axis.index()).copied()
@@ -133,19 +133,19 @@ impl<IF: Interface> SampleSource for Adxl355Source<IF> {
         let (sensor, block) = (&mut self.sensor, &mut self.block);
         match retry::<_, IF>(health, attempts, || sensor.status()) {
             Ok(status) if status.fifo_overrun => {
-                health.fifo_overruns += 1;
+                health.fifo_overruns = health.fifo_overruns.saturating_add(1);
                 self.overrun_seen = true;
             }
             Ok(_) => {}
             Err(_) => {
-                health.failed_polls += 1;
+                health.failed_polls = health.failed_polls.saturating_add(1);
                 return 0;
             }
         }
         let read = match retry::<_, IF>(health, attempts, || sensor.read_fifo(&mut block[..])) {
             Ok(r) => r,
             Err(_) => {
-                health.failed_polls += 1;
+                health.failed_polls = health.failed_polls.saturating_add(1);
                 return 0;
             }
         };
@@ -201,14 +201,14 @@ fn retry<T, IF: Interface>(
         match op() {
             Ok(v) => {
                 if tries > 1 {
-                    health.recovered += 1;
+                    health.recovered = health.recovered.saturating_add(1);
                 }
                 return Ok(v);
             }
             Err(e) => {
-                health.bus_errors += 1;
+                health.bus_errors = health.bus_errors.saturating_add(1);
                 if matches!(&e, adxl355::Error::Comm(c) if IF::is_nack(c)) {
-                    health.nacks += 1;
+                    health.nacks = health.nacks.saturating_add(1);
                 }
                 if tries >= attempts.max(1) {
                     return Err(e);

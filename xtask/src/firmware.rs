@@ -1,6 +1,6 @@
 //! Cross-building the firmware images and reporting their footprint.
 
-use crate::images::Image;
+use crate::images::{Image, PanicProof};
 use crate::provision::DEBIAN_CARGO;
 use anyhow::{bail, Context, Result};
 use std::path::{Path, PathBuf};
@@ -14,13 +14,72 @@ pub fn workspace_root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).parent().map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from("."))
 }
 
-/// Builds `image` with Debian's cargo (`-Zbuild-std=core`) and returns the ELF path.
+/// Whether a build carries the no-panic proof (feature `no-panic-proof` of `edgekf-firmware`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Proof {
+    /// `panic-never`'s handler: the link fails if a panic path survives.
+    NoPanic,
+    /// The ordinary handler (a message over semihosting or defmt), panic paths kept.
+    Ordinary,
+}
+
+/// Builds `image`, proves it panic-free as its row says ([`PanicProof`]) and returns the ELF
+/// path. A failed proof lists the panic paths that survived ([`crate::panics`]).
 pub fn build(image: &Image) -> Result<PathBuf> {
+    let allowed = match image.proof {
+        PanicProof::Link => match build_with(image, Proof::NoPanic) {
+            Ok(elf) => return Ok(elf),
+            Err(e) => {
+                eprintln!(
+                    "\nxtask: {} did not build with the no-panic proof (feature no-panic-proof). If the \
+                     link failed with `undefined reference to ... panic-never ...`, a panic path \
+                     survived optimisation; building the ordinary image to find it",
+                    image.bin
+                );
+                let elf = build_with(image, Proof::Ordinary).context("the ordinary build failed too")?;
+                let sites = crate::panics::sites(&elf)?;
+                return if sites.is_empty() { Err(e) } else { surviving(image, &elf, &sites) };
+            }
+        },
+        PanicProof::Except(allowed) => allowed,
+    };
+    let elf = build_with(image, Proof::Ordinary)?;
+    let stray: Vec<_> = crate::panics::sites(&elf)?
+        .into_iter()
+        .filter(|s| !allowed.iter().any(|a| s.function.starts_with(a)))
+        .collect();
+    if stray.is_empty() {
+        Ok(elf)
+    } else {
+        surviving(image, &elf, &stray)
+    }
+}
+
+/// The failed proof's message, with the panic paths that survived.
+fn surviving(image: &Image, elf: &Path, sites: &[crate::panics::Site]) -> Result<PathBuf> {
+    eprintln!("panic paths in {} (source line, panic, function):", elf.display());
+    crate::panics::print(sites);
+    bail!(
+        "{}: {} panic path(s) survived, listed above (the no-panic proof, see the README): remove \
+         them (checked or `get` indexing, explicit wrapping/saturating/checked arithmetic, handled \
+         errors); `cargo xtask panics{}` lists them again",
+        image.bin,
+        sites.len(),
+        image.flag.map(|f| format!(" {f}")).unwrap_or_default()
+    )
+}
+
+/// Builds `image` with Debian's cargo (`-Zbuild-std=core`) and returns the ELF path.
+pub fn build_with(image: &Image, proof: Proof) -> Result<PathBuf> {
     let root = workspace_root();
     let path = std::env::var("PATH").unwrap_or_default();
+    let features = match proof {
+        Proof::NoPanic => format!("{},no-panic-proof", image.features),
+        Proof::Ordinary => image.features.to_string(),
+    };
     let mut cmd = Command::new(DEBIAN_CARGO);
     cmd.current_dir(&root)
-        .args(["build", "-p", "edgekf-firmware", "--bin", image.bin, "--features", image.features])
+        .args(["build", "-p", "edgekf-firmware", "--bin", image.bin, "--features", &features])
         .args(["--target", TARGET, "--profile", PROFILE, "-Zbuild-std=core"])
         .env("PATH", format!("/usr/bin:{path}"))
         .env("RUSTC_BOOTSTRAP", "1");

@@ -22,6 +22,29 @@ pub enum Role {
     Bench,
 }
 
+/// How an image is proven panic-free.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PanicProof {
+    /// At link time: built with feature `no-panic-proof`, so a surviving panic path fails the
+    /// link.
+    Link,
+    /// Built with the ordinary panic handler, and every panic path in its disassembly must lie
+    /// in one of these functions (symbol prefixes). For the HIL images, which read
+    /// `hil_input.csv` with `core`'s `f32` parser: its slow path keeps bounds checks that no
+    /// caller can remove, so those images cannot take the link proof yet.
+    Except(&'static [&'static str]),
+}
+
+/// The panic paths the HIL images may keep: `core`'s float parser and string splitting, used
+/// by test equipment only (reading `hil_input.csv` over semihosting; the board reads none).
+pub const CORE_CSV_PARSING: &[&str] = &[
+    "<core::num::imp::dec2flt::",
+    "core::num::imp::dec2flt::",
+    "<f32 as core::str::traits::FromStr>::from_str",
+    "<core::iter::adapters::enumerate::Enumerate<core::str::iter::Split<char>>",
+    "<core::str::pattern::CharSearcher as core::str::pattern::Searcher>::next_match",
+];
+
 /// One firmware image.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Image {
@@ -35,6 +58,8 @@ pub struct Image {
     pub what: &'static str,
     /// What it is for.
     pub role: Role,
+    /// How it is proven panic-free (checked by every build of `cargo xtask fw`, `bench`, `test`).
+    pub proof: PanicProof,
     /// Its instruction budgets, measured by the bench image. Why these figures: the oscillator
     /// step must leave most of a 1 kHz sample free; the rotor node's steady-state step must fit
     /// a 1 kHz sample at 84 MHz with room for the I/O and the loop (20 000 instructions is under
@@ -54,6 +79,7 @@ pub const IMAGES: [Image; 5] = [
         features: "board",
         what: "the board image (STM32F411, ADXL355 on I2C1)",
         role: Role::Board,
+        proof: PanicProof::Link,
         budgets: &[],
     },
     Image {
@@ -62,6 +88,7 @@ pub const IMAGES: [Image; 5] = [
         features: "qemu",
         what: "the QEMU image (harmonic force on a virtual ADXL355)",
         role: Role::Hil { env: "EDGEKF_FW_ELF", tests: &["hil"] },
+        proof: PanicProof::Except(CORE_CSV_PARSING),
         budgets: &[("harmonic_step", 4, 1, 5_000)],
     },
     Image {
@@ -70,6 +97,7 @@ pub const IMAGES: [Image; 5] = [
         features: "qemu",
         what: "the rotor virtual-sensing QEMU image",
         role: Role::Hil { env: "EDGEKF_ROTOR_ELF", tests: &["hil"] },
+        proof: PanicProof::Except(CORE_CSV_PARSING),
         budgets: &[("rotor_node_steady", 20, 4, 20_000)],
     },
     Image {
@@ -78,6 +106,7 @@ pub const IMAGES: [Image; 5] = [
         features: "qemu",
         what: "the slider-crank clearance QEMU image",
         role: Role::Hil { env: "EDGEKF_CRANK_ELF", tests: &["crank_node"] },
+        proof: PanicProof::Except(CORE_CSV_PARSING),
         budgets: &[
             ("crank_sample", 2500, 1, 200),
             ("crank_window", 2500, 1, 750_000),
@@ -90,6 +119,7 @@ pub const IMAGES: [Image; 5] = [
         features: "qemu",
         what: "the instruction-count image",
         role: Role::Bench,
+        proof: PanicProof::Link,
         budgets: &[("kalman_joseph", 24, 4, 150_000)],
     },
 ];

@@ -3,18 +3,25 @@
 //! * `cargo xtask test [--long]` — everything: provisioning, host tests, firmware cross-builds
 //!   (QEMU and board images) with their footprint, then the hardware-in-the-loop tests in QEMU.
 //! * `cargo xtask fw [--board | --rotor | --crank | --bench]` — cross-build an image
-//!   (`edgekf-qemu` without a flag) and print its flash/RAM use.
+//!   (`edgekf-qemu` without a flag), prove it panic-free and print its flash/RAM use.
+//! * `cargo xtask panics [--board | --rotor | --crank | --bench]` — build an image without the
+//!   proof and list its panic paths (source line, panic function, enclosing function).
 //! * `cargo xtask run [--data FILE.csv]` — run the QEMU image on a data file (default: the demo
 //!   scenario) and print the decoded defmt log, the stack high-water mark included.
 //! * `cargo xtask bench` — per-step instruction counts of the filters on the Cortex-M4F under
 //!   QEMU (an instruction-counting TCG plugin), checked against the budgets.
 //! * `cargo xtask provision` — install what a fresh Debian machine lacks (as root), or say what.
 //!
+//! Every build proves its image panic-free as the table says ([`images::PanicProof`]): at link
+//! time (feature `no-panic-proof`), or for the HIL images by their disassembly, where only
+//! `core`'s CSV parsing may keep a panic path; a failed proof lists where ([`panics`]).
+//!
 //! The images, their flags, HIL tests and instruction budgets are one table, [`images::IMAGES`].
 
 mod bench;
 mod firmware;
 mod images;
+mod panics;
 mod provision;
 
 use images::{Role, IMAGES};
@@ -46,6 +53,14 @@ fn run() -> Result<()> {
             let elf = firmware::build(images::default_image())?;
             firmware::run_and_print(&elf, data.map(std::path::Path::new))
         }
+        Some("panics") => {
+            provision::ensure()?;
+            let elf = firmware::build_with(images::select(&args), firmware::Proof::Ordinary)?;
+            let sites = panics::sites(&elf)?;
+            println!("{} panic path(s) in {}", sites.len(), elf.display());
+            panics::print(&sites);
+            Ok(())
+        }
         Some("provision") => provision::ensure(),
         Some("bench") => {
             provision::ensure()?;
@@ -53,7 +68,7 @@ fn run() -> Result<()> {
         }
         _ => {
             eprintln!(
-                "usage: cargo xtask <test [--long] | fw [{}] | run [--data FILE.csv] | bench | provision>",
+                "usage: cargo xtask <test [--long] | fw [{0}] | panics [{0}] | run [--data FILE.csv] | bench | provision>",
                 images::flags()
             );
             std::process::exit(2);
@@ -79,7 +94,7 @@ fn test(long: bool) -> Result<()> {
     hil.args(["test", "-p", "edgekf-tests", "--features", "hil"]);
     let mut tests: Vec<&str> = Vec::new();
     for image in IMAGES.iter().filter(|i| i.role != Role::Bench) {
-        step(&format!("firmware: cross-build {}", image.what));
+        step(&format!("firmware: cross-build {} and prove it panic-free", image.what));
         let elf = firmware::build(image)?;
         firmware::print_footprint(image, &elf)?;
         if let Role::Hil { env, tests: these } = image.role {

@@ -396,9 +396,14 @@ where
 
     /// Copies the upper triangle of P onto the lower one.
     fn mirror_upper(&mut self) {
+        // Through `get` and `get_mut`: no index check is left (no panic path).
         for j in 0..self.p.ncols() {
             for i in 0..j {
-                self.p[(j, i)] = self.p[(i, j)];
+                if let Some(v) = self.p.get((i, j)).copied() {
+                    if let Some(d) = self.p.get_mut((j, i)) {
+                        *d = v;
+                    }
+                }
             }
         }
     }
@@ -424,11 +429,11 @@ where
     /// error.
     pub fn update(&mut self, y: &OVector<T, M>) -> Result<GenericInnovation<T, M>, FilterError> {
         if y.nrows() != self.model.measurements() {
-            self.health.refused_updates += 1;
+            self.health.refused_updates = self.health.refused_updates.saturating_add(1);
             return Err(FilterError::SizeMismatch);
         }
         if y.iter().any(|v| !v.is_finite()) {
-            self.health.refused_updates += 1;
+            self.health.refused_updates = self.health.refused_updates.saturating_add(1);
             return Err(FilterError::NonFiniteMeasurement);
         }
         let residual = y - &self.model.c * &self.x;
@@ -440,7 +445,7 @@ where
         N::mul_tr_mm(&self.ct, &pct, &mut cpct);
         let s = &self.model.r + (&cpct + cpct.transpose()) * T::of_f64(0.5);
         let Some(chol) = s.clone().cholesky() else {
-            self.health.refused_updates += 1;
+            self.health.refused_updates = self.health.refused_updates.saturating_add(1);
             return Err(FilterError::InnovationCovariance);
         };
         // K = P Cᵀ S⁻¹, computed as (S⁻¹ C P)ᵀ since S and P are symmetric.
@@ -496,16 +501,17 @@ where
     pub fn update_sequential(&mut self, y: &OVector<T, M>) -> Result<GenericSequentialInnovation<T, M>, FilterError> {
         let m = self.model.measurements();
         if y.nrows() != m {
-            self.health.refused_updates += 1;
+            self.health.refused_updates = self.health.refused_updates.saturating_add(1);
             return Err(FilterError::SizeMismatch);
         }
         if y.iter().any(|v| !v.is_finite()) {
-            self.health.refused_updates += 1;
+            self.health.refused_updates = self.health.refused_updates.saturating_add(1);
             return Err(FilterError::NonFiniteMeasurement);
         }
         let r = &self.model.r;
-        if (0..m).any(|i| (0..m).any(|j| i != j && r[(i, j)] != T::zero())) {
-            self.health.refused_updates += 1;
+        // Off-diagonal entries through `get` (no index check, no panic path).
+        if (0..m).any(|i| (0..m).any(|j| i != j && r.get((i, j)).is_some_and(|v| *v != T::zero()))) {
+            self.health.refused_updates = self.health.refused_updates.saturating_add(1);
             return Err(FilterError::CorrelatedNoise);
         }
         let residual = y - &self.model.c * &self.x;
@@ -517,7 +523,7 @@ where
             let phi = &p * h.transpose();
             let s = (h * &phi)[(0, 0)] + r[(i, i)];
             if !s.is_finite() || s <= T::zero() {
-                self.health.refused_updates += 1;
+                self.health.refused_updates = self.health.refused_updates.saturating_add(1);
                 return Err(FilterError::InnovationCovariance);
             }
             let e = y[i] - (h * &x)[(0, 0)];
@@ -548,7 +554,7 @@ where
         // A finite sum means no NaN anywhere, so a plain comparison suffices for the diagonal.
         let broken = !sum.is_finite() || (0..self.p.nrows()).any(|i| self.p[(i, i)] <= T::zero());
         if broken {
-            self.health.covariance_resets += 1;
+            self.health.covariance_resets = self.health.covariance_resets.saturating_add(1);
             self.p.copy_from(&self.p_reset);
             if self.x.iter().any(|v| !v.is_finite()) {
                 self.x.copy_from(&self.x_reset);

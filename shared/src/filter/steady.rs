@@ -249,7 +249,7 @@ where
     fn guard(&mut self) {
         if self.x.iter().any(|v| !v.is_finite()) {
             self.x.copy_from(&self.x0);
-            self.resets += 1;
+            self.resets = self.resets.saturating_add(1);
         }
     }
 

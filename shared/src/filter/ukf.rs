@@ -188,15 +188,21 @@ fn moments<T: Real, const K: usize, const N: usize>(
 ) -> (SVector<T, K>, SMatrix<T, K, K>, SMatrix<T, K, N>, SMatrix<T, K, N>) {
     let mut e_plus = *plus;
     let mut e_minus = *minus;
+    // Element by element: the same subtraction without nalgebra's shape assertion.
     for mut col in e_plus.column_iter_mut().chain(e_minus.column_iter_mut()) {
-        col -= center;
+        for (e, c) in col.iter_mut().zip(center.iter()) {
+            *e -= *c;
+        }
     }
+    // The columns as vectors from the storage: `column_iter`'s per-column assertion would be a
+    // panic path (the no-panic proof); the arithmetic is the same.
+    let columns = || e_plus.data.0.iter().chain(e_minus.data.0.iter()).map(|c| SVector::<T, K>::from(*c));
     let mut m = SVector::<T, K>::zeros();
-    for e in e_plus.column_iter().chain(e_minus.column_iter()) {
+    for e in columns() {
         m += e * w.side;
     }
     let mut cov = (m * m.transpose()) * w.cov_shift;
-    for e in e_plus.column_iter().chain(e_minus.column_iter()) {
+    for e in columns() {
         cov += (e * e.transpose()) * w.side;
     }
     for mut col in e_plus.column_iter_mut().chain(e_minus.column_iter_mut()) {
@@ -364,7 +370,7 @@ impl<T: Real, const N: usize, const M: usize> UnscentedKalmanFilter<T, N, M> {
         y: &SVector<T, M>,
     ) -> Result<Innovation<T, M>, FilterError> {
         if y.iter().any(|v| !v.is_finite()) {
-            self.health.refused_updates += 1;
+            self.health.refused_updates = self.health.refused_updates.saturating_add(1);
             return Err(FilterError::NonFiniteMeasurement);
         }
         let x = self.x;
@@ -393,7 +399,7 @@ impl<T: Real, const N: usize, const M: usize> UnscentedKalmanFilter<T, N, M> {
         }
         let residual = y - z_pred;
         let refuse = |health: &mut FilterHealth| {
-            health.refused_updates += 1;
+            health.refused_updates = health.refused_updates.saturating_add(1);
             Err(FilterError::InnovationCovariance)
         };
         if s.iter().any(|v| !v.is_finite()) || pxz.iter().any(|v| !v.is_finite()) {
@@ -424,7 +430,7 @@ impl<T: Real, const N: usize, const M: usize> UnscentedKalmanFilter<T, N, M> {
         match sigma_factor(&self.p, self.weights.spread) {
             Some(l) if state_ok => self.sqrt = l,
             _ => {
-                self.health.covariance_resets += 1;
+                self.health.covariance_resets = self.health.covariance_resets.saturating_add(1);
                 self.p = self.p_reset;
                 self.sqrt = self.sqrt_reset;
                 if !state_ok {

@@ -134,22 +134,26 @@ fn product<T: Real, const K: usize, const R: usize, const C: usize>(
     add: bool,
 ) {
     let mut put = |i: usize, j: usize, v: T| {
-        if add {
-            out[(i, j)] += v;
-        } else {
-            out[(i, j)] = v;
+        // `get_mut`: in range by the loops' bounds, without a panic path (the no-panic proof).
+        if let Some(o) = out.get_mut((i, j)) {
+            if add {
+                *o += v;
+            } else {
+                *o = v;
+            }
         }
     };
     let (ac, bc) = (&a.data.0, &b.data.0);
     let mut j = 0;
     while j < C {
         let two_j = j + 1 < C;
-        let b0 = &bc[j];
-        let b1 = if two_j { &bc[j + 1] } else { b0 };
+        let Some(b0) = bc.get(j) else { break };
+        let b1 = if two_j { bc.get(j + 1).unwrap_or(b0) } else { b0 };
         let rows = if upper { (j + 2).min(R) } else { R };
         let mut i = 0;
         while i + 4 <= rows {
-            let s = dot4x2([&ac[i], &ac[i + 1], &ac[i + 2], &ac[i + 3]], b0, b1);
+            let Some([a0, a1, a2, a3]) = ac.get(i..i + 4) else { break };
+            let s = dot4x2([a0, a1, a2, a3], b0, b1);
             for r in 0..4 {
                 put(i + r, j, s[r]);
                 if two_j {
@@ -160,8 +164,9 @@ fn product<T: Real, const K: usize, const R: usize, const C: usize>(
         }
         while i < rows {
             let two_i = i + 1 < rows;
-            let a0 = &ac[i];
-            let a1 = if two_i { &ac[i + 1] } else { a0 };
+            // `get`: the optimiser does not always see `i < rows <= R` here (no panic path).
+            let Some(a0) = ac.get(i) else { break };
+            let a1 = if two_i { ac.get(i + 1).unwrap_or(a0) } else { a0 };
             let s = dot2x2(a0, a1, b0, b1);
             put(i, j, s[0]);
             if two_j {

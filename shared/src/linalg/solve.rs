@@ -26,41 +26,59 @@ where
     let k_cols = b.ncols();
     let mut a = a.clone();
     let mut x = b.clone();
+    // Every index below is in range by the loops' bounds; `get` and `get_mut` say so without a
+    // panic path, which the optimiser does not always remove (the firmware's no-panic proof).
+    fn at<T: Real, R: Dim, C: Dim>(m: &OMatrix<T, R, C>, i: usize, j: usize) -> T
+    where
+        DefaultAllocator: Allocator<R, C>,
+    {
+        m.get((i, j)).copied().unwrap_or_else(T::zero)
+    }
+    fn sub<T: Real, R: Dim, C: Dim>(m: &mut OMatrix<T, R, C>, i: usize, j: usize, v: T)
+    where
+        DefaultAllocator: Allocator<R, C>,
+    {
+        if let Some(e) = m.get_mut((i, j)) {
+            *e -= v;
+        }
+    }
     for col in 0..n {
         let mut pivot = col;
         for row in col + 1..n {
-            if a[(row, col)].abs() > a[(pivot, col)].abs() {
+            if at(&a, row, col).abs() > at(&a, pivot, col).abs() {
                 pivot = row;
             }
         }
-        let p = a[(pivot, col)];
+        let p = at(&a, pivot, col);
         if p == T::zero() || !p.is_finite() {
             return None;
         }
         a.swap_rows(col, pivot);
         x.swap_rows(col, pivot);
         for row in col + 1..n {
-            let f = a[(row, col)] / p;
+            let f = at(&a, row, col) / p;
             if f == T::zero() {
                 continue;
             }
             for j in col..n {
-                let v = a[(col, j)];
-                a[(row, j)] -= f * v;
+                let v = at(&a, col, j);
+                sub(&mut a, row, j, f * v);
             }
             for j in 0..k_cols {
-                let v = x[(col, j)];
-                x[(row, j)] -= f * v;
+                let v = at(&x, col, j);
+                sub(&mut x, row, j, f * v);
             }
         }
     }
     for col in (0..n).rev() {
         for j in 0..k_cols {
-            let mut s = x[(col, j)];
+            let mut s = at(&x, col, j);
             for k in col + 1..n {
-                s -= a[(col, k)] * x[(k, j)];
+                s -= at(&a, col, k) * at(&x, k, j);
             }
-            x[(col, j)] = s / a[(col, col)];
+            if let Some(e) = x.get_mut((col, j)) {
+                *e = s / at(&a, col, col);
+            }
         }
     }
     Some(x)

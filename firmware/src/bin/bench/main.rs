@@ -14,7 +14,6 @@
 #![no_main]
 
 use cortex_m_rt::entry;
-use defmt_semihosting as _;
 use edgekf::filter::{KalmanFilter, MerweSigmaPoints, SteadyState, SteadyStateFilter, UnscentedKalmanFilter};
 use edgekf::models::synthetic::{dense_model, CubicModel, Lcg};
 use edgekf::systems::oscillator::{HarmonicForceEstimator, HarmonicForceParams};

@@ -68,6 +68,8 @@ fn halt() -> ! {
     }
 }
 
+// Under the no-panic proof, `panic-never` supplies the handler.
+#[cfg(not(feature = "no-panic-proof"))]
 #[panic_handler]
 fn panic(_info: &core::panic::PanicInfo) -> ! {
     defmt::error!("panic");

@@ -6,7 +6,6 @@
 #![no_std]
 #![no_main]
 
-use defmt_semihosting as _;
 use edgekf_firmware::systems::rotor::RotorImage;
 
 edgekf_firmware::qemu_image!(RotorImage);

@@ -195,7 +195,7 @@ impl<T: ClearanceFloat, S: AsRef<[T]> + AsMut<[T]>> CrankFeatures<T, S> {
         let var = (a - mu * mu).max(T::zero());
         let (three, four, six) = (T::of_f64(3.0), T::of_f64(4.0), T::of_f64(6.0));
         let m4 = (c - mu * (four * b - mu * (six * a - three * mu * mu))).max(T::zero());
-        let mags = &self.storage.as_ref()[..n - 1];
+        let mags = self.storage.as_ref().get(..n.saturating_sub(1)).unwrap_or(&[]);
         let median = select_nth(mags, (n - 1) / 2).unwrap_or_else(T::zero);
         // Impacts: runs of |Δα| above 6 × the median; each run's peak.
         let threshold = six * median;

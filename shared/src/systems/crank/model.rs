@@ -94,16 +94,17 @@ impl<T: ClearanceFloat> ClearanceModel<T> {
             for (c, &wc) in w.iter().enumerate() {
                 let r = match c {
                     0 => T::one(),
-                    c if c <= FEATURES => z[c - 1],
-                    c => z[c - 1 - FEATURES] * z[c - 1 - FEATURES],
+                    // `get`: a weight row longer than the terms meets zeros (no panic path).
+                    c if c <= FEATURES => z.get(c - 1).copied().unwrap_or_else(T::zero),
+                    c => z.get(c - 1 - FEATURES).map_or_else(T::zero, |&v| v * v),
                 };
                 s += wc * r;
             }
             s
         };
-        let scores = [0, 1, 2].map(|j| linear(&self.discriminant[j]));
+        let scores = self.discriminant.each_ref().map(|w| linear(w));
         let (lo, hi) = (T::of_f64(CLEARANCE_RANGE.0), T::of_f64(CLEARANCE_RANGE.1));
-        let per_joint = [0, 1, 2].map(|j| linear(&self.regression[j]).exp_m().max(lo).min(hi));
+        let per_joint = self.regression.each_ref().map(|w| linear(w).exp_m().max(lo).min(hi));
         // The largest score; the later joint on a tie (as `Iterator::max_by`).
         let mut joint = 0;
         for j in 1..3 {

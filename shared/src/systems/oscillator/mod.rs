@@ -332,11 +332,11 @@ impl<T: Real> HarmonicForceEstimator<T> {
     /// Advances one sample period. `None` marks a missing sample (dropout, stuck or saturated
     /// sensor): the state is predicted and the uncertainty grows, nothing is invented.
     pub fn step(&mut self, accel: Option<T>) -> HarmonicStep<T> {
-        self.counters.steps += 1;
+        self.counters.steps = self.counters.steps.saturating_add(1);
         self.core.predict();
         let (innovation, nis) = match accel {
             None => {
-                self.counters.missing += 1;
+                self.counters.missing = self.counters.missing.saturating_add(1);
                 (None, None)
             }
             Some(a) => self.measure(a),
@@ -351,8 +351,8 @@ impl<T: Real> HarmonicForceEstimator<T> {
         if gate_on {
             if let Some((r, nis)) = self.core.innovation(&y) {
                 if nis > self.gate {
-                    self.gated_in_a_row += 1;
-                    self.counters.gated += 1;
+                    self.gated_in_a_row = self.gated_in_a_row.saturating_add(1);
+                    self.counters.gated = self.counters.gated.saturating_add(1);
                     return (Some(r), Some(nis));
                 }
             }

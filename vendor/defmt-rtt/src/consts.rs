@@ -1,0 +1,2 @@
+// see `build.rs` for contents
+include!(concat!(env!("OUT_DIR"), "/consts.rs"));
