@@ -8,12 +8,16 @@
 //!   scenario) and print the decoded defmt log, the stack high-water mark included.
 //! * `cargo xtask bench` — per-step instruction counts of the filters on the Cortex-M4F under
 //!   QEMU (an instruction-counting TCG plugin), checked against the budgets.
+//! * `cargo xtask fuzz [--seconds N] [TARGET…]` — the coverage-guided fuzz targets of `fuzz/`
+//!   for N seconds each (default 20), on stable (cargo-fuzz without a sanitizer; installed when
+//!   missing).
 //! * `cargo xtask provision` — install what a fresh Debian machine lacks (as root), or say what.
 //!
 //! The images, their flags, HIL tests and instruction budgets are one table, [`images::IMAGES`].
 
 mod bench;
 mod firmware;
+mod fuzz;
 mod images;
 mod provision;
 
@@ -47,13 +51,14 @@ fn run() -> Result<()> {
             firmware::run_and_print(&elf, data.map(std::path::Path::new))
         }
         Some("provision") => provision::ensure(),
+        Some("fuzz") => fuzz::run(&firmware::workspace_root(), &args[1..]),
         Some("bench") => {
             provision::ensure()?;
             bench::run(&firmware::workspace_root()).map(|_| ())
         }
         _ => {
             eprintln!(
-                "usage: cargo xtask <test [--long] | fw [{}] | run [--data FILE.csv] | bench | provision>",
+                "usage: cargo xtask <test [--long] | fw [{}] | run [--data FILE.csv] | bench | fuzz [--seconds N] [TARGET…] | provision>",
                 images::flags()
             );
             std::process::exit(2);
