@@ -10,6 +10,9 @@
 //!   scenario) and print the decoded defmt log, the stack high-water mark included.
 //! * `cargo xtask bench` — per-step instruction counts of the filters on the Cortex-M4F under
 //!   QEMU (an instruction-counting TCG plugin), checked against the budgets.
+//! * `cargo xtask fuzz [--seconds N] [TARGET…]` — the coverage-guided fuzz targets of `fuzz/`
+//!   for N seconds each (default 20), on stable (cargo-fuzz without a sanitizer; installed when
+//!   missing).
 //! * `cargo xtask provision` — install what a fresh Debian machine lacks (as root), or say what.
 //!
 //! Every build proves its image panic-free as the table says ([`images::PanicProof`]): at link
@@ -20,6 +23,7 @@
 
 mod bench;
 mod firmware;
+mod fuzz;
 mod images;
 mod panics;
 mod provision;
@@ -62,13 +66,14 @@ fn run() -> Result<()> {
             Ok(())
         }
         Some("provision") => provision::ensure(),
+        Some("fuzz") => fuzz::run(&firmware::workspace_root(), &args[1..]),
         Some("bench") => {
             provision::ensure()?;
             bench::run(&firmware::workspace_root()).map(|_| ())
         }
         _ => {
             eprintln!(
-                "usage: cargo xtask <test [--long] | fw [{0}] | panics [{0}] | run [--data FILE.csv] | bench | provision>",
+                "usage: cargo xtask <test [--long] | fw [{0}] | panics [{0}] | run [--data FILE.csv] | bench | fuzz [--seconds N] [TARGET…] | provision>",
                 images::flags()
             );
             std::process::exit(2);

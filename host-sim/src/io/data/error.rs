@@ -51,6 +51,17 @@ pub enum DataError {
         /// Which rule.
         error: edgekf::csv_header::HeaderError,
     },
+    /// A column name holds a comma, a double quote or a line break (possible in a quoted
+    /// header cell): the contract's writer could not write it back.
+    #[error("{}:{line}: column name {name:?} holds a comma, quote or line break", path.display())]
+    BadColumnName {
+        /// The file.
+        path: PathBuf,
+        /// Line of the header.
+        line: u64,
+        /// The name.
+        name: String,
+    },
     /// A row has a different number of fields than the header.
     #[error("{}:{line}: {found} field(s), but the header has {expected}", path.display())]
     Ragged {

@@ -2,6 +2,7 @@
 //!
 //! * a header row, fields separated by commas (surrounding spaces are trimmed; blank lines and
 //!   lines starting with `#` are skipped);
+//! * column names are unique and plain: no comma, double quote or line break, even quoted;
 //! * first column `t`, the time in seconds. Uniform sampling is expected, but gaps and jitter
 //!   are measured and reported ([`TimingReport`]), not hidden;
 //! * then named channels in SI units (`ax` in m/s², …);
@@ -303,6 +304,9 @@ impl Layout {
             checked.find(name).map_err(refused)?;
         }
         let (mut kept, mut ignored) = (Vec::new(), Vec::new());
+        if let Some(name) = checked.names().find(|n| !plain_name(n)) {
+            return Err(DataError::BadColumnName { path: path.to_owned(), line, name: name.to_owned() });
+        }
         for (i, name) in checked.names().enumerate().skip(1) {
             if required.contains(&name) || known.contains(&name) || name.starts_with(TRUTH_PREFIX) {
                 kept.push((i, name.to_owned()));
@@ -312,6 +316,12 @@ impl Layout {
         }
         Ok(Self { width: checked.width(), kept, ignored })
     }
+}
+
+/// Whether a column name is written as it is: no comma, double quote or line break (a
+/// quoted header cell may hold them, but the writer does not quote).
+fn plain_name(name: &str) -> bool {
+    !name.contains([',', '"', '\r', '\n'])
 }
 
 /// A channel cell: a finite number, or NaN for an empty / `NaN` cell. Infinity is refused: no
@@ -338,7 +348,8 @@ fn push_value(out: &mut String, v: f64) {
 }
 
 /// The CSV text of a data file: header `t,names…`, then one row per time. `path` is only used
-/// in the error when a column's length differs from `t`'s.
+/// in the errors: a column's length differs from `t`'s, or a name holds a comma, double quote
+/// or line break (it would not read back).
 pub fn to_csv_string(path: &Path, names: &[&str], t: &[f64], columns: &[&[f64]]) -> Result<String, DataError> {
     if names.len() != columns.len() {
         return Err(DataError::LengthMismatch {
@@ -357,6 +368,9 @@ pub fn to_csv_string(path: &Path, names: &[&str], t: &[f64], columns: &[&[f64]])
                 expected: t.len(),
             });
         }
+    }
+    if let Some(name) = names.iter().find(|n| !plain_name(n)) {
+        return Err(DataError::BadColumnName { path: path.to_owned(), line: 1, name: (*name).to_owned() });
     }
     let mut out = String::with_capacity(t.len() * 12 * (names.len() + 1));
     out.push('t');
