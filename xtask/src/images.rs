@@ -43,6 +43,9 @@ pub const CORE_CSV_PARSING: &[&str] = &[
     "<f32 as core::str::traits::FromStr>::from_str",
     "<core::iter::adapters::enumerate::Enumerate<core::str::iter::Split<char>>",
     "<core::str::pattern::CharSearcher as core::str::pattern::Searcher>::next_match",
+    // The same `Split<char>::next`, inlined into the header rules' field iterator
+    // (`shared/src/csv_header.rs`, `self.fields.next()`).
+    "<edgekf::csv_header::Names<core::str::iter::Split<char>> as core::iter::traits::iterator::Iterator>::next",
 ];
 
 /// One firmware image.
