@@ -107,9 +107,16 @@ impl Bridging {
         out
     }
 
-    /// Whether `row` of the bridged file was inserted for a lost sample.
-    pub fn is_filled(&self, row: usize) -> bool {
-        self.filled.iter().any(|r| r.contains(&row))
+    /// For each of the bridged file's `rows`, whether it was inserted for a lost sample (one
+    /// pass, for estimators that ask per sample).
+    pub fn filled_mask(&self, rows: usize) -> Vec<bool> {
+        let mut mask = vec![false; rows];
+        for r in &self.filled {
+            if let Some(m) = mask.get_mut(r.clone()) {
+                m.fill(true);
+            }
+        }
+        mask
     }
 
     /// Whether the filters restart at `row`.
@@ -219,7 +226,9 @@ mod tests {
         let data = file(t);
         let (b, what) = bridge(&data, &TimingReport::of(&data.t), &TimelineOptions::default());
         assert_eq!((what.inserted, what.gaps, b.t.len()), (21, 1, 2000));
-        assert!(what.is_filled(500) && what.is_filled(520) && !what.is_filled(521) && !what.is_filled(499));
+        let filled = what.filled_mask(b.t.len());
+        assert!(filled[500] && filled[520] && !filled[521] && !filled[499]);
+        assert_eq!(filled.iter().filter(|f| **f).count(), 21);
         for (a, e) in b.t.iter().zip(&full) {
             assert!((a - e).abs() < 1e-12, "{a} vs {e}");
         }

@@ -257,6 +257,7 @@ pub fn run<T: Real>(
     };
     let mut est = new_estimator()?;
     let mut counters = EstimatorCounters::default();
+    let filled = timeline.filled_mask(ax.len());
 
     let n = data.len();
     let mut out = Estimates {
@@ -284,7 +285,7 @@ pub fn run<T: Real>(
             est = new_estimator()?;
             out.input.restarts += 1;
         }
-        let input = if timeline.is_filled(k) {
+        let input = if filled[k] {
             out.input.gap_steps += 1;
             None
         } else if a.is_nan() {
