@@ -169,7 +169,7 @@ impl LoopSystem for Oscillator {
 fn close(factor: f64, bias: f64, seed: u64) -> edgekf_sim::residual_loop::LoopReport {
     let (t, y, truth) = record(factor, bias, 4.0, seed);
     let options = LoopOptions { screen_parameters: false, ..LoopOptions::default() };
-    search(&Oscillator { t, y, truth }, &options).unwrap()
+    search(&mut Oscillator { t, y, truth }, &options).unwrap()
 }
 
 #[test]
@@ -217,8 +217,8 @@ fn toy_loop(
     anyhow::ensure!(cfg.get("frequency_hz").and_then(|v| v.as_float()) == Some(FREQ_HZ), "a 20 Hz toy only");
     let data = edgekf_sim::cli::registry::read_data(&request.data, &["q"], RATE, &Default::default())?;
     let column = |name: &str| data.column(name).map(<[f64]>::to_vec).ok_or_else(|| anyhow::anyhow!("no {name}"));
-    let sys = Oscillator { t: data.t.clone(), y: column("q")?, truth: column("truth_q")? };
-    search(&sys, &request.options)
+    let mut sys = Oscillator { t: data.t.clone(), y: column("q")?, truth: column("truth_q")? };
+    search(&mut sys, &request.options)
 }
 
 /// A new system joins through one registry row: `edgekf loop toy` runs end to end through the

@@ -12,11 +12,17 @@
 //! * [`report`]: what a run reports (`report.json`'s layout);
 //! * [`onset`]: effects that start mid-run (the onset's placement, the halves after it);
 //! * [`signature`]: the innovations' statistics and what is left unexplained;
+//! * [`envelope`]: envelope analysis (kurtogram, squared envelope, lines in its spectrum);
+//! * [`cyclic`]: a resonance rung by periodic impacts, fitted to the innovations by likelihood;
+//! * [`impacts`]: the first stage, periodic impacts named by envelope lines and taken out;
 //! * [`filter`]: a dynamic-size Kalman filter for the host search (time-varying gain until the
 //!   covariance converges, then frozen);
 //! * [`optimize`]: the one-dimensional maximum-likelihood fit of an effect's scalar.
 
+pub mod cyclic;
+pub mod envelope;
 pub mod filter;
+pub mod impacts;
 pub mod onset;
 pub mod optimize;
 pub mod report;

@@ -7,7 +7,9 @@
 //! acceptance rule, the identifiability verdicts and the report, so they read the same for a
 //! machine, a mechanism or a vehicle.
 
+use super::envelope::LineSearch;
 use super::filter::Run;
+use super::impacts::{self, ImpactLine};
 use super::onset;
 use super::optimize::{maximise, ScalarRange};
 use super::signature::{unexplained, Signature, SignatureOptions};
@@ -36,6 +38,9 @@ pub struct LoopOptions {
     /// Check at the end which component parameters the data cannot see (halving or doubling
     /// each changes the log-likelihood by less than its BIC cost).
     pub screen_parameters: bool,
+    /// How the lines of periodic impacts are looked for in the innovations' envelope
+    /// ([`LoopSystem::impact_lines`]).
+    pub envelope: LineSearch,
     /// Print progress to standard error.
     pub progress: bool,
 }
@@ -48,6 +53,7 @@ impl Default for LoopOptions {
             half_gain: 0.25,
             identifiable_margin: 2.0,
             screen_parameters: true,
+            envelope: LineSearch::default(),
             progress: false,
         }
     }
@@ -99,6 +105,19 @@ pub trait LoopSystem {
     /// more than the effect's BIC cost, the data cannot see it. None by default.
     fn screened(&self) -> Vec<(Self::Effect, Vec<f64>)> {
         Vec::new()
+    }
+    /// Periodic impacts the system can name (a bearing's defect lines at the running speed),
+    /// looked for in the envelope of the base model's innovations before anything else (see
+    /// [`impacts`]); none by default.
+    fn impact_lines(&self) -> Vec<ImpactLine<Self::Effect>> {
+        Vec::new()
+    }
+    /// Takes `signal` (in the channel's unit) out of channel `channel` of the data: the
+    /// vibration of impacts the first stage found, so that later runs do not see it. Needed
+    /// only by systems with [`impact_lines`](LoopSystem::impact_lines).
+    fn subtract(&mut self, channel: usize, signal: &[f64]) -> Result<()> {
+        let _ = (channel, signal);
+        Err(anyhow!("{} cannot take a signal out of its data", self.name()))
     }
     /// Time, channels, virtual rows and truth for the report's plots (the engine fills in
     /// the runs before and after).
@@ -464,26 +483,43 @@ fn explained(before: &RunSummary, after: &RunSummary) -> Vec<f64> {
     out
 }
 
-/// Closes the loop on `sys`: runs its base model, then adds effects while the innovations are
+/// Closes the loop on `sys`: runs its base model, takes out the periodic impacts its
+/// envelope names ([`impacts`]), then adds effects while the innovations are
 /// not consistent and an effect pays for its parameters (BIC) in both halves of the run (of
 /// the stretch after its onset, for an effect that starts mid-run); then screens what the data
 /// cannot see and reports what is left.
-pub fn search<S: LoopSystem>(sys: &S, options: &LoopOptions) -> Result<LoopReport> {
+pub fn search<S: LoopSystem>(sys: &mut S, options: &LoopOptions) -> Result<LoopReport> {
     let traces = sys.traces();
-    let mut engine = Engine { sys, options, t: traces.t.clone(), n_meas: 2.0 };
     let mut effects: Vec<Applied<S::Effect>> = Vec::new();
-    engine.progress(|| "running the base model".into());
+    if options.progress {
+        eprintln!("loop: running the base model");
+    }
     let (mut cur_model, mut cur_run) = sys.run(&effects)?;
-    engine.n_meas = cur_run.measurements().max(2) as f64;
-    let engine = engine;
     let base_run = cur_run.clone();
     let before = sys.summarise(&cur_run);
-    let mut current = before.clone();
+    let found = impacts::stage(&*sys, &cur_run, &traces, &options.envelope, options.half_gain);
+    if !found.signals.is_empty() {
+        for (channel, signal) in &found.signals {
+            sys.subtract(*channel, signal)?;
+        }
+        if options.progress {
+            for (_, a) in &found.added {
+                eprintln!(
+                    "loop: impacts {} at {}: Δ log-likelihood {:.1}, BIC cost {:.1}",
+                    a.kind, a.location, a.delta_log_likelihood, a.bic_penalty
+                );
+            }
+        }
+        (cur_model, cur_run) = sys.run(&effects)?;
+    }
+    let sys = &*sys;
+    let engine = Engine { sys, options, t: traces.t.clone(), n_meas: cur_run.measurements().max(2) as f64 };
+    let mut current = sys.summarise(&cur_run);
     let mut added: Vec<Kept<S::Effect>> = Vec::new();
-    let mut trials = Vec::new();
+    let mut trials = found.trials;
     let mut not_identifiable = Vec::new();
     let mut partial: Vec<Signature> = Vec::new();
-    let mut refused: Vec<Refused> = Vec::new();
+    let mut refused: Vec<Refused> = found.refused;
     let stopped;
     let mut iteration = 0;
     loop {
@@ -551,9 +587,11 @@ pub fn search<S: LoopSystem>(sys: &S, options: &LoopOptions) -> Result<LoopRepor
     if options.screen_parameters {
         not_identifiable.extend(engine.screen(&effects, &cur_run)?);
     }
-    let effects_added = added
+    let effects_added = found
+        .added
         .into_iter()
-        .map(|f| AddedEffect {
+        .map(|(_, a)| a)
+        .chain(added.into_iter().map(|f| AddedEffect {
             kind: f.label.kind,
             location: f.label.location,
             value: sys.value(&cur_model, &cur_run, &f.applied),
@@ -562,7 +600,7 @@ pub fn search<S: LoopSystem>(sys: &S, options: &LoopOptions) -> Result<LoopRepor
             explains: f.explains,
             delta_log_likelihood: f.delta,
             bic_penalty: f.penalty,
-        })
+        }))
         .collect();
     let unexplained = if current.consistent {
         Vec::new()

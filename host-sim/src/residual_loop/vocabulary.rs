@@ -28,7 +28,8 @@ pub enum EffectKind {
     PointMass,
     /// A mode the model lacks, Hz (`damping`).
     ExtraMode,
-    /// A bearing defect: impulse size in the channel's unit (`line`, `harmonics`, `band_hz`).
+    /// A bearing defect: RMS of its impacts' vibration in the channel's unit (`line`,
+    /// `harmonics`, `band_hz`, `damping` of the resonance they ring).
     BearingDefect,
     /// An actuator's health factor after the onset (1 = healthy; `onset_s`).
     ActuatorHealth,
@@ -80,9 +81,9 @@ pub struct EffectDetail {
     /// The defect line (`BPFO`, `BPFI`, `BSF`, `FTF`) of a `bearing_defect`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub line: Option<String>,
-    /// Harmonics of the defect line modelled.
+    /// Harmonics of the defect line found in the envelope spectrum (1 = the line itself).
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub harmonics: Option<u32>,
+    pub harmonics: Option<Vec<u32>>,
     /// The band the defect's impulses ring in, Hz.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub band_hz: Option<[f64; 2]>,

@@ -359,5 +359,5 @@ impl LoopSystem for OscillatorSystem<'_> {
 
 /// Closes the loop on `data` with the model of `scenario`.
 pub fn close_loop(scenario: &Scenario, data: &DataFile, options: &LoopOptions) -> Result<LoopReport> {
-    search(&OscillatorSystem::new(scenario, data, options)?, options)
+    search(&mut OscillatorSystem::new(scenario, data, options)?, options)
 }

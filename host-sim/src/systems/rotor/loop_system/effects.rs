@@ -152,10 +152,10 @@ pub enum Effect {
         /// Frequency of the spectral peak that proposed it, mHz.
         seed_mhz: u32,
     },
-    /// A defect of a rolling-element bearing: a periodic force along the load direction (`y`)
-    /// at the bearing node, at a defect line's frequency and its first `harmonics` multiples
-    /// (two states each: the impacts of a spall are periodic, not sinusoidal, and a housing
-    /// resonance lifts the upper harmonics). Value: RMS of the force, N.
+    /// A defect of a rolling-element bearing: impacts at a defect line's rate ringing a
+    /// housing resonance, found and fitted by the engine's first stage on the innovations'
+    /// envelope (`residual_loop::impacts`), never inside the rotor's filter. Value: RMS of the
+    /// impacts' vibration, in the channel's unit.
     BearingDefect {
         /// Bearing index (configuration order).
         bearing: usize,
@@ -163,8 +163,6 @@ pub enum Effect {
         line: BearingLine,
         /// The line's order of the running speed, in thousandths (from the bearing geometry).
         order_milli: u32,
-        /// Harmonics of the line modelled (1 = the line alone).
-        harmonics: u8,
     },
 }
 
@@ -197,7 +195,7 @@ impl Effect {
             }
             Effect::ExtraMode { .. } => "a line at neither an order nor a natural frequency of the model",
             Effect::BearingDefect { .. } => {
-                "lines at a bearing defect frequency (BPFO, BPFI, BSF, FTF) and its harmonics"
+                "a bearing defect line (BPFO, BPFI, BSF, FTF) and its harmonics in the envelope of the most impulsive band"
             }
         }
     }
@@ -207,9 +205,11 @@ impl Effect {
         match self {
             Effect::SensorBias { .. } => 1,
             Effect::HarmonicForce { .. } | Effect::UnknownInput { .. } => 2,
-            Effect::BearingDefect { harmonics, .. } => 2 * (*harmonics).max(1) as usize,
             Effect::ExtraMode { .. } => 2 * channels,
-            Effect::SensorScale { .. } | Effect::SensorDelay { .. } | Effect::Parameter(_) => 0,
+            Effect::SensorScale { .. }
+            | Effect::SensorDelay { .. }
+            | Effect::Parameter(_)
+            | Effect::BearingDefect { .. } => 0,
         }
     }
 
@@ -267,7 +267,8 @@ impl Effect {
             Effect::SensorBias { .. } => "m",
             Effect::SensorScale { .. } | Effect::Parameter(_) => "1",
             Effect::SensorDelay { .. } => "s",
-            Effect::HarmonicForce { .. } | Effect::UnknownInput { .. } | Effect::BearingDefect { .. } => "N",
+            Effect::HarmonicForce { .. } | Effect::UnknownInput { .. } => "N",
+            Effect::BearingDefect { .. } => "m/s^2",
             Effect::ExtraMode { .. } => "Hz",
         }
     }
@@ -468,23 +469,8 @@ pub fn augment(
                     p0[(s + d, s + d)] = tuning.force_std.powi(2);
                 }
             }
-            Effect::BearingDefect { bearing, order_milli, harmonics, .. } => {
-                let node = model
-                    .config()
-                    .bearings
-                    .get(bearing)
-                    .map(|b| b.node)
-                    .ok_or_else(|| anyhow!("no bearing #{bearing}"))?;
-                for h in 0..harmonics.max(1) as usize {
-                    let sh = s + 2 * h;
-                    rotating(&mut a, sh, (h + 1) as f64 * order_milli as f64 * 1e-3 * red.speed);
-                    let t = Target { a: &mut a, c: &mut c, displacement: &mut displacement };
-                    add_force(t, red, model, flex, node, [None, Some(sh)])?;
-                    for d in 0..2 {
-                        qc[(sh + d, sh + d)] = tuning.force_psd;
-                        p0[(sh + d, sh + d)] = tuning.force_std.powi(2);
-                    }
-                }
+            Effect::BearingDefect { .. } => {
+                bail!("a bearing defect is fitted on the innovations' envelope, not in the rotor's filter")
             }
             Effect::ExtraMode { .. } => {
                 if !(theta.is_finite() && theta > 0.0) {
@@ -584,11 +570,10 @@ mod tests {
             (Effect::HarmonicForce { node: 12, order: 2 }, 0.0),
             (Effect::UnknownInput { node: 20 }, 0.0),
             (Effect::ExtraMode { seed_mhz: 55_000 }, 55.0),
-            (Effect::BearingDefect { bearing: 0, line: BearingLine::Bpfo, order_milli: 3585, harmonics: 2 }, 0.0),
         ];
         let m = augment(&red, &model, &flex, &kinds, &EffectTuning::default()).unwrap();
         let added: usize = kinds.iter().map(|(e, _)| e.states(4)).sum();
-        assert_eq!(added, 1 + 2 + 2 + 8 + 4);
+        assert_eq!(added, 1 + 2 + 2 + 8);
         assert_eq!(m.a.nrows(), red.states() + added);
         // The scale multiplies row 2 of the base model's C.
         let base = &red.c;
@@ -601,13 +586,9 @@ mod tests {
         // The 2x force's states rotate at 2 Ω.
         let s = red.states() + 1;
         assert!((m.a[(s + 1, s)] - 2.0 * speed).abs() < 1e-12);
-        // The bearing defect's force acts along y only: its x state has no modal input.
-        let b = red.states() + 1 + 2 + 2 + 8;
-        let r = red.frequencies_hz.len();
-        assert!((0..r).all(|i| m.a[(r + i, b + 1)] == 0.0 && m.a[(r + i, b + 3)] == 0.0));
-        assert!((0..r).any(|i| m.a[(r + i, b)] != 0.0));
-        // Its second harmonic rotates at twice the line's frequency.
-        assert!((m.a[(b + 3, b + 2)] - 2.0 * 3.585 * speed).abs() < 1e-9);
+        // A bearing defect is the envelope stage's, never the filter's.
+        let defect = [(Effect::BearingDefect { bearing: 0, line: BearingLine::Bpfo, order_milli: 3585 }, 0.0)];
+        assert!(augment(&red, &model, &flex, &defect, &EffectTuning::default()).is_err());
     }
 
     /// On the accelerometer rotor, a 1× force added as an effect at disk node 12 must enter the

@@ -196,12 +196,7 @@ pub fn inject_bearing_defect(data: &mut DataFile, channel: &str, d: &DefectSigna
         }
         tk += period * (1.0 + slip.sample(&mut rng));
     }
-    let add = |col: &mut Vec<f64>| col.iter_mut().zip(&signal).for_each(|(v, s)| *v += s);
-    add(column_mut(data, channel).ok_or_else(|| anyhow!("the data file has no channel {channel}"))?);
-    if let Some(col) = column_mut(data, &format!("{TRUTH_PREFIX}{channel}")) {
-        add(col);
-    }
-    Ok(())
+    add_signal(data, channel, &signal)
 }
 
 /// Delays channel `channel` by `tau` seconds (linear interpolation between samples; the first
@@ -223,6 +218,59 @@ pub fn inject_delay(data: &mut DataFile, channel: &str, tau: f64) -> Result<()> 
             let (i, f) = (p.floor() as usize, p.fract());
             (1.0 - f) * old[i.min(last)] + f * old[(i + 1).min(last)]
         };
+    }
+    Ok(())
+}
+
+/// Adds a lightly damped housing or foundation resonance rung by broadband forces to channel
+/// `channel` (and its `truth_` column): the output of `ẍ + 2ζω ẋ + ω² x = w` (white `w`),
+/// the velocity scaled to RMS `rms`, discretised exactly per sample; a healthy machine shows it
+/// too. Seeded with `seed`.
+pub fn inject_resonance(data: &mut DataFile, channel: &str, hz: f64, damping: f64, rms: f64, seed: u64) -> Result<()> {
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, Normal};
+    let t = data.t.clone();
+    if !(hz > 0.0 && damping > 0.0 && damping < 1.0 && rms.is_finite() && rms >= 0.0) || t.len() < 2 {
+        bail!("a resonance needs a frequency > 0, a damping in (0, 1) and an RMS ≥ 0 on two samples or more");
+    }
+    let dt = (t[t.len() - 1] - t[0]) / (t.len() - 1) as f64;
+    let w = std::f64::consts::TAU * hz;
+    let a = faer::mat![[0.0, 1.0], [-w * w, -2.0 * damping * w]];
+    let step = expm((&a * dt).as_ref()).map_err(|e| anyhow!("{e}"))?;
+    // White acceleration of density q gives the velocity a variance q / (4 ζ ω); per sample
+    // the kick's variance is q dt.
+    let kick = (rms * rms * 4.0 * damping * w * dt).sqrt();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let unit = Normal::new(0.0, 1.0).map_err(|e| anyhow!("{e}"))?;
+    let (mut x, mut v) = (0.0, 0.0);
+    let signal: Vec<f64> = (0..t.len())
+        .map(|_| {
+            (x, v) = (
+                step[(0, 0)] * x + step[(0, 1)] * v,
+                step[(1, 0)] * x + step[(1, 1)] * v + kick * unit.sample(&mut rng),
+            );
+            v
+        })
+        .collect();
+    add_signal(data, channel, &signal)
+}
+
+/// Adds sinusoids `(frequency Hz, amplitude, phase rad)` to channel `channel` (and its
+/// `truth_` column): the motor's electromagnetic forces at harmonics of the line frequency.
+pub fn inject_tones(data: &mut DataFile, channel: &str, tones: &[(f64, f64, f64)]) -> Result<()> {
+    let signal: Vec<f64> = data
+        .t
+        .iter()
+        .map(|t| tones.iter().map(|(f, a, p)| a * (std::f64::consts::TAU * f * t + p).cos()).sum())
+        .collect();
+    add_signal(data, channel, &signal)
+}
+
+fn add_signal(data: &mut DataFile, channel: &str, signal: &[f64]) -> Result<()> {
+    let add = |col: &mut Vec<f64>| col.iter_mut().zip(signal).for_each(|(v, s)| *v += s);
+    add(column_mut(data, channel).ok_or_else(|| anyhow!("the data file has no channel {channel}"))?);
+    if let Some(col) = column_mut(data, &format!("{TRUTH_PREFIX}{channel}")) {
+        add(col);
     }
     Ok(())
 }

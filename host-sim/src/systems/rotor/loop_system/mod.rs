@@ -19,12 +19,13 @@ use self::effects::{apply_parameters, augment, AugmentedModel, Effect, EffectTun
 use self::speed::{estimate_speed, RunningSpeed};
 use crate::io::data::DataFile;
 use crate::residual_loop::filter::{run_state_space, Run, StateSpace};
+use crate::residual_loop::impacts::ImpactLine;
 use crate::residual_loop::onset::settled_mean;
 use crate::residual_loop::optimize::ScalarRange;
 use crate::residual_loop::search::{
     search, Applied, EffectDetail, EffectLabel, LoopOptions, LoopReport, LoopSystem, RunSummary, SystemSection, Traces,
 };
-use crate::residual_loop::signature::{summarise, Channel, NamedLine, ReferenceLines, SummaryContext, LINE_HARMONICS};
+use crate::residual_loop::signature::{summarise, Channel, NamedLine, ReferenceLines, SummaryContext};
 use crate::systems::rotor::bearing_geometry::BearingLine;
 use crate::systems::rotor::estimate::Tuning;
 use crate::systems::rotor::estimate::{reduce, ReducedRotor};
@@ -139,7 +140,7 @@ impl<'a> RotorSystem<'a> {
                 .iter()
                 .map(|&(b, l, order)| NamedLine {
                     name: l.name().to_string(),
-                    location: format!("bearing #{b}"),
+                    location: format!("bearing {}", cfg.bearings[b].node),
                     hz: order * speed / TAU,
                 })
                 .collect(),
@@ -173,19 +174,6 @@ impl<'a> RotorSystem<'a> {
     /// The sensor channels as the filter reads them (offsets removed), `[channel][k]`.
     pub fn columns(&self) -> &[Vec<f64>] {
         &self.columns
-    }
-
-    /// The highest harmonic (up to [`LINE_HARMONICS`]) of a line at `order` that some channel's
-    /// spectrum has a peak at, whatever else that peak was named (a harmonic of a defect line
-    /// can sit on an order or a natural frequency too).
-    fn line_harmonics(&self, s: &RunSummary, order: f64) -> u8 {
-        let f = order * self.red.speed / TAU;
-        let tol = 1.2 * s.bin_width_hz;
-        let peaks = || s.channels.iter().flat_map(|c| c.peaks.iter());
-        (1..=LINE_HARMONICS)
-            .filter(|&h| peaks().any(|p| (p.frequency_hz - h as f64 * f).abs() <= tol))
-            .max()
-            .unwrap_or(1)
     }
 
     /// The base model's log-likelihood on the data (no effects).
@@ -244,7 +232,7 @@ impl LoopSystem for RotorSystem<'_> {
     /// elsewhere), then the structural ones (scales, delays, parameters, 1× forces off the
     /// unbalance nodes) when the innovations carry lines or colour; the catch-all
     /// (`unknown_input` at each force site) in a tier of its own.
-    fn candidates(&self, s: &RunSummary, effects: &[Applied<Effect>]) -> Vec<Vec<Effect>> {
+    fn candidates(&self, s: &RunSummary, _effects: &[Applied<Effect>]) -> Vec<Vec<Effect>> {
         let mut named = Vec::new();
         let mut biased: Vec<(f64, usize)> = s
             .channels
@@ -258,19 +246,14 @@ impl LoopSystem for RotorSystem<'_> {
         let mut structural = false;
         let mut modes: Vec<u32> = Vec::new();
         let mut orders: Vec<(f64, u32)> = Vec::new();
-        // Bearing lines seen, with the highest harmonic seen.
-        let mut defects: Vec<(usize, BearingLine, u8)> = Vec::new();
         for c in &s.channels {
             if c.whiteness_p < self.options.signatures.alpha || !c.peaks.is_empty() {
                 structural = true;
             }
             for p in &c.peaks {
-                if let Some((i, h)) = p.line {
-                    let (bearing, line, _) = self.lines[i];
-                    match defects.iter_mut().find(|(b, l, _)| *b == bearing && *l == line) {
-                        Some(d) => d.2 = d.2.max(h),
-                        None => defects.push((bearing, line, h)),
-                    }
+                if p.line.is_some() {
+                    // A bearing line in the spectrum itself: the envelope stage looks for defects.
+                    continue;
                 } else if let Some(k) = p.order {
                     match orders.iter_mut().find(|(_, o)| *o == k) {
                         Some(e) => e.0 = e.0.max(p.prominence_db),
@@ -283,19 +266,6 @@ impl LoopSystem for RotorSystem<'_> {
                         modes.push(mhz);
                     }
                 }
-            }
-        }
-        // A line already modelled is not proposed again with another number of harmonics.
-        let modelled = |b: usize, l: BearingLine| {
-            effects
-                .iter()
-                .any(|a| matches!(a.effect, Effect::BearingDefect { bearing, line, .. } if bearing == b && line == l))
-        };
-        for (bearing, line, seen) in defects.into_iter().filter(|&(b, l, _)| !modelled(b, l)) {
-            if let Some(&(_, _, order)) = self.lines.iter().find(|(b, l, _)| *b == bearing && *l == line) {
-                let harmonics = self.line_harmonics(s, order).max(seen);
-                let order_milli = (order * 1e3).round() as u32;
-                named.push(Effect::BearingDefect { bearing, line, order_milli, harmonics });
             }
         }
         orders.sort_by(|a, b| b.0.total_cmp(&a.0));
@@ -369,20 +339,52 @@ impl LoopSystem for RotorSystem<'_> {
         match effect {
             Effect::SensorBias { .. } => settled(&|k| s[offset][k]),
             Effect::HarmonicForce { .. } => settled(&|k| s[offset][k].hypot(s[offset + 1][k])),
-            Effect::BearingDefect { harmonics, .. } => {
-                let power =
-                    |k: usize| (0..2 * (*harmonics).max(1) as usize).map(|j| s[offset + j][k].powi(2)).sum::<f64>();
-                (settled(&power) / 2.0).sqrt()
-            }
             Effect::UnknownInput { .. } => settled(&|k| s[offset][k].powi(2) + s[offset + 1][k].powi(2)).sqrt(),
             Effect::SensorScale { .. } | Effect::Parameter(_) => applied.theta.exp(),
             Effect::SensorDelay { .. } | Effect::ExtraMode { .. } => applied.theta,
+            // Valued by the envelope stage, which fits it.
+            Effect::BearingDefect { .. } => f64::NAN,
         }
     }
 
     /// Every component parameter, halved and doubled.
     fn screened(&self) -> Vec<(Effect, Vec<f64>)> {
         Parameter::all(self.cfg).into_iter().map(|p| (Effect::Parameter(p), vec![0.5f64.ln(), 2f64.ln()])).collect()
+    }
+
+    /// Every defect line of every bearing with a geometry, at the running speed: an inner-race
+    /// defect turns with the shaft through the load zone (modulated at the shaft's rate), a
+    /// rolling element with the cage (at the cage's, FTF). A line found on an integer order of
+    /// the shaft speed is refused by the engine (a synchronous modulation looks the same).
+    fn impact_lines(&self) -> Vec<ImpactLine<Effect>> {
+        let shaft_hz = self.red.speed / TAU;
+        self.lines
+            .iter()
+            .map(|&(bearing, line, order)| {
+                let cage = self.lines.iter().find(|(b, l, _)| *b == bearing && *l == BearingLine::Ftf).map(|x| x.2);
+                let modulation_hz = match line {
+                    BearingLine::Bpfi => Some(shaft_hz),
+                    BearingLine::Bsf => cage.map(|c| c * shaft_hz),
+                    BearingLine::Bpfo | BearingLine::Ftf => None,
+                };
+                let order_milli = (order * 1e3).round() as u32;
+                ImpactLine {
+                    effect: Effect::BearingDefect { bearing, line, order_milli },
+                    hz: order * shaft_hz,
+                    modulation_hz,
+                    synchronous_hz: Some(shaft_hz),
+                }
+            })
+            .collect()
+    }
+
+    fn subtract(&mut self, channel: usize, signal: &[f64]) -> Result<()> {
+        let col = self.columns.get_mut(channel).ok_or_else(|| anyhow!("no channel #{channel}"))?;
+        if col.len() != signal.len() {
+            return Err(anyhow!("a signal of {} samples for a channel of {}", signal.len(), col.len()));
+        }
+        col.iter_mut().zip(signal).for_each(|(v, s)| *v -= s);
+        Ok(())
     }
 
     fn traces(&self) -> Traces {
@@ -454,7 +456,7 @@ pub fn close_loop(
         }
         None => RunningSpeed { hz: declared_hz, declared_hz, source: "config", spectral_hz: None },
     };
-    search(&RotorSystem::at_speed(model, data, options, rotor, speed)?, options)
+    search(&mut RotorSystem::at_speed(model, data, options, rotor, speed)?, options)
 }
 
 /// Runs the filter of `model` over `columns` (`[channel][k]`, offsets removed) at `dt`, and
