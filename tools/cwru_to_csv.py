@@ -11,7 +11,9 @@ no recording, excerpt or converted CSV is committed to this repository: fetch th
 yourself, convert them outside the repository, and point the tests or `--data` at the CSVs.
 
     python3 -m venv /tmp/venv-cwru && /tmp/venv-cwru/bin/pip install -r tools/requirements-cwru.txt
-    /tmp/venv-cwru/bin/python tools/cwru_to_csv.py normal_0_97.mat --out 097.csv \\
+    /tmp/venv-cwru/bin/python tools/cwru_to_csv.py normal_0_97.mat --out 097_48k.csv \\
+        --channel DE=n1_ay --channel FE=n11_ay
+    /tmp/venv-cwru/bin/python tools/cwru_to_csv.py normal_0_97.mat --decimate 4 --out 097.csv \\
         --channel DE=n1_ay --channel FE=n11_ay
     /tmp/venv-cwru/bin/python tools/cwru_to_csv.py 12k_Drive_End_IR007_0_105.mat \\
         --start 0 --duration 5 --out 105_first5s.csv
@@ -19,18 +21,31 @@ yourself, convert them outside the repository, and point the tests or `--data` a
 What is in a file: variables `X<nnn>_DE_time` (drive-end housing accelerometer),
 `X<nnn>_FE_time` (fan-end housing), `X<nnn>_BA_time` (base plate; not in every file), all in g,
 one column each, and `X<nnn>RPM` (the shaft speed noted during the test). `<nnn>` is the record
-number, but some files also hold another record's variables (098 is known to hold X099 too), so
+number, but a file may also hold another record's variables (098 is said to hold X099 too), so
 for each sensor the variable whose number matches the record is taken (the record number is the
 last number in the file name, or `--record`), else the only one there is, with a notice.
 
+The sample rate: 12 kHz for the 12 kHz drive-end and fan-end fault files, 48 kHz for the
+48 kHz drive-end files and for the normal baseline records 097-100. The baseline is 48 kHz
+although it is usually filed with the 12 kHz data: read at 12 kHz, record 097 has lines at
+quarter orders of the shaft speed (7.48, 14.97, 22.45 Hz ... for a 29.93 Hz shaft), which
+vanish at 48 kHz, where only the integer orders remain, as in the 12 kHz fault record 105 and
+the 48 kHz record 109 (0 hp both), and 097 has as many samples as the 48 kHz record 109
+(243938: 5.08 s). So without `--rate` the rate is 48000 Hz for records 97-100 and files whose
+name starts with `48k`, else 12000 Hz, and the choice goes to stderr. `--decimate N` writes
+every N-th sample after a linear-phase anti-alias FIR (Kaiser window: flat to 0.8 of the new
+Nyquist frequency, 80 dB down at it), e.g. `--decimate 4` puts the 48 kHz baseline on the 12 kHz
+fault records' clock; the filter's delay is compensated, and the first and last ~25 output
+samples carry its start-up (the record is padded with its mean).
+
 What is written: a header row, then one row per sample, comma-separated. The first column is
 `t` in seconds, t = k / fs with k the sample's index in the record (so a cut made with
-`--start` keeps the record's own clock) and fs from `--rate` (12000 Hz for these files; the
-48 kHz drive-end files need `--rate 48000`). `t` is written as the shortest decimal that reads
-back to the exact double k / fs, so the reader sees no jitter; the channels follow in m/s^2
-(g x 9.80665) with 9 significant digits (the recordings come from a 16-bit recorder).
-Channels are named by `--channel SENSOR=NAME` (SENSOR is DE, FE or BA), in the order given;
-the default is `DE=n1_ay`.
+`--start` keeps the record's own clock; with `--decimate N`, fs is the output rate and k
+counts output samples). `t` is written as the shortest decimal that reads back to the exact
+double k / fs, so the reader sees no jitter; the channels follow in m/s^2 (g x 9.80665) with
+9 significant digits (the recordings come from a 16-bit recorder). Channels are named by
+`--channel SENSOR=NAME` (SENSOR is DE, FE or BA), in the order given; the default is
+`DE=n1_ay`. `--start` and `--duration` are seconds on the output clock.
 
 Safety: the output's folder must exist; an existing output is refused unless `--force`, and the
 input is never overwritten, whatever the spelling. The CSV is written to a temporary file in
@@ -144,7 +159,11 @@ def main(argv=None):
     ap.add_argument("--out", required=True, help="the CSV to write")
     ap.add_argument("--channel", action="append", type=parse_channel, metavar="SENSOR=NAME",
                     help="map a sensor (DE, FE, BA) to a channel name; repeatable; default DE=n1_ay")
-    ap.add_argument("--rate", type=positive, default=12000.0, help="sample rate fs, Hz (default 12000)")
+    ap.add_argument("--rate", type=positive, default=None,
+                    help="the record's sample rate, Hz (default: 48000 for records 97-100 and files "
+                         "named 48k*, else 12000)")
+    ap.add_argument("--decimate", type=int, default=1, metavar="N",
+                    help="write every N-th sample after an anti-alias FIR (default 1: all samples)")
     ap.add_argument("--start", type=non_negative, default=0.0,
                     help="first sample at k = round(start * fs), s (default 0)")
     ap.add_argument("--duration", type=positive, default=None,
@@ -153,6 +172,8 @@ def main(argv=None):
                     help="the record number, when the file name does not end with it")
     ap.add_argument("--force", action="store_true", help="overwrite an existing output (never the input)")
     args = ap.parse_args(argv)
+    if args.decimate < 1:
+        ap.error(f"--decimate {args.decimate}: must be 1 or more")
 
     channels = args.channel or [("DE", "n1_ay")]
     names = [name for _, name in channels]
@@ -221,22 +242,31 @@ def run(args, channels):
     except Failure:
         notice(f"{inp}: no RPM variable in the file; RPM unknown")
 
-    fs = args.rate
+    fs_in = args.rate
+    if fs_in is None:
+        fs_in = default_rate(inp, record)
+    n_dec = args.decimate
+    fs = fs_in / n_dec
+    series = [x * G for _, _, x in cols]
+    if n_dec > 1:
+        series = [decimate(x, n_dec) for x in series]
+        notice(f"decimated by {n_dec}: {fs_in:g} Hz -> {fs:g} Hz, {series[0].size} samples")
+    n_out = series[0].size
     k0 = int(round(args.start * fs))
-    if k0 >= n_record:
+    if k0 >= n_out:
         raise Failure(f"{inp}: --start {args.start:g} s is past the record's end "
-                      f"({n_record} samples, {n_record / fs:g} s at {fs:g} Hz)")
+                      f"({n_out} samples, {n_out / fs:g} s at {fs:g} Hz)")
     if args.duration is None:
-        k1 = n_record
+        k1 = n_out
     else:
         k1 = k0 + int(round(args.duration * fs))
-        if k1 > n_record:
+        if k1 > n_out:
             raise Failure(f"{inp}: --start {args.start:g} s --duration {args.duration:g} s runs past "
-                          f"the record's end ({n_record} samples, {n_record / fs:g} s at {fs:g} Hz)")
+                          f"the record's end ({n_out} samples, {n_out / fs:g} s at {fs:g} Hz)")
         if k1 == k0:
             raise Failure(f"{inp}: --duration {args.duration:g} s is less than one sample")
 
-    data = [x[k0:k1] * G for _, _, x in cols]
+    data = [x[k0:k1] for x in series]
     bad = sum(int(np.count_nonzero(~np.isfinite(d))) for d in data)
     if bad:
         notice(f"{bad} non-finite value(s) written as empty cells")
@@ -279,8 +309,40 @@ def run(args, channels):
         raise
 
     n = k1 - k0
-    notice(f"{inp}: {n_record} samples in the record ({n_record / fs:g} s at {fs:g} Hz); "
+    notice(f"{inp}: {n_record} samples in the record ({n_record / fs_in:g} s at {fs_in:g} Hz); "
            f"wrote {n} rows, t = {k0 / fs:g} .. {(k1 - 1) / fs:g} s, to {out}")
+
+
+# Records sampled at 48 kHz whose file names need not say so: the normal baseline (module docstring).
+BASELINE_48K = range(97, 101)
+
+
+def default_rate(path, record):
+    name = os.path.basename(path)
+    if name.lower().startswith("48k"):
+        notice(f"rate 48000 Hz (the file name says 48k; give --rate to override)")
+        return 48000.0
+    if record in BASELINE_48K:
+        notice(f"rate 48000 Hz (record {record} is a normal baseline record, sampled at 48 kHz; "
+               f"give --rate to override, --decimate 4 for 12 kHz)")
+        return 48000.0
+    notice("rate 12000 Hz (give --rate to override)")
+    return 12000.0
+
+
+def decimate(x, n):
+    """Every n-th sample after a zero-phase Kaiser FIR, 80 dB down at the new Nyquist frequency."""
+    import numpy as np
+    import scipy.signal as sg
+
+    nyq_out = 0.5 / n  # in cycles per input sample
+    numtaps, beta = sg.kaiserord(80.0, 0.2 * nyq_out * 2.0)  # transition 0.8..1.0 of nyq_out
+    numtaps |= 1  # odd: a whole-sample delay, which resample_poly removes
+    h = sg.firwin(numtaps, 0.9 * nyq_out * 2.0, window=("kaiser", beta))
+    bad = ~np.isfinite(x)
+    if bad.any():
+        raise Failure(f"{int(bad.sum())} non-finite value(s): cannot decimate")
+    return sg.resample_poly(x, 1, n, window=h, padtype="mean")
 
 
 def current_umask():
