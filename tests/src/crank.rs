@@ -17,10 +17,17 @@ pub struct CrankRun {
     pub features: [f32; FEATURES],
     /// The estimate for the whole recording.
     pub estimate: ClearanceEstimate<f32>,
-    /// Input lines read.
+    /// Samples stepped (input lines, and missing lines bridged).
     pub samples: u32,
-    /// Samples skipped (lines that did not parse or held a non-finite value).
+    /// Samples skipped (lines that did not parse or held a non-finite value, and missing
+    /// lines).
     pub skipped: u32,
+    /// Lines that did not parse.
+    pub bad_lines: u32,
+    /// Lines missing from the file, stepped as missing samples.
+    pub missing_lines: u32,
+    /// Lines whose `t` was off the sample grid.
+    pub time_jumps: u32,
 }
 
 /// Runs the firmware's crank image over CSV text exactly as `edgekf-crank-qemu` does.
@@ -44,6 +51,9 @@ pub fn parse(lines: &[String]) -> Result<CrankRun> {
         estimate: end.estimate().ok_or_else(joint)?,
         samples: end.samples,
         skipped: end.skipped,
+        bad_lines: end.bad_lines,
+        missing_lines: end.missing_lines,
+        time_jumps: end.time_jumps,
     })
 }
 

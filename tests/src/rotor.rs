@@ -6,9 +6,8 @@ use crate::report::frames;
 use anyhow::{anyhow, Result};
 use edgekf_firmware::line_feed::ChannelReader;
 use edgekf_firmware::node::Node;
-use edgekf_firmware::source::ChannelSource;
 use edgekf_firmware::systems::rotor::{
-    RotorEstimator, RotorFrame, RotorImage, RotorNode, RotorReport, CHANNELS, DISK_NODES,
+    channel_source, RotorEnd, RotorEstimator, RotorFrame, RotorImage, RotorNode, RotorReport, CHANNELS, DISK_NODES,
 };
 use edgekf_sim::systems::rotor::Recording;
 
@@ -22,13 +21,24 @@ pub fn run_host(csv: &[u8]) -> Result<Vec<RotorReport>> {
 /// the node's switch against).
 pub fn run_host_with(csv: &[u8], est: RotorEstimator) -> Result<Vec<RotorReport>> {
     let reader = ChannelReader::new(csv, CHANNELS).map_err(|e| anyhow!("header: {e:?}"))?;
-    let mut node = Node::new(ChannelSource::new(reader), RotorNode::new(est), Default::default());
+    let mut node = Node::new(channel_source(reader), RotorNode::new(est), Default::default());
     parse(&crate::host::run_node::<RotorImage>(&mut node)?)
 }
 
 /// The `rot` frames of a run's lines, as reports.
 pub fn parse(lines: &[String]) -> Result<Vec<RotorReport>> {
     Ok(frames::<RotorFrame>(lines)?.iter().map(RotorFrame::report).collect())
+}
+
+/// The `rot` frames of a run's lines as (sample number, report): a sample bridged for a line
+/// missing from the file has no frame of its own.
+pub fn parse_numbered(lines: &[String]) -> Result<Vec<(u32, RotorReport)>> {
+    Ok(frames::<RotorFrame>(lines)?.iter().map(|f| (f.sample, f.report())).collect())
+}
+
+/// The run's end frame (its counts).
+pub fn end(lines: &[String]) -> Result<RotorEnd> {
+    frames::<RotorEnd>(lines)?.pop().ok_or_else(|| anyhow!("no `rotor` line: the run did not finish"))
 }
 
 /// Worst RMS error over the disk nodes' x and y for samples with `t ≥ t0`, m.
