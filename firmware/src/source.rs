@@ -345,24 +345,29 @@ fn retry<T, IF: Interface>(
 ///
 /// With a clock ([`with_clock`](Self::with_clock)) the source also reads each line's `t` and
 /// bridges lines missing from the file: a line whose `t` is a whole number `k ≥ 2` of sample
-/// periods (within a quarter period) after the previous line's is preceded by `k − 1` missing
-/// samples (`None`), so that the estimator's clock does not slip, up to `max_gap` of them. A
-/// line off that grid (a repeated or earlier `t`, a gap of 1.5 periods, a longer gap, a `t` that
-/// is garbage) is a time jump: counted, not bridged, and its `t` the new reference. Lines that
-/// do not parse are stepped as missing, one each, as without a clock.
+/// periods (within a quarter period) after the previous timed line's is preceded by `k − 1`
+/// missing samples (`None`), so that the estimator's clock does not slip, up to `max_gap` of
+/// them. A line off that grid (a repeated or earlier `t`, a gap of 1.5 periods, a longer gap, a
+/// `t` that is garbage but a number) is a time jump: counted, not bridged, and its `t` the new
+/// reference. A line whose channels do not parse but whose `t` does is stepped as missing, at
+/// its time. A line without a usable `t` is not stepped at all: if it stood for a sample, the
+/// next line's `t` shows the gap and bridges it; if it was inserted junk, stepping it would
+/// slip the clock. Without a clock every line is one sample, bad ones stepped as missing.
 ///
 /// ```
 /// use edgekf_firmware::line_feed::ChannelReader;
 /// use edgekf_firmware::node::{Health, Recorded, SampleSource};
 /// use edgekf_firmware::source::ChannelSource;
-/// let text = b"t,a\n0,1.5\n0.1,x\n0.4,2\n";
+/// // 0.2 is missing, 0.3 garbage, and a line of junk sits between 0.4 and 0.5.
+/// let text = b"t,a\n0,1.5\n0.1,x\n#?\n0.4,2\njunk\n0.5,3\n";
 /// let mut src = ChannelSource::new(ChannelReader::new(&text[..], ["a"]).unwrap()).with_clock(0.1, 10);
 /// let mut got = Vec::new();
 /// while src.advance() {
 ///     src.read(&mut Health::default(), |s| got.push(s));
 /// }
-/// assert_eq!(got, [Some([1.5]), None, None, None, Some([2.0])]);
-/// assert_eq!((src.reader().bad_lines(), src.missing_lines(), src.time_jumps()), (1, 2, 0));
+/// assert_eq!(got, [Some([1.5]), None, None, None, Some([2.0]), Some([3.0])]);
+/// assert_eq!(src.reader().bad_lines(), 3);
+/// assert_eq!((src.missing_lines(), src.untimed_lines(), src.time_jumps()), (2, 2, 0));
 /// ```
 pub struct ChannelSource<B: ByteSource, const M: usize> {
     reader: ChannelReader<B, M>,
@@ -372,6 +377,7 @@ pub struct ChannelSource<B: ByteSource, const M: usize> {
     gap: u32,
     missing_lines: u32,
     time_jumps: u32,
+    untimed_lines: u32,
 }
 
 /// A channel source's sample clock.
@@ -399,7 +405,7 @@ impl Clock {
 impl<B: ByteSource, const M: usize> ChannelSource<B, M> {
     /// Lines of `reader`, its header already read; one sample per line.
     pub fn new(reader: ChannelReader<B, M>) -> Self {
-        Self { reader, line: None, clock: None, gap: 0, missing_lines: 0, time_jumps: 0 }
+        Self { reader, line: None, clock: None, gap: 0, missing_lines: 0, time_jumps: 0, untimed_lines: 0 }
     }
 
     /// Bridges lines missing from the file by their `t`, for samples `period_s` apart, up to
@@ -421,6 +427,11 @@ impl<B: ByteSource, const M: usize> ChannelSource<B, M> {
     /// Lines whose `t` was off the sample grid (see the type's docs), not bridged.
     pub fn time_jumps(&self) -> u32 {
         self.time_jumps
+    }
+
+    /// Lines without a usable `t`, not stepped (with a clock only; they count as bad lines too).
+    pub fn untimed_lines(&self) -> u32 {
+        self.untimed_lines
     }
 }
 
@@ -454,7 +465,13 @@ impl<B: ByteSource, const M: usize> Recorded for ChannelSource<B, M> {
             self.line = None;
             return false;
         };
-        if let (Some(clock), Some(t)) = (self.clock.as_mut(), t) {
+        self.line = Some(line);
+        if let Some(clock) = self.clock.as_mut() {
+            let Some(t) = t else {
+                self.untimed_lines = self.untimed_lines.saturating_add(1);
+                self.line = None;
+                return true;
+            };
             match clock.missing_before(t) {
                 Some(gap) => {
                     self.gap = gap;
@@ -463,7 +480,6 @@ impl<B: ByteSource, const M: usize> Recorded for ChannelSource<B, M> {
                 None => self.time_jumps = self.time_jumps.saturating_add(1),
             }
         }
-        self.line = Some(line);
         true
     }
 }

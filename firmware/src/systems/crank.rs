@@ -299,7 +299,7 @@ impl From<[f32; FEATURES]> for FeaturesFrame {
 
 clearance_frame! {
     /// The end of a crank run: the whole recording's estimate and the counts.
-    CrankEnd = "crank {=u8} {=f32} {=f32} {=f32} {=f32} {=f32} {=f32} {=f32} {=u8} {=u32} {=u32} {=u32} {=u32} {=u32} {=u32}" {} {
+    CrankEnd = "crank {=u8} {=f32} {=f32} {=f32} {=f32} {=f32} {=f32} {=f32} {=u8} {=u32} {=u32} {=u32} {=u32} {=u32} {=u32} {=u32}" {} {
         /// Windows completed.
         pub windows: u32,
         /// Samples stepped (lines, and missing lines bridged).
@@ -308,6 +308,8 @@ clearance_frame! {
         pub skipped: u32,
         /// Lines that did not parse.
         pub bad_lines: u32,
+        /// Of those, lines without a usable `t` (not stepped).
+        pub untimed_lines: u32,
         /// Lines missing from the file (by their `t`), stepped as missing samples.
         pub missing_lines: u32,
         /// Lines whose `t` was off the sample grid (not bridged; see
@@ -373,6 +375,7 @@ impl HilImage for CrankImage {
             samples: est.samples(),
             skipped: est.skipped(),
             bad_lines: node.source().reader().bad_lines(),
+            untimed_lines: node.source().untimed_lines(),
             missing_lines: node.source().missing_lines(),
             time_jumps: node.source().time_jumps(),
             ..CrankEnd::default()

@@ -331,11 +331,13 @@ impl RotorFrame {
 crate::frame! {
     /// The end of a rotor run.
     #[derive(Eq)]
-    pub struct RotorEnd = "rotor {=u32} {=u32} {=u32} {=u32} {=u32} {=u32}" {
-        /// Input lines stepped.
+    pub struct RotorEnd = "rotor {=u32} {=u32} {=u32} {=u32} {=u32} {=u32} {=u32}" {
+        /// Input lines read (one poll each).
         pub samples: u32,
-        /// Of those, lines that did not parse (stepped as missing).
+        /// Of those, lines that did not parse (stepped as missing if their `t` did).
         pub bad_lines: u32,
+        /// Of the bad lines, those without a usable `t` (not stepped).
+        pub untimed_lines: u32,
         /// Lines missing from the file (by their `t`), bridged by prediction.
         pub missing_lines: u32,
         /// Lines whose `t` was off the sample grid (not bridged; see
@@ -420,6 +422,7 @@ impl HilImage for RotorImage {
         sink.frame(&RotorEnd {
             samples: node.health().blocks,
             bad_lines: node.source().reader().bad_lines(),
+            untimed_lines: node.source().untimed_lines(),
             missing_lines: node.source().missing_lines(),
             time_jumps: node.source().time_jumps(),
             covariance_resets: h.covariance_resets,
