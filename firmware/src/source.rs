@@ -429,7 +429,8 @@ impl<B: ByteSource, const M: usize> ChannelSource<B, M> {
         self.time_jumps
     }
 
-    /// Lines without a usable `t`, not stepped (with a clock only; they count as bad lines too).
+    /// Lines without a usable `t`, not stepped (with a clock only). A line that is garbage
+    /// throughout is also one of the reader's bad lines.
     pub fn untimed_lines(&self) -> u32 {
         self.untimed_lines
     }

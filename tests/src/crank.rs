@@ -24,7 +24,7 @@ pub struct CrankRun {
     pub skipped: u32,
     /// Lines that did not parse.
     pub bad_lines: u32,
-    /// Of those, lines without a usable `t` (not stepped).
+    /// Lines without a usable `t` (not stepped).
     pub untimed_lines: u32,
     /// Lines missing from the file, stepped as missing samples.
     pub missing_lines: u32,

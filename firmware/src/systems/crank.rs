@@ -308,7 +308,7 @@ clearance_frame! {
         pub skipped: u32,
         /// Lines that did not parse.
         pub bad_lines: u32,
-        /// Of those, lines without a usable `t` (not stepped).
+        /// Lines without a usable `t` (not stepped).
         pub untimed_lines: u32,
         /// Lines missing from the file (by their `t`), stepped as missing samples.
         pub missing_lines: u32,

@@ -336,7 +336,7 @@ crate::frame! {
         pub samples: u32,
         /// Of those, lines that did not parse (stepped as missing if their `t` did).
         pub bad_lines: u32,
-        /// Of the bad lines, those without a usable `t` (not stepped).
+        /// Lines without a usable `t` (not stepped).
         pub untimed_lines: u32,
         /// Lines missing from the file (by their `t`), bridged by prediction.
         pub missing_lines: u32,
