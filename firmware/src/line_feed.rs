@@ -182,6 +182,10 @@ impl<S: ByteSource> SampleFeed for LineFeed<S> {
     }
 }
 
+/// A line of named channels and its `t`, as [`ChannelReader::next_timed`] reads it: `t` if it
+/// is a finite number, the values or why not.
+pub type TimedLine<const M: usize> = (Option<f64>, Result<[f32; M], BadLine>);
+
 /// Most columns a [`ChannelReader`] header may have.
 pub const MAX_COLUMNS: usize = 128;
 
@@ -225,34 +229,60 @@ impl<S: ByteSource, const M: usize> ChannelReader<S, M> {
 
     /// The next line's values; `Err` for a line that does not parse (counted), `None` at the end.
     pub fn next_values(&mut self) -> Option<Result<[f32; M], BadLine>> {
+        self.next_line_values(false).map(|(_, values)| values)
+    }
+
+    /// Like [`next_values`](Self::next_values), also returning the line's `t` (the first
+    /// column, parsed as `f64` so that sample times keep their spacing in long recordings) when
+    /// it reads as a finite number, whether or not the channels do: a line whose values are bad
+    /// still says when it was.
+    ///
+    /// ```
+    /// use edgekf_firmware::line_feed::ChannelReader;
+    /// let text = b"t,a\n0.001,1.5\n0.002,x\nnope,2\n";
+    /// let mut r = ChannelReader::new(&text[..], ["a"]).unwrap();
+    /// assert_eq!(r.next_timed(), Some((Some(0.001), Ok([1.5]))));
+    /// assert!(matches!(r.next_timed(), Some((Some(t), Err(_))) if t == 0.002));
+    /// assert_eq!(r.next_timed(), Some((None, Ok([2.0]))));
+    /// ```
+    pub fn next_timed(&mut self) -> Option<TimedLine<M>> {
+        self.next_line_values(true)
+    }
+
+    fn next_line_values(&mut self, timed: bool) -> Option<TimedLine<M>> {
         loop {
             let line = match self.reader.next_line()? {
                 Ok(text) if text.trim().is_empty() => continue,
                 Ok(text) => text,
                 Err(BadLine) => {
                     self.bad_lines = self.bad_lines.saturating_add(1);
-                    return Some(Err(BadLine));
+                    return Some((None, Err(BadLine)));
                 }
             };
+            let mut t = None;
             let mut values = [f32::NAN; M];
             let mut fields = 0;
+            let mut bad = false;
             for (i, field) in line.split(',').enumerate() {
                 fields = i + 1;
+                if timed && i == 0 {
+                    t = field.trim().parse::<f64>().ok().filter(|v| v.is_finite());
+                }
+                if bad {
+                    continue;
+                }
                 if let Some(k) = self.index.iter().position(|&c| usize::from(c) == i) {
-                    match field.trim().parse::<f32>() {
-                        Ok(v) if v.is_finite() => values[k] = v,
-                        _ => {
-                            self.bad_lines = self.bad_lines.saturating_add(1);
-                            return Some(Err(BadLine));
-                        }
+                    match (field.trim().parse::<f32>(), values.get_mut(k)) {
+                        (Ok(v), Some(slot)) if v.is_finite() => *slot = v,
+                        _ => bad = true,
                     }
                 }
             }
-            if fields != self.width {
+            if bad || fields != self.width {
                 self.bad_lines = self.bad_lines.saturating_add(1);
-                return Some(Err(BadLine));
+                return Some((t, Err(BadLine)));
             }
-            return Some(Ok(values));
+            return Some((t, Ok(values)));
         }
     }
 

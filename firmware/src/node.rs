@@ -13,28 +13,38 @@
 //! [`Node::poll`] is called once per source period: for the ADXL355 once per FIFO watermark
 //! period (`watermark / 3` samples at the output data rate), on the board from a timer, under
 //! QEMU and in host tests right after the harness advances the virtual device's clock by one
-//! period ([`Recorded::advance`]); for a channel source once per line. Samples that could not
-//! be read stay in the FIFO and are read late; samples the FIFO overwrote (overrun) are bridged
-//! by prediction-only steps, so the estimator's clock never slips against the physical one.
+//! period ([`Recorded::advance`]); for a channel source once per line. A poll never comes before
+//! its period has ended. Samples that could not be read stay in the FIFO and are read late;
+//! samples that never arrive (the FIFO overwrote them, the part did not produce them or reset,
+//! a line is missing from the file) are bridged by prediction-only steps, so the estimator's
+//! clock never slips against the physical one.
 
 use edgekf::residual::RunningStats;
 
 crate::frame! {
-    /// Counted events. A clean run has only `samples` and `blocks` non-zero.
+    /// Counted events. A clean run has only `samples` and `blocks` non-zero. Every counter
+    /// saturates.
     #[derive(Eq)]
     #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-    pub struct Health = "health {=u32} {=u32} {=u32} {=u32} {=u32} {=u32} {=u32} {=u32} {=u32} {=u32} {=u32}" {
+    pub struct Health = "health {=u32} {=u32} {=u32} {=u32} {=u32} {=u32} {=u32} {=u32} {=u32} {=u32} {=u32} {=u32} {=u32} {=u32} {=u32} {=u32}" {
         /// Polls made.
         pub blocks: u32,
         /// Samples the estimator updated with (an innovation and its NIS).
         pub samples: u32,
-        /// Bus errors seen (each failed attempt), NACKs included.
+        /// Failed bus operations (each attempt): NACKs, timeouts, garbage reads (wrong IDs) and
+        /// other bus errors.
         pub bus_errors: u32,
         /// Of those, NACKs.
         pub nacks: u32,
+        /// Of those, timeouts (not retried: the poll is given up).
+        pub timeouts: u32,
+        /// Of those, reads whose ID registers came back wrong (a bus returning garbage; the
+        /// FIFO is not read on them).
+        pub bad_id: u32,
         /// Operations that succeeded after at least one retry.
         pub recovered: u32,
-        /// Polls whose FIFO could not be read within the attempt budget.
+        /// Polls given up (the FIFO could not be read within the attempt budget, or a part that
+        /// reset could not be reconfigured yet).
         pub failed_polls: u32,
         /// FIFO overruns reported by the sensor.
         pub fifo_overruns: u32,
@@ -44,8 +54,17 @@ crate::frame! {
         pub saturated: u32,
         /// Samples identical to the previous one on all axes (frozen output, not used).
         pub stuck: u32,
-        /// Samples the FIFO lost, bridged by prediction.
+        /// Samples due that were never read, bridged by prediction: overwritten in the FIFO,
+        /// never produced, or lost to a reset.
         pub bridged: u32,
+        /// Of those, samples the part did not deliver without a FIFO overrun: a stall, or a
+        /// reset (the FIFO cleared, standby until reconfigured).
+        pub dropped: u32,
+        /// Configuration read-backs: polls that found the FIFO empty although samples were due.
+        pub config_checks: u32,
+        /// Resets detected (the configuration read back at its defaults); each one leads to a
+        /// re-initialisation.
+        pub resets: u32,
     }
 }
 
@@ -136,10 +155,10 @@ impl<S: SampleSource, E: NodeEstimator<Input = S::Sample>> Node<S, E> {
             if let Innovation { residual: Some(r), nis: Some(n) } = estimator.step(sample) {
                 innovations.push(r);
                 nis.push(n);
-                used += 1;
+                used = used.saturating_add(1);
             }
         });
-        self.health.samples += used;
+        self.health.samples = self.health.samples.saturating_add(used);
         self.estimator.report(&Poll { block, read, missing, innovations, nis })
     }
 

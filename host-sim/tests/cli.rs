@@ -48,7 +48,8 @@ fn demo_prints_the_summary_and_writes_files() {
 
     let data = std::fs::read_to_string(dir.join("data.csv")).unwrap();
     assert!(data.starts_with(
-        "t,ax,ay,az,fault_nack,fault_stuck,truth_x,truth_v,truth_force,truth_force_amplitude,truth_accel\n0,"
+        "t,ax,ay,az,fault_nack,fault_timeout,fault_garbage,fault_stuck,fault_drop,fault_reset,truth_x,truth_v,\
+         truth_force,truth_force_amplitude,truth_accel\n0,"
     ));
     assert_eq!(data.lines().count(), 12_001);
     let est = std::fs::read_to_string(dir.join("est.csv")).unwrap();
@@ -88,7 +89,7 @@ fn simulate_then_estimate_round_trip_with_faults() {
     let est = dir.join("est.csv");
     let out = edgekf(&["oscillator", "simulate", "--config", DEMO_CONFIG, "--out", path(&data), "--faults"]);
     assert!(out.status.success(), "{}", text(&out.stderr));
-    assert!(text(&out.stdout).contains("12000 samples, seed 1, 3 fault(s)"), "{}", text(&out.stdout));
+    assert!(text(&out.stdout).contains("12000 samples, seed 1, 7 fault(s)"), "{}", text(&out.stdout));
 
     let out = edgekf(&["oscillator", "estimate", "--config", DEMO_CONFIG, "--data", path(&data), "--out", path(&est)]);
     let (stdout, stderr) = (text(&out.stdout), text(&out.stderr));

@@ -17,10 +17,19 @@ pub struct CrankRun {
     pub features: [f32; FEATURES],
     /// The estimate for the whole recording.
     pub estimate: ClearanceEstimate<f32>,
-    /// Input lines read.
+    /// Samples stepped (input lines, and missing lines bridged).
     pub samples: u32,
-    /// Samples skipped (lines that did not parse or held a non-finite value).
+    /// Samples skipped (lines that did not parse or held a non-finite value, and missing
+    /// lines).
     pub skipped: u32,
+    /// Lines that did not parse.
+    pub bad_lines: u32,
+    /// Lines without a usable `t` (not stepped).
+    pub untimed_lines: u32,
+    /// Lines missing from the file, stepped as missing samples.
+    pub missing_lines: u32,
+    /// Lines whose `t` was off the sample grid.
+    pub time_jumps: u32,
 }
 
 /// Runs the firmware's crank image over CSV text exactly as `edgekf-crank-qemu` does.
@@ -44,6 +53,10 @@ pub fn parse(lines: &[String]) -> Result<CrankRun> {
         estimate: end.estimate().ok_or_else(joint)?,
         samples: end.samples,
         skipped: end.skipped,
+        bad_lines: end.bad_lines,
+        untimed_lines: end.untimed_lines,
+        missing_lines: end.missing_lines,
+        time_jumps: end.time_jumps,
     })
 }
 
@@ -104,4 +117,98 @@ pub fn reference_features(x: &[f64], rate: f64, window_s: f64) -> ([f64; FEATURE
     }
     let k = windows.max(1) as f64;
     (acc.map(|v| (v / k).max(1e-12).ln()), windows)
+}
+
+/// What [`faulty_csv`] does to a crank HIL file, and the counts the node must report for it.
+pub mod faulty {
+    /// Data lines (sample numbers) deleted from the file: missing, stepped as missing samples
+    /// by their `t`.
+    pub const DELETED: std::ops::Range<usize> = 5000..5010;
+    /// A sample whose line is replaced by garbage without a `t`: not stepped itself, stepped as
+    /// missing when the next line's `t` shows it.
+    pub const GARBAGE: usize = 12_000;
+    /// A sample whose value is emptied: stepped as missing, at its time.
+    pub const EMPTY_CELL: usize = 7000;
+    /// A junk line is inserted after this sample: not stepped.
+    pub const JUNK_AFTER: usize = 15_000;
+    /// A sample whose value reads NaN: stepped as missing.
+    pub const NAN: usize = 16_000;
+    /// Lines that do not parse: the garbage, the empty cell, the junk, the NaN.
+    pub const BAD_LINES: u32 = 4;
+    /// Of those, lines without a `t`: the garbage and the junk.
+    pub const UNTIMED_LINES: u32 = 2;
+    /// Samples stepped as missing for lines missing from the file: the deleted and the garbage.
+    pub const MISSING_LINES: u32 = 11;
+    /// Samples the estimator skipped: the missing lines, the empty cell and the NaN.
+    pub const SKIPPED: u32 = MISSING_LINES + 2;
+}
+
+/// `text` (the output of [`csv`]) with the faults of [`faulty`].
+pub fn faulty_csv(text: &str) -> String {
+    let mut out = String::new();
+    for (k, line) in text.lines().enumerate() {
+        let Some(sample) = k.checked_sub(1) else {
+            out.push_str(line);
+            out.push('\n');
+            continue;
+        };
+        if faulty::DELETED.contains(&sample) {
+            continue;
+        }
+        let t = line.split(',').next().unwrap_or("");
+        match sample {
+            faulty::GARBAGE => out.push_str("\u{1}%garbage%"),
+            faulty::EMPTY_CELL => out.push_str(&format!("{t},")),
+            faulty::NAN => out.push_str(&format!("{t},NaN")),
+            _ => out.push_str(line),
+        }
+        out.push('\n');
+        if sample == faulty::JUNK_AFTER {
+            out.push_str("junk,,\n");
+        }
+    }
+    out
+}
+
+/// Checks a run over [`faulty_csv`] of a recording of `samples` samples against the clean
+/// run: the counts exactly (one step per sample of the recording: the missing lines were
+/// stepped, the clock did not slip), every window closed where 2 500 usable samples end (the
+/// shared estimator's windows count usable samples: a skipped one lengthens its window), the
+/// same joint named as the clean run after as many windows, and the clearance within
+/// `tolerance` (relative) of the clean run's then. Returns the clearance's relative difference.
+pub fn check_faulty_run(run: &CrankRun, clean: &CrankRun, samples: usize, tolerance: f64) -> Result<f64> {
+    let counts = (run.samples, run.skipped, run.bad_lines, run.untimed_lines, run.missing_lines, run.time_jumps);
+    let want = (samples as u32, faulty::SKIPPED, faulty::BAD_LINES, faulty::UNTIMED_LINES, faulty::MISSING_LINES, 0);
+    if counts != want {
+        bail!("(samples, skipped, bad, untimed, missing, jumps) = {counts:?}, expected {want:?}");
+    }
+    let skipped =
+        |k: usize| faulty::DELETED.contains(&k) || [faulty::GARBAGE, faulty::EMPTY_CELL, faulty::NAN].contains(&k);
+    let window = edgekf_firmware::systems::crank::WINDOW;
+    let mut usable = 0;
+    let mut closes = Vec::new();
+    for k in 0..samples {
+        if !skipped(k) {
+            usable += 1;
+            if usable % window == 0 {
+                closes.push(k as u32 + 1);
+            }
+        }
+    }
+    let got: Vec<u32> = run.windows.iter().map(|w| w.samples).collect();
+    if got != closes {
+        bail!("windows closed at {got:?}, expected {closes:?}");
+    }
+    let Some(reference) = clean.windows.get(run.windows.len().wrapping_sub(1)) else {
+        bail!("{} windows, the clean run has {}", run.windows.len(), clean.windows.len());
+    };
+    let reference = reference.estimate;
+    if run.estimate.joint != reference.joint {
+        bail!("joint {} named, clean {}", run.estimate.joint, reference.joint);
+    }
+    let rel = f64::from(run.estimate.clearance) / f64::from(reference.clearance) - 1.0;
+    if rel.is_nan() || rel.abs() > tolerance {
+        bail!("clearance {} against {} clean ({rel:+.2e})", run.estimate.clearance, reference.clearance);
+    }
+    Ok(rel)
 }

@@ -89,10 +89,10 @@ mod tests {
         let lines = [
             "start odr=1000 watermark=48",
             "blk 3 16 1 1e-5 -0.002 4.5 -2.25 5.0311 0.004 0.98",
-            "health 10 160 2 2 1 0 0 0 0 1 0",
+            "health 10 160 2 2 0 0 1 0 0 0 0 1 0 0 0 0",
             "estimator 160 1 0 0 0",
             "feed 160 0 5",
-            "virtual 160 2 0",
+            "virtual 160 2 0 0 0 0 0 0",
             "stack 9000 1200 131000",
             "done",
         ];

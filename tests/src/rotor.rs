@@ -6,9 +6,8 @@ use crate::report::frames;
 use anyhow::{anyhow, Result};
 use edgekf_firmware::line_feed::ChannelReader;
 use edgekf_firmware::node::Node;
-use edgekf_firmware::source::ChannelSource;
 use edgekf_firmware::systems::rotor::{
-    RotorEstimator, RotorFrame, RotorImage, RotorNode, RotorReport, CHANNELS, DISK_NODES,
+    channel_source, RotorEnd, RotorEstimator, RotorFrame, RotorImage, RotorNode, RotorReport, CHANNELS, DISK_NODES,
 };
 use edgekf_sim::systems::rotor::Recording;
 
@@ -22,13 +21,24 @@ pub fn run_host(csv: &[u8]) -> Result<Vec<RotorReport>> {
 /// the node's switch against).
 pub fn run_host_with(csv: &[u8], est: RotorEstimator) -> Result<Vec<RotorReport>> {
     let reader = ChannelReader::new(csv, CHANNELS).map_err(|e| anyhow!("header: {e:?}"))?;
-    let mut node = Node::new(ChannelSource::new(reader), RotorNode::new(est), Default::default());
+    let mut node = Node::new(channel_source(reader), RotorNode::new(est), Default::default());
     parse(&crate::host::run_node::<RotorImage>(&mut node)?)
 }
 
 /// The `rot` frames of a run's lines, as reports.
 pub fn parse(lines: &[String]) -> Result<Vec<RotorReport>> {
     Ok(frames::<RotorFrame>(lines)?.iter().map(RotorFrame::report).collect())
+}
+
+/// The `rot` frames of a run's lines as (sample number, report): a sample bridged for a line
+/// missing from the file has no frame of its own.
+pub fn parse_numbered(lines: &[String]) -> Result<Vec<(u32, RotorReport)>> {
+    Ok(frames::<RotorFrame>(lines)?.iter().map(|f| (f.sample, f.report())).collect())
+}
+
+/// The run's end frame (its counts).
+pub fn end(lines: &[String]) -> Result<RotorEnd> {
+    frames::<RotorEnd>(lines)?.pop().ok_or_else(|| anyhow!("no `rotor` line: the run did not finish"))
 }
 
 /// Worst RMS error over the disk nodes' x and y for samples with `t ≥ t0`, m.
@@ -47,4 +57,126 @@ pub fn disk_rms_error(reports: &[RotorReport], rec: &Recording, t0: f64) -> f64 
         }
     }
     worst
+}
+
+/// What [`faulty_csv`] does to a rotor HIL file, and the counts the node must report for it.
+pub mod faulty {
+    /// Data lines (sample numbers) deleted from the file: missing, bridged by their `t`.
+    pub const DELETED: std::ops::Range<usize> = 1500..1520;
+    /// A sample whose line is replaced by garbage without a `t`: not stepped, bridged when
+    /// the next line's `t` shows it missing.
+    pub const GARBAGE: usize = 2500;
+    /// A sample whose first probe's cell is emptied: stepped as missing, at its time.
+    pub const EMPTY_CELL: usize = 1800;
+    /// A junk line is inserted after this sample: not stepped.
+    pub const JUNK_AFTER: usize = 3000;
+    /// A sample whose first probe reads NaN: stepped as missing.
+    pub const NAN: usize = 3200;
+    /// Lines that do not parse: the garbage, the empty cell, the junk, the NaN.
+    pub const BAD_LINES: u32 = 4;
+    /// Of those, lines without a `t`: the garbage and the junk.
+    pub const UNTIMED_LINES: u32 = 2;
+    /// Samples bridged for lines missing from the file: the deleted ones and the garbage one.
+    pub const MISSING_LINES: u32 = 21;
+    /// When the last fault is over, s.
+    pub const CLEAR_AT: f64 = 3.201;
+}
+
+/// The HIL file `csv` (a header and one line per sample) with the faults of [`faulty`].
+pub fn faulty_csv(csv: &str) -> String {
+    let mut out = String::new();
+    for (k, line) in csv.lines().enumerate() {
+        let Some(sample) = k.checked_sub(1) else {
+            out.push_str(line);
+            out.push('\n');
+            continue;
+        };
+        if faulty::DELETED.contains(&sample) {
+            continue;
+        }
+        let mut fields: Vec<&str> = line.split(',').collect();
+        match sample {
+            faulty::GARBAGE => fields = vec!["#\u{1}garbage"],
+            faulty::EMPTY_CELL => fields[1] = "",
+            faulty::NAN => fields[1] = "NaN",
+            _ => {}
+        }
+        out.push_str(&fields.join(","));
+        out.push('\n');
+        if sample == faulty::JUNK_AFTER {
+            out.push_str("1.2x,abc,,,\n");
+        }
+    }
+    out
+}
+
+/// Worst RMS error over the disk nodes' x and y for numbered reports with `t ≥ t0`, m.
+pub fn disk_rms_error_numbered(reports: &[(u32, RotorReport)], rec: &Recording, t0: f64) -> f64 {
+    let mut worst = 0.0f64;
+    for (j, &node) in DISK_NODES.iter().enumerate() {
+        for (d, truth) in [(0, &rec.x[node]), (1, &rec.y[node])] {
+            let (mut s, mut n) = (0.0, 0usize);
+            for (k, r) in reports {
+                let k = *k as usize;
+                if rec.t[k] >= t0 {
+                    s += (r.disk[2 * j + d] as f64 - truth[k]).powi(2);
+                    n += 1;
+                }
+            }
+            worst = worst.max((s / n.max(1) as f64).sqrt());
+        }
+    }
+    worst
+}
+
+/// Checks a run of the rotor image over [`faulty_csv`] of `rec`'s file against the clean run's
+/// numbered reports: the end frame's counts exactly, a report for every sample but the bridged
+/// ones (the clock did not slip), the disk error for t ≥ 1 s within the virtual-sensing target
+/// (1 µm RMS), and from 0.5 s after the last fault every disk and force estimate within 1 % of
+/// the clean run's RMS. Returns the disk error and that mismatch, for the log.
+pub fn check_faulty_run(lines: &[String], clean: &[(u32, RotorReport)], rec: &Recording) -> Result<(f64, f64)> {
+    let end = end(lines)?;
+    let lines_read = rec.t.len() as u32 - faulty::DELETED.len() as u32 + 1;
+    let expected = RotorEnd {
+        samples: lines_read,
+        bad_lines: faulty::BAD_LINES,
+        untimed_lines: faulty::UNTIMED_LINES,
+        missing_lines: faulty::MISSING_LINES,
+        time_jumps: 0,
+        ..end
+    };
+    if end != expected {
+        anyhow::bail!("end frame {end:?}, expected {expected:?}");
+    }
+    let reports = parse_numbered(lines)?;
+    let numbers: Vec<u32> = reports.iter().map(|(k, _)| *k).collect();
+    let want: Vec<u32> =
+        (0..rec.t.len()).filter(|k| !faulty::DELETED.contains(k) && *k != faulty::GARBAGE).map(|k| k as u32).collect();
+    if numbers != want {
+        anyhow::bail!("reported samples are not every sample but the bridged ones (the clock slipped)");
+    }
+    let err = disk_rms_error_numbered(&reports, rec, 1.0);
+    if err > 1e-6 {
+        anyhow::bail!("disk RMS error {err} m for t ≥ 1 s");
+    }
+    let after = faulty::CLEAR_AT + 0.5;
+    let (mut d2, mut r2) = (0.0f64, 0.0f64);
+    let kept =
+        |(k, _): &&(u32, RotorReport)| !faulty::DELETED.contains(&(*k as usize)) && *k as usize != faulty::GARBAGE;
+    for ((k, a), (kc, c)) in reports.iter().zip(clean.iter().filter(kept)) {
+        if *k != *kc {
+            anyhow::bail!("sample {k} against clean sample {kc}");
+        }
+        if rec.t[*k as usize] >= after {
+            for (x, y) in a.disk.iter().chain(&a.force).zip(c.disk.iter().chain(&c.force)) {
+                d2 += f64::from(x - y).powi(2);
+                r2 += f64::from(*y).powi(2);
+            }
+        }
+    }
+    let mismatch = (d2 / r2).sqrt();
+    if mismatch.is_nan() || mismatch > 0.01 {
+        anyhow::bail!("from {after} s the estimates differ from the clean run by {mismatch} of its RMS");
+    }
+    Ok((err, mismatch))
 }

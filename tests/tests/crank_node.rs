@@ -9,7 +9,7 @@ use edgekf_sim::systems::crank::estimate::model::{feature_vector, FastModel, FEA
 use edgekf_sim::systems::crank::estimate::train::Run;
 use edgekf_sim::systems::crank::estimate::Recording;
 use edgekf_sim::systems::crank::{CrankConfig, Joint};
-use edgekf_tests::crank::{csv, reference_features, run_host};
+use edgekf_tests::crank::{check_faulty_run, csv, faulty_csv, reference_features, run_host};
 
 /// Agreement required between the node (`f32`) and the host (`f64`) on the clearance of the
 /// whole recording, relative. Measured: below 1e-4 (see the test's output).
@@ -115,6 +115,29 @@ fn bad_samples_are_skipped_and_counted() {
     assert!(run.estimate.clearance.is_finite());
 }
 
+/// Relative clearance change allowed by the faults of `edgekf_tests::crank::faulty_csv` (13
+/// samples of 20 000 missing or bad).
+const FAULTY_TOLERANCE: f64 = 0.01;
+
+/// Lines missing (10 in a row, and one replaced by garbage), an empty cell, a NaN and a junk
+/// line in a 2 s recording: the missing lines are stepped as missing samples by their `t`, the
+/// bad cells too, lines without a `t` not at all; every window closes where its 2 500 usable
+/// samples end, and the clearance is within [`FAULTY_TOLERANCE`] of the clean run's after as
+/// many windows (`edgekf_tests::crank::check_faulty_run`).
+#[test]
+fn missing_and_garbage_lines_are_bridged_and_counted() {
+    let rec = recording(Joint::A, 0.25e-3, 1);
+    let text = csv(&rec.t, &rec.crank_alpha);
+    let clean = run_host(text.as_bytes()).unwrap();
+    let run = run_host(faulty_csv(&text).as_bytes()).unwrap();
+    let rel = check_faulty_run(&run, &clean, rec.t.len(), FAULTY_TOLERANCE).unwrap_or_else(|e| panic!("{e:#}"));
+    eprintln!(
+        "crank node with missing and garbage lines: {} windows, joint {}, clearance {rel:+.2e} off the clean run's after as many",
+        run.windows.len(),
+        Joint::ALL[run.estimate.joint]
+    );
+}
+
 #[cfg(feature = "hil")]
 mod hil {
     use super::*;
@@ -163,6 +186,39 @@ mod hil {
             assert_eq!(f64_est.joint, joint);
             assert!(rel.abs() <= CLEARANCE_TOLERANCE, "{rel}");
         }
+    }
+
+    /// Missing lines, garbage lines, an empty cell and a NaN (`edgekf_tests::crank::faulty_csv`)
+    /// in QEMU: every window bit-identical to the host run of the same file, and the counts and
+    /// bounds of `edgekf_tests::crank::check_faulty_run` (20 000 samples stepped, 13 skipped of
+    /// which 11 for missing lines, 4 bad lines of which 2 without a `t`, no time jump; the
+    /// windows closing where their usable samples end; the clearance within
+    /// [`FAULTY_TOLERANCE`] of the clean run's).
+    #[test]
+    fn crank_image_bridges_missing_and_garbage_lines() {
+        let elf = qemu::crank_elf().unwrap_or_else(|e| panic!("{e:#}"));
+        let rec = recording(Joint::A, 0.25e-3, 1);
+        let text = csv(&rec.t, &rec.crank_alpha);
+        let faulty = faulty_csv(&text);
+        let run = qemu::run(&elf, faulty.as_bytes(), Duration::from_secs(300)).unwrap_or_else(|e| panic!("{e:#}"));
+        if let Some(msg) = run.failure() {
+            panic!("{msg}");
+        }
+        let chip = crank::parse(&run.lines).unwrap();
+        assert_eq!(chip, run_host(faulty.as_bytes()).unwrap(), "the chip and the host disagree");
+        let clean = run_host(text.as_bytes()).unwrap();
+        let rel = check_faulty_run(&chip, &clean, rec.t.len(), FAULTY_TOLERANCE).unwrap_or_else(|e| panic!("{e:#}"));
+        eprintln!(
+            "HIL crank with missing and garbage lines: {} samples, {} skipped ({} missing lines), {} bad lines ({} \
+             without t), {} windows, joint {}, clearance {rel:+.2e} off the clean run's; bit-identical to the host",
+            chip.samples,
+            chip.skipped,
+            chip.missing_lines,
+            chip.bad_lines,
+            chip.untimed_lines,
+            chip.windows.len(),
+            Joint::ALL[chip.estimate.joint]
+        );
     }
 
     /// Bad lines in the input: the image skips and counts them and finishes.

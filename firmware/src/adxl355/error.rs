@@ -61,6 +61,26 @@ pub fn is_nack<E: embedded_hal::i2c::Error>(e: &Error<E>) -> bool {
     matches!(e, Error::Comm(c) if is_i2c_nack(c))
 }
 
+/// Whether `e` is an I2C timeout: embedded-hal 1.0 has no timeout kind, and HALs report theirs
+/// as `ErrorKind::Other` (stm32f4xx-hal's `Error::Timeout`, the virtual bus's
+/// `VirtualBusError::Timeout`), so that kind counts as one. A timeout already cost the HAL's
+/// wait; the node does not retry it within a poll (see [`crate::source`]).
+///
+/// ```
+/// use edgekf_firmware::adxl355::{is_timeout, Error};
+/// use embedded_hal::i2c::{ErrorKind, NoAcknowledgeSource};
+/// assert!(is_timeout(&Error::Comm(ErrorKind::Other)));
+/// assert!(!is_timeout(&Error::Comm(ErrorKind::NoAcknowledge(NoAcknowledgeSource::Address))));
+/// ```
+pub fn is_timeout<E: embedded_hal::i2c::Error>(e: &Error<E>) -> bool {
+    matches!(e, Error::Comm(c) if is_i2c_timeout(c))
+}
+
+/// Whether an I2C bus error is a timeout (kind `Other`, see [`is_timeout`]).
+pub(crate) fn is_i2c_timeout<E: embedded_hal::i2c::Error>(e: &E) -> bool {
+    matches!(e.kind(), embedded_hal::i2c::ErrorKind::Other)
+}
+
 /// Whether an I2C bus error is a NACK (address or data).
 pub(crate) fn is_i2c_nack<E: embedded_hal::i2c::Error>(e: &E) -> bool {
     matches!(e.kind(), embedded_hal::i2c::ErrorKind::NoAcknowledge(_))

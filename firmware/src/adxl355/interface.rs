@@ -28,6 +28,13 @@ pub trait Interface {
         let _ = error;
         false
     }
+
+    /// Whether `error` is a timeout, which a retry layer does not retry at once (the default
+    /// says no).
+    fn is_timeout(error: &Self::Error) -> bool {
+        let _ = error;
+        false
+    }
 }
 
 /// The part on an I2C bus: a register write is `[reg, value]`; a read is a write of `[reg]`
@@ -80,6 +87,10 @@ impl<I2C: I2c> Interface for I2cInterface<I2C> {
 
     fn is_nack(error: &Self::Error) -> bool {
         super::error::is_i2c_nack(error)
+    }
+
+    fn is_timeout(error: &Self::Error) -> bool {
+        super::error::is_i2c_timeout(error)
     }
 }
 

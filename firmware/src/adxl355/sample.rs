@@ -57,6 +57,17 @@ impl Status {
     }
 }
 
+/// What [`Adxl355::poll_status`](super::Adxl355::poll_status) read: the part's status and
+/// its FIFO's fill, from a read whose IDs were right.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct PollStatus {
+    /// The `STATUS` flags.
+    pub status: Status,
+    /// Entries (axes) in the FIFO, 0..=96.
+    pub fifo_entries: u8,
+}
+
 /// Outcome of [`Adxl355::read_fifo`](super::Adxl355::read_fifo).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]

@@ -96,6 +96,70 @@ fn status_and_fifo_entries() {
 }
 
 #[test]
+fn poll_status_reads_ids_status_and_entries_in_one_burst() {
+    let expectations = [
+        // IDs, REVID, STATUS (overrun, full, ready), FIFO_ENTRIES (bit 7 is not part of it).
+        I2cTransaction::write_read(ADDR, vec![0x00], vec![0xAD, 0x1D, 0xED, 0x01, 0b0000_0111, 0x80 | 48]),
+        I2cTransaction::write_read(ADDR, vec![0x00], vec![0xAD, 0x1D, 0xED, 0x01, 0, 0]),
+        // A bus returning all ones, then all zeros: wrong IDs, whatever STATUS says.
+        I2cTransaction::write_read(ADDR, vec![0x00], vec![0xFF; 6]),
+        I2cTransaction::write_read(ADDR, vec![0x00], vec![0x00; 6]),
+    ];
+    let mut adxl = Adxl355::new_i2c(I2cMock::new(&expectations), ADDR);
+    let all = Status { data_ready: true, fifo_full: true, fifo_overrun: true };
+    assert_eq!(adxl.poll_status().unwrap(), PollStatus { status: all, fifo_entries: 48 });
+    assert_eq!(adxl.poll_status().unwrap(), PollStatus::default());
+    assert_eq!(adxl.poll_status(), Err(Error::WrongDevice { ad: 0xFF, mst: 0xFF, part: 0xFF }));
+    assert_eq!(adxl.poll_status(), Err(Error::WrongDevice { ad: 0, mst: 0, part: 0 }));
+    finish(adxl);
+}
+
+#[test]
+fn config_read_back_tells_a_reset_part() {
+    let mut traffic = init_traffic(ADDR, 0x03, 0x82, 30);
+    traffic.extend([
+        // FILTER, FIFO_SAMPLES, INT_MAP, SYNC, RANGE, POWER_CTL as programmed.
+        I2cTransaction::write_read(ADDR, vec![0x28], vec![0x03, 30, 0, 0, 0x82, 0x00]),
+        // The reset defaults: ODR 4 kHz, 96 entries, ±2 g, standby.
+        I2cTransaction::write_read(ADDR, vec![0x28], vec![0x00, 0x60, 0, 0, 0x81, 0x01]),
+        // Programmed, but in standby.
+        I2cTransaction::write_read(ADDR, vec![0x28], vec![0x03, 30, 0, 0, 0x82, 0x01]),
+    ]);
+    let mut adxl = Adxl355::new_i2c(I2cMock::new(&traffic), ADDR);
+    adxl.init(Config { range: Range::G4, odr: OutputDataRate::Hz500, fifo_watermark: 30 }).unwrap();
+    assert_eq!(adxl.config_matches(), Ok(true));
+    assert_eq!(adxl.config_matches(), Ok(false));
+    assert_eq!(adxl.config_matches(), Ok(false));
+    finish(adxl);
+}
+
+#[test]
+fn read_fifo_entries_takes_the_count_it_is_given() {
+    let data = fifo_bytes(&[(1, 1), (2, 0), (3, 0), (4, 1), (5, 0), (6, 0)]);
+    // 8 entries known from the status read: one 6-entry burst, no FIFO_ENTRIES read.
+    let expectations = [I2cTransaction::write_read(ADDR, vec![0x11], data)];
+    let mut adxl = Adxl355::new_i2c(I2cMock::new(&expectations), ADDR);
+    let mut out = [RawSample::default(); 4];
+    assert_eq!(adxl.read_fifo_entries(8, &mut out).unwrap(), FifoRead { samples: 2, skipped_entries: 0 });
+    assert_eq!(out[1], RawSample { x: 4, y: 5, z: 6 });
+    // Fewer than 3 entries, or no room: no traffic.
+    assert_eq!(adxl.read_fifo_entries(2, &mut out).unwrap(), FifoRead::default());
+    assert_eq!(adxl.read_fifo_entries(96, &mut []).unwrap(), FifoRead::default());
+    finish(adxl);
+}
+
+#[test]
+fn timeouts_are_told_from_nacks() {
+    let expectations = [I2cTransaction::write_read(ADDR, vec![0x00], vec![0; 6]).with_error(ErrorKind::Other)];
+    let mut adxl = Adxl355::new_i2c(I2cMock::new(&expectations), ADDR);
+    let err = adxl.poll_status().unwrap_err();
+    assert!(is_timeout(&err) && !is_nack(&err));
+    assert!(!is_timeout(&Error::Comm(ErrorKind::NoAcknowledge(NoAcknowledgeSource::Data))));
+    assert!(!is_timeout::<ErrorKind>(&Error::WrongDevice { ad: 0, mst: 0, part: 0 }));
+    finish(adxl);
+}
+
+#[test]
 fn read_xyz_decodes_extremes() {
     let expectations = [
         I2cTransaction::write_read(ADDR, vec![0x08], vec![0x7F, 0xFF, 0xF0, 0x80, 0x00, 0x00, 0xFF, 0xFF, 0xF0]),

@@ -69,7 +69,8 @@ pub type Storage = [f32; WINDOW - 1];
 pub struct WindowReport {
     /// Windows completed so far (1 for the first).
     pub window: u32,
-    /// Input lines read so far, the bad ones included.
+    /// Samples stepped so far: input lines, the bad ones included, and lines missing from the
+    /// file, bridged.
     pub samples: u32,
     /// The estimate for the recording up to here.
     pub estimate: ClearanceEstimate<f32>,
@@ -138,7 +139,7 @@ impl<'s> CrankNode<'s> {
         self.est.features().skipped()
     }
 
-    /// Input lines stepped.
+    /// Samples stepped (input lines, and missing lines bridged).
     pub fn samples(&self) -> u32 {
         self.samples
     }
@@ -214,7 +215,7 @@ clearance_frame! {
     WindowFrame = "win {=u32} {=u32} {=u8} {=f32} {=f32} {=f32} {=f32} {=f32} {=f32} {=f32} {=u8}" {
         /// Windows completed so far.
         pub window: u32,
-        /// Input lines read so far.
+        /// Samples stepped so far (lines, and missing lines bridged).
         pub samples: u32,
     } {}
 }
@@ -298,16 +299,31 @@ impl From<[f32; FEATURES]> for FeaturesFrame {
 
 clearance_frame! {
     /// The end of a crank run: the whole recording's estimate and the counts.
-    CrankEnd = "crank {=u8} {=f32} {=f32} {=f32} {=f32} {=f32} {=f32} {=f32} {=u8} {=u32} {=u32} {=u32} {=u32}" {} {
+    CrankEnd = "crank {=u8} {=f32} {=f32} {=f32} {=f32} {=f32} {=f32} {=f32} {=u8} {=u32} {=u32} {=u32} {=u32} {=u32} {=u32} {=u32}" {} {
         /// Windows completed.
         pub windows: u32,
-        /// Input lines stepped.
+        /// Samples stepped (lines, and missing lines bridged).
         pub samples: u32,
         /// Samples skipped (missing or non-finite).
         pub skipped: u32,
         /// Lines that did not parse.
         pub bad_lines: u32,
+        /// Lines without a usable `t` (not stepped).
+        pub untimed_lines: u32,
+        /// Lines missing from the file (by their `t`), stepped as missing samples.
+        pub missing_lines: u32,
+        /// Lines whose `t` was off the sample grid (not bridged; see
+        /// [`crate::source::ChannelSource`]).
+        pub time_jumps: u32,
     }
+}
+
+/// The crank image's source: the crank acceleration, lines missing from the file stepped as
+/// missing samples for up to [`crate::source::MAX_GAP_S`] (see
+/// [`ChannelSource::with_clock`]), so that the windows keep their length in time.
+pub fn channel_source<B: ByteSource>(reader: ChannelReader<B, 1>) -> ChannelSource<B, 1> {
+    let max_gap = crate::source::MAX_GAP_S * f64::from(SAMPLE_RATE_HZ);
+    ChannelSource::new(reader).with_clock(1.0 / f64::from(SAMPLE_RATE_HZ), max_gap as u32)
 }
 
 impl NodeEstimator for CrankNode<'_> {
@@ -348,7 +364,7 @@ impl HilImage for CrankImage {
     fn start<B: ByteSource>(input: B, storage: &mut Storage) -> Result<HilNode<'_, Self, B>, HilError<FeatureError>> {
         let reader = ChannelReader::new(input, CHANNELS).map_err(HilError::Header)?;
         let estimator = CrankNode::new(storage).map_err(HilError::Start)?;
-        Ok(Node::new(ChannelSource::new(reader), estimator, Default::default()))
+        Ok(Node::new(channel_source(reader), estimator, Default::default()))
     }
 
     fn finish<B: ByteSource>(node: &HilNode<'_, Self, B>, sink: &mut impl FrameSink) {
@@ -359,6 +375,9 @@ impl HilImage for CrankImage {
             samples: est.samples(),
             skipped: est.skipped(),
             bad_lines: node.source().reader().bad_lines(),
+            untimed_lines: node.source().untimed_lines(),
+            missing_lines: node.source().missing_lines(),
+            time_jumps: node.source().time_jumps(),
             ..CrankEnd::default()
         };
         sink.frame(&end.with_estimate(&est.estimate()));

@@ -202,15 +202,41 @@ crate::frame! {
 }
 
 crate::frame! {
-    /// What the virtual ADXL355 did.
+    /// What the virtual ADXL355 did: the faults it injected, for the test to check the node's
+    /// counts against.
     #[derive(Eq)]
-    pub struct VirtualFrame = "virtual {=u32} {=u32} {=u32}" {
+    pub struct VirtualFrame = "virtual {=u32} {=u32} {=u32} {=u32} {=u32} {=u32} {=u32} {=u32}" {
         /// Samples taken from the feed into the FIFO.
         pub samples_loaded: u32,
         /// Injected NACKs sent.
         pub nacks_sent: u32,
         /// FIFO entries discarded because the FIFO overflowed.
         pub overrun_entries: u32,
+        /// Injected timeouts sent.
+        pub timeouts_sent: u32,
+        /// Garbage reads served.
+        pub garbage_sent: u32,
+        /// Samples dropped (not produced) while measuring.
+        pub samples_dropped: u32,
+        /// Resets injected.
+        pub resets: u32,
+        /// Samples lost to resets (cleared from the FIFO, or due in standby).
+        pub samples_discarded: u32,
+    }
+}
+
+impl From<crate::virtual_adxl355::VirtualCounters> for VirtualFrame {
+    fn from(v: crate::virtual_adxl355::VirtualCounters) -> Self {
+        Self {
+            samples_loaded: v.samples_loaded,
+            nacks_sent: v.nacks_sent,
+            overrun_entries: v.overrun_entries,
+            timeouts_sent: v.timeouts_sent,
+            garbage_sent: v.garbage_sent,
+            samples_dropped: v.samples_dropped,
+            resets: v.resets,
+            samples_discarded: v.samples_discarded,
+        }
     }
 }
 
@@ -252,19 +278,14 @@ impl HilImage for OscillatorImage {
             bad_lines: feed.bad_lines(),
             ignored_columns: feed.columns().ignored() as u32,
         });
-        let v = device.counters();
-        sink.frame(&VirtualFrame {
-            samples_loaded: v.samples_loaded,
-            nacks_sent: v.nacks_sent,
-            overrun_entries: v.overrun_entries,
-        });
+        sink.frame(&VirtualFrame::from(device.counters()));
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::virtual_adxl355::{FeedSample, SliceFeed};
+    use crate::virtual_adxl355::{FeedSample, SliceFeed, VirtualCounters};
     use edgekf::filter::solve_riccati;
     use std::vec::Vec;
 
@@ -308,12 +329,61 @@ mod tests {
     }
 
     fn run_counted(samples: &[FeedSample]) -> (Vec<BlockReport>, Health, EstimatorCounters) {
+        let r = run_device(samples);
+        (r.reports, r.health, r.estimator)
+    }
+
+    /// Everything a run on the virtual device left.
+    struct Run {
+        reports: Vec<BlockReport>,
+        health: Health,
+        estimator: EstimatorCounters,
+        device: VirtualCounters,
+    }
+
+    fn run_device(samples: &[FeedSample]) -> Run {
         let config = NodeConfig::default();
         let sensor = Adxl355::new_i2c(VirtualAdxl355::new(SliceFeed::new(samples)), config.address);
         let mut node = start(sensor, &config).map_err(|(e, _)| e).unwrap();
         let mut reports = Vec::new();
         node.run(|r| reports.push(*r));
-        (reports, node.health(), node.estimator().counters())
+        let device = node.source().sensor().interface().bus().counters();
+        Run { reports, health: node.health(), estimator: node.estimator().counters(), device }
+    }
+
+    /// Samples of the fault tests: 1.6 s of the steady response, the faults early in it.
+    const FAULT_RUN: usize = 1600;
+
+    /// From block `from` on: the worst over displacement, velocity and the force components of
+    /// the RMS difference between two runs' block estimates, relative to the reference's RMS.
+    fn mismatch(reference: &[BlockReport], other: &[BlockReport], from: usize) -> f32 {
+        type Pick = fn(&BlockReport) -> f32;
+        let picks: [Pick; 4] = [|b| b.displacement, |b| b.velocity, |b| b.force_cos, |b| b.force_sin];
+        assert_eq!(reference.len(), other.len());
+        let mut worst = 0.0f32;
+        for pick in picks {
+            let (mut d2, mut r2) = (0.0f32, 0.0f32);
+            for (a, b) in reference[from..].iter().zip(&other[from..]) {
+                d2 += (pick(a) - pick(b)) * (pick(a) - pick(b));
+                r2 += pick(a) * pick(a);
+            }
+            worst = worst.max(libm::sqrtf(d2 / r2));
+        }
+        worst
+    }
+
+    /// A fault run against the clean one: the estimator's clock did not slip (one step per
+    /// sample due), the estimate stayed bounded (the amplitude within 50 % of the true 4 N from
+    /// block 20 on, once converged), and from block 60 (0.96 s, over 0.5 s after the last
+    /// fault) it matches the clean run within 1 % of its RMS.
+    fn assert_recovers(faulty: &Run, clean: &Run) {
+        assert_eq!(faulty.estimator.steps, FAULT_RUN as u32, "the estimator's clock slipped");
+        assert_eq!(faulty.reports.len(), clean.reports.len());
+        for r in &faulty.reports[20..] {
+            assert!((r.force_amplitude - 4.0).abs() < 2.0, "unbounded estimate {r:?}");
+        }
+        let rel = mismatch(&clean.reports, &faulty.reports, 60);
+        assert!(rel < 0.01, "after recovery the estimates differ from the clean run by {rel}");
     }
 
     /// The committed constants are what the node's configured model computes, bit for bit.
@@ -389,5 +459,137 @@ mod tests {
         assert_eq!(health.stuck, 50);
         assert_eq!(health.saturated, 10);
         assert_eq!(health.samples, 640 - 60);
+    }
+
+    /// The invariant every fault run keeps: each sample due is either used, screened out or
+    /// bridged, and every bridged sample is one the device lost (overwritten, dropped or lost
+    /// to a reset).
+    fn assert_accounted(run: &Run, due: usize) {
+        let (h, d) = (run.health, run.device);
+        assert_eq!((h.samples + h.saturated + h.stuck + h.bridged) as usize, due, "{h:?}");
+        assert_eq!(h.bridged, d.overrun_entries / 3 + d.samples_dropped + d.samples_discarded, "{h:?} {d:?}");
+        assert_eq!(run.estimator.missing, h.bridged + h.saturated + h.stuck);
+        assert_eq!(h.bus_errors, h.nacks + h.timeouts + h.bad_id, "{h:?}");
+        assert_eq!((h.nacks, h.timeouts, h.bad_id), (d.nacks_sent, d.timeouts_sent, d.garbage_sent), "{h:?} {d:?}");
+    }
+
+    #[test]
+    fn timeouts_are_not_retried_and_the_overwritten_samples_are_bridged() {
+        let clean = run_device(&steady_response(FAULT_RUN));
+        let mut samples = steady_response(FAULT_RUN);
+        samples[100].timeout = 3; // due in poll 6: polls 6, 7 and 8 time out at their first transaction
+        let run = run_device(&samples);
+        let h = run.health;
+        assert_eq!((h.timeouts, h.bus_errors, h.nacks, h.recovered, h.failed_polls), (3, 3, 0, 0, 3), "{h:?}");
+        // Poll 9 finds 64 samples due and the 32 newest in the FIFO, which overran.
+        assert_eq!((h.fifo_overruns, h.bridged, h.dropped), (1, 32, 0), "{h:?}");
+        assert_eq!((run.device.timeouts_sent, run.device.overrun_entries), (3, 96));
+        assert_eq!(run.reports[9].read, 32);
+        assert_eq!(run.reports[9].missing, 32);
+        assert_accounted(&run, FAULT_RUN);
+        assert_recovers(&run, &clean);
+    }
+
+    #[test]
+    fn garbage_reads_are_retried_and_never_taken_for_samples() {
+        let clean = run_device(&steady_response(FAULT_RUN));
+        let mut samples = steady_response(FAULT_RUN);
+        samples[100].garbage = 2; // poll 6: two status reads with IDs 0xFF, the third is good
+        samples[300].garbage = 6; // poll 18 fails (4 bad reads), poll 19 reads both blocks
+        let run = run_device(&samples);
+        let h = run.health;
+        assert_eq!((h.bad_id, h.bus_errors, h.recovered, h.failed_polls), (8, 8, 2, 1), "{h:?}");
+        // Nothing was lost: the FIFO kept the samples of the failed poll (32 fit).
+        assert_eq!((h.bridged, h.fifo_overruns, h.skipped_entries, h.samples), (0, 0, 0, FAULT_RUN as u32), "{h:?}");
+        assert_eq!(run.device.garbage_sent, 8);
+        assert_eq!((run.reports[18].read, run.reports[19].read), (0, 32));
+        assert_accounted(&run, FAULT_RUN);
+        // Every sample used, in order: after the poll that caught up, bit-identical to the clean
+        // run.
+        assert_eq!(run.reports[20..], clean.reports[20..]);
+    }
+
+    #[test]
+    fn dropped_samples_are_bridged_and_counted() {
+        let clean = run_device(&steady_response(FAULT_RUN));
+        let mut samples = steady_response(FAULT_RUN);
+        for s in &mut samples[100..150] {
+            s.dropped = true; // 12 of poll 6, all of polls 7 and 8, 6 of poll 9
+        }
+        let run = run_device(&samples);
+        let h = run.health;
+        assert_eq!((h.dropped, h.bridged, h.fifo_overruns), (50, 50, 0), "{h:?}");
+        // Polls 7 and 8 find the FIFO empty: the configuration is read back, and it is intact.
+        assert_eq!((h.config_checks, h.resets, h.failed_polls, h.bus_errors), (2, 0, 0, 0), "{h:?}");
+        assert_eq!(run.device.samples_dropped, 50);
+        let missing: Vec<u16> = run.reports[5..11].iter().map(|r| r.missing).collect();
+        assert_eq!(missing, [0, 12, 16, 16, 6, 0]);
+        assert_accounted(&run, FAULT_RUN);
+        assert_recovers(&run, &clean);
+    }
+
+    #[test]
+    fn a_reset_is_detected_the_part_reconfigured_and_the_gap_bridged() {
+        let clean = run_device(&steady_response(FAULT_RUN));
+        let mut samples = steady_response(FAULT_RUN);
+        samples[100].reset = true; // in poll 6's period: 96..99 cleared, 100..111 in standby
+        let run = run_device(&samples);
+        let h = run.health;
+        assert_eq!((h.resets, h.config_checks, h.bridged, h.dropped), (1, 1, 16, 16), "{h:?}");
+        assert_eq!((h.failed_polls, h.bus_errors, h.fifo_overruns), (0, 0, 0), "{h:?}");
+        assert_eq!((run.device.resets, run.device.samples_discarded), (1, 16));
+        assert_eq!((run.reports[6].read, run.reports[6].missing, run.reports[7].read), (0, 16, 16));
+        assert_accounted(&run, FAULT_RUN);
+        assert_recovers(&run, &clean);
+    }
+
+    #[test]
+    fn a_reset_behind_a_nack_burst_is_found_once_the_bus_is_back() {
+        let clean = run_device(&steady_response(FAULT_RUN));
+        let mut samples = steady_response(FAULT_RUN);
+        samples[100].reset = true;
+        samples[101].nack = 6; // poll 6 fails; poll 7 gets through on its third attempt
+        let run = run_device(&samples);
+        let h = run.health;
+        assert_eq!((h.nacks, h.failed_polls, h.recovered), (6, 1, 1), "{h:?}");
+        assert_eq!((h.resets, h.config_checks, h.bridged, h.dropped), (1, 1, 32, 32), "{h:?}");
+        assert_eq!(run.device.samples_discarded, 32);
+        assert_accounted(&run, FAULT_RUN);
+        assert_recovers(&run, &clean);
+    }
+
+    #[test]
+    fn every_fault_in_one_run() {
+        let clean = run_device(&steady_response(FAULT_RUN));
+        let mut samples = steady_response(FAULT_RUN);
+        samples[40].nack = 3;
+        samples[90].timeout = 1;
+        samples[130].garbage = 2;
+        for s in &mut samples[170..180] {
+            s.stuck = true;
+        }
+        for s in &mut samples[200..205] {
+            s.accel[0] = 40.0;
+        }
+        for s in &mut samples[230..260] {
+            s.dropped = true;
+        }
+        samples[300].reset = true;
+        samples[350].nack = 12;
+        let run = run_device(&samples);
+        let h = run.health;
+        assert_eq!((h.nacks, h.timeouts, h.bad_id), (15, 1, 2), "{h:?}");
+        assert_eq!((h.stuck, h.saturated, h.resets), (10, 5, 1), "{h:?}");
+        assert_accounted(&run, FAULT_RUN);
+        assert_recovers(&run, &clean);
+    }
+
+    /// A recording whose length is not a whole number of periods: the samples after its end
+    /// were never due, so nothing is bridged.
+    #[test]
+    fn a_recording_ending_mid_period_bridges_nothing() {
+        let run = run_device(&steady_response(650));
+        assert_eq!((run.health.samples, run.health.bridged, run.health.dropped), (650, 0, 0), "{:?}", run.health);
+        assert_eq!(run.estimator.steps, 650);
     }
 }

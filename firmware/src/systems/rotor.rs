@@ -331,11 +331,18 @@ impl RotorFrame {
 crate::frame! {
     /// The end of a rotor run.
     #[derive(Eq)]
-    pub struct RotorEnd = "rotor {=u32} {=u32} {=u32} {=u32}" {
-        /// Input lines stepped.
+    pub struct RotorEnd = "rotor {=u32} {=u32} {=u32} {=u32} {=u32} {=u32} {=u32}" {
+        /// Input lines read (one poll each).
         pub samples: u32,
-        /// Of those, lines that did not parse (stepped as missing).
+        /// Of those, lines that did not parse (stepped as missing if their `t` did).
         pub bad_lines: u32,
+        /// Lines without a usable `t` (not stepped).
+        pub untimed_lines: u32,
+        /// Lines missing from the file (by their `t`), bridged by prediction.
+        pub missing_lines: u32,
+        /// Lines whose `t` was off the sample grid (not bridged; see
+        /// [`ChannelSource`]).
+        pub time_jumps: u32,
         /// Filter covariance resets (see [`RotorEstimator::health`]).
         pub covariance_resets: u32,
         /// Refused updates.
@@ -343,16 +350,25 @@ crate::frame! {
     }
 }
 
-/// The rotor estimator as the node runs it: one sample per poll, each reported.
+/// The rotor image's source: the probes' channels, lines missing from the file bridged for up
+/// to [`crate::source::MAX_GAP_S`] (see [`ChannelSource::with_clock`]).
+pub fn channel_source<B: ByteSource>(reader: ChannelReader<B, 4>) -> ChannelSource<B, 4> {
+    let max_gap = crate::source::MAX_GAP_S * f64::from(SAMPLE_RATE_HZ);
+    ChannelSource::new(reader).with_clock(1.0 / f64::from(SAMPLE_RATE_HZ), max_gap as u32)
+}
+
+/// The rotor estimator as the node runs it: one sample per poll (and the missing ones before
+/// it), each poll's last reported.
 pub struct RotorNode {
     estimator: RotorEstimator,
     last: Option<RotorReport>,
+    steps: u32,
 }
 
 impl RotorNode {
     /// Runs `estimator`.
     pub fn new(estimator: RotorEstimator) -> Self {
-        Self { estimator, last: None }
+        Self { estimator, last: None, steps: 0 }
     }
 
     /// The estimator.
@@ -368,11 +384,15 @@ impl NodeEstimator for RotorNode {
     fn step(&mut self, input: Option<[f32; 4]>) -> Innovation {
         let r = self.estimator.step(input);
         self.last = Some(r);
+        self.steps = self.steps.saturating_add(1);
         Innovation { residual: None, nis: Some(r.nis).filter(|n| n.is_finite()) }
     }
 
-    fn report(&mut self, poll: &Poll) -> Option<RotorFrame> {
-        self.last.take().map(|r| RotorFrame::new(poll.block, &r))
+    /// The poll's last sample, numbered by the estimator's steps (bridged samples included),
+    /// so that a missing line shows as a skipped number.
+    fn report(&mut self, _: &Poll) -> Option<RotorFrame> {
+        let sample = self.steps.saturating_sub(1);
+        self.last.take().map(|r| RotorFrame::new(sample, &r))
     }
 }
 
@@ -394,7 +414,7 @@ impl HilImage for RotorImage {
     #[inline(never)] // start-up temporaries stay out of the caller's frame
     fn start<B: ByteSource>(input: B, _: &mut ()) -> Result<HilNode<'_, Self, B>, HilError<Self::StartError>> {
         let reader = ChannelReader::new(input, CHANNELS).map_err(HilError::Header)?;
-        Ok(Node::new(ChannelSource::new(reader), RotorNode::new(RotorEstimator::new()), Default::default()))
+        Ok(Node::new(channel_source(reader), RotorNode::new(RotorEstimator::new()), Default::default()))
     }
 
     fn finish<B: ByteSource>(node: &HilNode<'_, Self, B>, sink: &mut impl FrameSink) {
@@ -402,6 +422,9 @@ impl HilImage for RotorImage {
         sink.frame(&RotorEnd {
             samples: node.health().blocks,
             bad_lines: node.source().reader().bad_lines(),
+            untimed_lines: node.source().untimed_lines(),
+            missing_lines: node.source().missing_lines(),
+            time_jumps: node.source().time_jumps(),
             covariance_resets: h.covariance_resets,
             refused_updates: h.refused_updates,
         });

@@ -2,8 +2,9 @@
 //!
 //! One header line names the columns, under the data contract's header rules
 //! ([`edgekf::csv_header`], the host reader's too): `t` (s) first, then in any order `ax`, `ay`,
-//! `az` (m/s², required), `fault_nack` (transactions to NACK, an integer 0..=255) and
-//! `fault_stuck` (0 or 1), both optional. Any other column (e.g. the simulator's `truth_*`
+//! `az` (m/s², required), and the optional fault instructions of [`FeedSample`]: `fault_nack`,
+//! `fault_timeout` and `fault_garbage` (transactions, an integer 0..=255), `fault_stuck`,
+//! `fault_drop` and `fault_reset` (0 or 1). Any other column (e.g. the simulator's `truth_*`
 //! columns) is ignored, so one file can carry both the sensor input and the answers the tests
 //! check against. A repeated name is refused, as on the host.
 
@@ -59,10 +60,44 @@ impl core::error::Error for CsvError {}
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct CsvColumns {
     accel: [u8; 3],
-    fault_nack: Option<u8>,
-    fault_stuck: Option<u8>,
+    /// Where each of [`FAULT_COLUMNS`] sits, if present.
+    faults: [Option<u8>; FAULT_COLUMNS.len()],
     count: u8,
     ignored: u8,
+}
+
+/// The optional fault columns, in the order of [`Fault`].
+pub const FAULT_COLUMNS: [&str; 6] =
+    ["fault_nack", "fault_timeout", "fault_garbage", "fault_stuck", "fault_drop", "fault_reset"];
+
+/// Which fault instruction a column carries (index into [`FAULT_COLUMNS`]).
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Fault {
+    Nack,
+    Timeout,
+    Garbage,
+    Stuck,
+    Drop,
+    Reset,
+}
+
+impl Fault {
+    const ALL: [Fault; FAULT_COLUMNS.len()] =
+        [Fault::Nack, Fault::Timeout, Fault::Garbage, Fault::Stuck, Fault::Drop, Fault::Reset];
+
+    /// Parses the field into `sample`: a transaction count (0..=255) or a flag (0 or 1).
+    fn apply(self, field: &str, sample: &mut FeedSample) -> Option<()> {
+        let flag = |field| parse_count(field, 1).map(|v| v == 1);
+        match self {
+            Fault::Nack => sample.nack = parse_count(field, u8::MAX)?,
+            Fault::Timeout => sample.timeout = parse_count(field, u8::MAX)?,
+            Fault::Garbage => sample.garbage = parse_count(field, u8::MAX)?,
+            Fault::Stuck => sample.stuck = flag(field)?,
+            Fault::Drop => sample.dropped = flag(field)?,
+            Fault::Reset => sample.reset = flag(field)?,
+        }
+        Some(())
+    }
 }
 
 /// What one column means.
@@ -70,8 +105,7 @@ pub struct CsvColumns {
 enum Role {
     Time,
     Accel(usize),
-    Nack,
-    Stuck,
+    Fault(Fault),
     Ignored,
 }
 
@@ -81,14 +115,13 @@ impl CsvColumns {
     pub fn from_header(line: &str) -> Result<Self, CsvError> {
         let header = Header::parse(line.split(','), MAX_CSV_COLUMNS).map_err(CsvError::Header)?;
         let accel = header.find_all(["ax", "ay", "az"]).map_err(CsvError::Header)?;
-        let (fault_nack, fault_stuck) = (header.position("fault_nack"), header.position("fault_stuck"));
-        let used = 1 + accel.len() + usize::from(fault_nack.is_some()) + usize::from(fault_stuck.is_some());
         // Every index and count is below MAX_CSV_COLUMNS (64), so the conversions are exact.
         let small = |v: usize| u8::try_from(v).unwrap_or(u8::MAX);
+        let faults = FAULT_COLUMNS.map(|name| header.position(name).map(small));
+        let used = 1 + accel.len() + faults.iter().filter(|f| f.is_some()).count();
         Ok(CsvColumns {
             accel: accel.map(small),
-            fault_nack: fault_nack.map(small),
-            fault_stuck: fault_stuck.map(small),
+            faults,
             count: small(header.width()),
             ignored: small(header.width().saturating_sub(used)),
         })
@@ -106,7 +139,7 @@ impl CsvColumns {
 
     /// Whether the file carries fault-injection columns.
     pub fn has_faults(&self) -> bool {
-        self.fault_nack.is_some() || self.fault_stuck.is_some()
+        self.faults.iter().any(Option::is_some)
     }
 
     fn role(&self, column: u8) -> Role {
@@ -114,10 +147,8 @@ impl CsvColumns {
             Role::Time
         } else if let Some(axis) = self.accel.iter().position(|&c| c == column) {
             Role::Accel(axis)
-        } else if self.fault_nack == Some(column) {
-            Role::Nack
-        } else if self.fault_stuck == Some(column) {
-            Role::Stuck
+        } else if let Some(k) = self.faults.iter().position(|&c| c == Some(column)) {
+            Fault::ALL.get(k).map_or(Role::Ignored, |&f| Role::Fault(f))
         } else {
             Role::Ignored
         }
@@ -127,9 +158,10 @@ impl CsvColumns {
     ///
     /// Fields are trimmed (spaces, a trailing `\r` from CRLF files). The line must have exactly
     /// as many fields as the header. `t`, `ax`, `ay` and `az` must parse as finite `f32`;
-    /// `fault_nack` must be an integer 0..=255 and `fault_stuck` 0 or 1 (`2.0`-style integral
-    /// floats are accepted for both, as are empty fault fields, meaning no fault). Ignored
-    /// columns are not looked at.
+    /// the transaction counts (`fault_nack`, `fault_timeout`, `fault_garbage`) must be integers
+    /// 0..=255 and the flags (`fault_stuck`, `fault_drop`, `fault_reset`) 0 or 1 (`2.0`-style
+    /// integral floats are accepted for all, as are empty fault fields, meaning no fault).
+    /// Ignored columns are not looked at.
     pub fn parse_line(&self, line: &str) -> Result<FeedSample, CsvError> {
         self.parse_record(line).map(|(_, sample)| sample)
     }
@@ -155,8 +187,7 @@ impl CsvColumns {
                         *slot = Some(parse_finite(field).ok_or(bad)?);
                     }
                 }
-                Role::Nack => sample.nack = parse_count(field, u8::MAX).ok_or(bad)?,
-                Role::Stuck => sample.stuck = parse_count(field, 1).ok_or(bad)? == 1,
+                Role::Fault(fault) => fault.apply(field, &mut sample).ok_or(bad)?,
                 Role::Ignored => {}
             }
         }

@@ -3,15 +3,20 @@
 //! [`VirtualAdxl355`] implements [`embedded_hal::i2c::I2c`] and answers at address 0x1D with
 //! the part's register protocol, so the real [`Adxl355`](crate::adxl355::Adxl355) driver and
 //! the main loop run on it unchanged, in QEMU and in host tests. Instead of a MEMS element it
-//! has a [`SampleFeed`]: recorded or simulated acceleration, with bus NACKs and stuck output
-//! injected where the feed says so.
+//! has a [`SampleFeed`]: recorded or simulated acceleration, with bus faults (NACKs,
+//! timeouts, garbage reads), frozen output, dropped samples and resets injected where the feed
+//! says so.
 //!
 //! # Time model
 //!
 //! The device has no clock of its own: the harness advances it, one watermark period at a time,
-//! with [`VirtualAdxl355::advance_period`]. In measurement mode (`POWER_CTL` bit 0 clear) each
-//! period pulls `FIFO_SAMPLES / 3` samples (at least one) from the feed into the FIFO; in
-//! standby nothing happens. Time passes whether or not the firmware manages to talk to the
+//! with [`VirtualAdxl355::advance_period`]. A period is `FIFO_SAMPLES / 3` samples (at least
+//! one) as programmed when measurement last started, i.e. the poll period of the node that
+//! programmed it; a reset of the part does not change the harness's clock. Before the first
+//! measurement nothing happens (the recording starts when the node starts the part). From then
+//! on each period takes its samples from the feed: in measurement mode (`POWER_CTL` bit 0 clear)
+//! into the FIFO, in standby (after a reset) into nothing, since time does not stop while the
+//! part waits to be reconfigured. Time passes whether or not the firmware manages to talk to the
 //! device, exactly as on a real bus: a NACK burst that lasts several periods lets the FIFO
 //! overrun. Runs are deterministic and independent of how fast the host or QEMU executes.
 //!
@@ -27,9 +32,20 @@
 //!
 //! # Faults
 //!
-//! * `nack`: when the sample enters the FIFO, that many NACKs are queued; each following bus
-//!   transaction (any kind) then fails with `NoAcknowledge(Address)` without side effects.
+//! Bus faults are queued when their sample is due and served one per transaction, timeouts
+//! first, then NACKs, then garbage reads; a faulty transaction has no effect on the part.
+//!
+//! * `nack`: that many transactions fail with `NoAcknowledge(Address)`.
+//! * `timeout`: that many transactions fail with [`VirtualBusError::Timeout`], of kind
+//!   `ErrorKind::Other` (embedded-hal 1.0 has no timeout kind; STM32 HALs report theirs so).
+//! * `garbage`: that many transactions to the part's address complete, but every byte read is
+//!   `0xFF` (the ID registers included) and writes are lost: a marginal bus, a corrupt
+//!   register.
 //! * `stuck`: the sample is replaced by the previous output codes.
+//! * `dropped`: the part produces nothing for this sample (a stall): the FIFO and the data
+//!   registers are left alone.
+//! * `reset`: the part resets as the sample is due (registers to their defaults, standby,
+//!   FIFO cleared); this sample and the following ones are lost until the node reconfigures it.
 //!
 //! ```
 //! use edgekf_firmware::adxl355::{Adxl355, Config, RawSample};
@@ -52,7 +68,7 @@ mod feed;
 #[cfg(test)]
 mod tests;
 
-pub use csv::{CsvColumns, CsvError, MAX_CSV_COLUMNS};
+pub use csv::{CsvColumns, CsvError, FAULT_COLUMNS, MAX_CSV_COLUMNS};
 pub use feed::{CsvTextFeed, FeedSample, FnFeed, SampleFeed, SliceFeed};
 
 use core::fmt;
@@ -75,8 +91,12 @@ const EMPTY_ENTRY: [u8; 3] = [0x00, 0x00, reg::FIFO_EMPTY_INDICATOR];
 /// Temperature registers at reset: 1885 LSB, the datasheet's nominal 25 °C intercept.
 const TEMP_25C: [u8; 2] = [0x07, 0x5D];
 
-/// Why the virtual bus refused a transaction. Both report
-/// `ErrorKind::NoAcknowledge(NoAcknowledgeSource::Address)`, as a real bus would.
+/// What every byte of a garbage read returns.
+pub const GARBAGE_BYTE: u8 = 0xFF;
+
+/// Why the virtual bus refused a transaction. The NACKs report
+/// `ErrorKind::NoAcknowledge(NoAcknowledgeSource::Address)`, as a real bus would; a timeout
+/// reports `ErrorKind::Other`, where embedded-hal 1.0 HALs (stm32f4xx-hal among them) put theirs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum VirtualBusError {
@@ -84,11 +104,18 @@ pub enum VirtualBusError {
     AddressNack,
     /// A NACK injected by the feed (`FeedSample::nack`).
     InjectedNack,
+    /// A timeout injected by the feed (`FeedSample::timeout`).
+    Timeout,
 }
 
 impl embedded_hal::i2c::Error for VirtualBusError {
     fn kind(&self) -> ErrorKind {
-        ErrorKind::NoAcknowledge(NoAcknowledgeSource::Address)
+        match self {
+            VirtualBusError::AddressNack | VirtualBusError::InjectedNack => {
+                ErrorKind::NoAcknowledge(NoAcknowledgeSource::Address)
+            }
+            VirtualBusError::Timeout => ErrorKind::Other,
+        }
     }
 }
 
@@ -97,6 +124,7 @@ impl fmt::Display for VirtualBusError {
         match self {
             VirtualBusError::AddressNack => f.write_str("no device at this address"),
             VirtualBusError::InjectedNack => f.write_str("injected NACK"),
+            VirtualBusError::Timeout => f.write_str("injected bus timeout"),
         }
     }
 }
@@ -111,6 +139,17 @@ pub struct VirtualCounters {
     pub nacks_sent: u32,
     /// FIFO entries (axes) discarded because the FIFO overflowed.
     pub overrun_entries: u32,
+    /// Injected timeouts sent.
+    pub timeouts_sent: u32,
+    /// Garbage reads served (transactions answered with `0xFF` bytes).
+    pub garbage_sent: u32,
+    /// Samples the feed marked `dropped` that were due while measuring (nothing loaded).
+    pub samples_dropped: u32,
+    /// Resets injected by the feed.
+    pub resets: u32,
+    /// Samples lost to a reset: in the FIFO when it was cleared, or due while the part sat in
+    /// standby after it.
+    pub samples_discarded: u32,
 }
 
 /// A software ADXL355 on a virtual I2C bus. See the [module docs](self) for the model.
@@ -123,6 +162,12 @@ pub struct VirtualAdxl355<F: SampleFeed> {
     last_codes: [i32; 3],
     overrun: bool,
     pending_nacks: u32,
+    pending_timeouts: u32,
+    pending_garbage: u32,
+    /// Samples per period, latched when measurement starts (0: never measured yet).
+    period: u8,
+    /// Samples the feed supplied in the last period.
+    last_taken: u8,
     feed_ended: bool,
     pointer: u8,
     counters: VirtualCounters,
@@ -138,6 +183,10 @@ impl<F: SampleFeed> VirtualAdxl355<F> {
             last_codes: [0; 3],
             overrun: false,
             pending_nacks: 0,
+            pending_timeouts: 0,
+            pending_garbage: 0,
+            period: 0,
+            last_taken: 0,
             feed_ended: false,
             pointer: 0,
             counters: VirtualCounters::default(),
@@ -159,6 +208,22 @@ impl<F: SampleFeed> VirtualAdxl355<F> {
     /// NACKs still queued.
     pub fn pending_nacks(&self) -> u32 {
         self.pending_nacks
+    }
+
+    /// Bus faults of every kind (timeouts, NACKs, garbage reads) still queued.
+    pub fn pending_bus_faults(&self) -> u32 {
+        self.pending_timeouts.saturating_add(self.pending_nacks).saturating_add(self.pending_garbage)
+    }
+
+    /// Samples per period (0 before the first measurement).
+    pub fn period_samples(&self) -> usize {
+        usize::from(self.period)
+    }
+
+    /// Samples of the last period that the feed did not have, because it ended: a recording
+    /// that stops mid-period. Those samples were never due.
+    pub fn period_shortfall(&self) -> usize {
+        usize::from(self.period.saturating_sub(self.last_taken))
     }
 
     /// Entries in the FIFO.
@@ -183,7 +248,8 @@ impl<F: SampleFeed> VirtualAdxl355<F> {
     }
 
     /// Software reset: registers to their reset values, FIFO and output cleared. Injected
-    /// NACKs still pending and the counters are test-bench state and survive.
+    /// bus faults still pending, the harness's period and the counters are test-bench state and
+    /// survive.
     fn reset(&mut self) {
         self.registers = [0; REGISTER_COUNT];
         let defaults = [
@@ -220,29 +286,43 @@ impl<F: SampleFeed> VirtualAdxl355<F> {
         Range::from_register_code(self.peek_register(reg::RANGE)).unwrap_or(Range::G2)
     }
 
-    /// One watermark period passes: in measurement mode, pull `FIFO_SAMPLES / 3` samples (at
-    /// least one) from the feed into the FIFO. Returns how many were loaded (0 in standby or once
-    /// the feed has ended).
+    /// One watermark period passes: from the first measurement on, `period_samples()` samples
+    /// are taken from the feed, loaded into the FIFO in measurement mode, lost in standby.
+    /// Returns how many were loaded (0 before the first measurement, in standby or once the
+    /// feed has ended).
     pub fn advance_period(&mut self) -> usize {
-        if !self.measuring() {
-            return 0;
-        }
-        let per_period = (self.peek_register(reg::FIFO_SAMPLES).min(reg::FIFO_CAPACITY) / 3).max(1);
         let mut loaded = 0;
-        for _ in 0..per_period {
-            match self.feed.next_sample() {
-                Some(sample) => {
-                    self.feed_ended = false;
-                    self.load(sample);
-                    loaded += 1;
-                }
-                None => {
-                    self.feed_ended = true;
-                    break;
-                }
+        self.last_taken = 0;
+        for _ in 0..self.period {
+            let Some(sample) = self.feed.next_sample() else {
+                self.feed_ended = true;
+                break;
+            };
+            self.feed_ended = false;
+            self.last_taken = self.last_taken.saturating_add(1);
+            self.queue_bus_faults(&sample);
+            if sample.reset {
+                self.counters.resets = self.counters.resets.saturating_add(1);
+                let cleared = u32::try_from(self.fifo.len() / 3).unwrap_or(u32::MAX);
+                self.counters.samples_discarded = self.counters.samples_discarded.saturating_add(cleared);
+                self.reset();
+            }
+            if !self.measuring() {
+                self.counters.samples_discarded = self.counters.samples_discarded.saturating_add(1);
+            } else if sample.dropped {
+                self.counters.samples_dropped = self.counters.samples_dropped.saturating_add(1);
+            } else {
+                self.load(sample);
+                loaded += 1;
             }
         }
         loaded
+    }
+
+    fn queue_bus_faults(&mut self, sample: &FeedSample) {
+        self.pending_nacks = self.pending_nacks.saturating_add(u32::from(sample.nack));
+        self.pending_timeouts = self.pending_timeouts.saturating_add(u32::from(sample.timeout));
+        self.pending_garbage = self.pending_garbage.saturating_add(u32::from(sample.garbage));
     }
 
     /// Converts one sample and pushes it into the FIFO and the data registers.
@@ -253,7 +333,6 @@ impl<F: SampleFeed> VirtualAdxl355<F> {
             let lsb_per_g = self.range().lsb_per_g();
             sample.accel.map(|a| to_code(a, lsb_per_g))
         };
-        self.pending_nacks = self.pending_nacks.saturating_add(u32::from(sample.nack));
         let mut data_address = reg::XDATA3;
         for (axis, &code) in codes.iter().enumerate() {
             let marker = if axis == 0 { reg::FIFO_X_MARKER } else { 0 };
@@ -311,7 +390,14 @@ impl<F: SampleFeed> VirtualAdxl355<F> {
     fn write_register(&mut self, address: u8, value: u8) {
         match address {
             reg::RESET if value == reg::RESET_CODE => self.reset(),
-            reg::OFFSET_X_H..=reg::SELF_TEST => self.set(address, value),
+            reg::OFFSET_X_H..=reg::SELF_TEST => {
+                let starts = address == reg::POWER_CTL && !self.measuring() && value & reg::POWER_CTL_STANDBY == 0;
+                self.set(address, value);
+                if starts {
+                    // Measurement starts: the period is the watermark programmed now.
+                    self.period = (self.peek_register(reg::FIFO_SAMPLES).min(reg::FIFO_CAPACITY) / 3).max(1);
+                }
+            }
             _ => {}
         }
     }
@@ -361,6 +447,11 @@ impl<F: SampleFeed> ErrorType for VirtualAdxl355<F> {
 
 impl<F: SampleFeed> I2c for VirtualAdxl355<F> {
     fn transaction(&mut self, address: u8, operations: &mut [Operation<'_>]) -> Result<(), Self::Error> {
+        if self.pending_timeouts > 0 {
+            self.pending_timeouts -= 1;
+            self.counters.timeouts_sent = self.counters.timeouts_sent.saturating_add(1);
+            return Err(VirtualBusError::Timeout);
+        }
         if self.pending_nacks > 0 {
             self.pending_nacks -= 1;
             self.counters.nacks_sent = self.counters.nacks_sent.saturating_add(1);
@@ -368,6 +459,16 @@ impl<F: SampleFeed> I2c for VirtualAdxl355<F> {
         }
         if address != VIRTUAL_ADDRESS {
             return Err(VirtualBusError::AddressNack);
+        }
+        if self.pending_garbage > 0 {
+            self.pending_garbage -= 1;
+            self.counters.garbage_sent = self.counters.garbage_sent.saturating_add(1);
+            for operation in operations {
+                if let Operation::Read(buf) = operation {
+                    buf.fill(GARBAGE_BYTE);
+                }
+            }
+            return Ok(());
         }
         for operation in operations {
             match operation {

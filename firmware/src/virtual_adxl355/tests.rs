@@ -239,6 +239,110 @@ fn overrun_discards_oldest_and_sets_flag() {
     assert!(device(&adxl).is_exhausted());
 }
 
+#[test]
+fn timeouts_fail_with_kind_other_and_come_before_nacks() {
+    let mut input = signal(6);
+    input[0].timeout = 2;
+    input[0].nack = 1;
+    let mut adxl = driver(&input, Config { fifo_watermark: 9, ..Config::default() });
+    assert_eq!(tick(&mut adxl), 3);
+    let mut out = [RawSample::default(); 8];
+    for _ in 0..2 {
+        let err = adxl.read_fifo(&mut out).unwrap_err();
+        assert_eq!(err, Error::Comm(VirtualBusError::Timeout));
+        assert!(crate::adxl355::is_timeout(&err) && !is_nack(&err));
+        assert_eq!(VirtualBusError::Timeout.kind(), ErrorKind::Other);
+    }
+    assert!(is_nack(&adxl.read_fifo(&mut out).unwrap_err()));
+    // No side effects: the whole block is still there.
+    assert_eq!(adxl.read_fifo(&mut out).unwrap().samples, 3);
+    let c = device(&adxl).counters();
+    assert_eq!((c.timeouts_sent, c.nacks_sent, device(&adxl).pending_bus_faults()), (2, 1, 0));
+}
+
+#[test]
+fn garbage_reads_all_ones_without_touching_the_part() {
+    let mut input = signal(6);
+    input[2].garbage = 3;
+    let mut adxl = driver(&input, Config { fifo_watermark: 9, ..Config::default() });
+    tick(&mut adxl);
+    // The poll's status read: the IDs read 0xFF, refused as a wrong device.
+    assert_eq!(adxl.poll_status(), Err(Error::WrongDevice { ad: 0xFF, mst: 0xFF, part: 0xFF }));
+    // A garbage FIFO burst pops nothing (the entries stay) and decodes to nothing (0xFF carries
+    // the empty indicator).
+    let mut out = [RawSample::default(); 8];
+    assert_eq!(
+        adxl.read_fifo_entries(9, &mut out).unwrap(),
+        crate::adxl355::FifoRead { samples: 0, skipped_entries: 9 }
+    );
+    assert_eq!(device(&adxl).fifo_len(), 9);
+    // A lost write: the range does not change.
+    adxl.interface_mut().bus_mut().write(0x1D, &[0x2C, 0x83]).unwrap();
+    assert_eq!(device(&adxl).peek_register(0x2C), 0x81);
+    // The burst is over: the status read is good and sees all 3 samples.
+    let poll = adxl.poll_status().unwrap();
+    assert_eq!((poll.fifo_entries, poll.status.fifo_overrun), (9, false));
+    assert_eq!(adxl.read_fifo_entries(poll.fifo_entries, &mut out).unwrap().samples, 3);
+    assert_eq!(device(&adxl).counters().garbage_sent, 3);
+}
+
+#[test]
+fn dropped_samples_never_enter_the_fifo() {
+    let mut input = signal(12);
+    for s in &mut input[4..9] {
+        s.dropped = true;
+    }
+    let mut adxl = driver(&input, Config { fifo_watermark: 18, ..Config::default() });
+    assert_eq!((tick(&mut adxl), tick(&mut adxl)), (4, 3));
+    let mut out = [RawSample::default(); 12];
+    assert_eq!(adxl.read_fifo(&mut out).unwrap().samples, 7);
+    // Sample 9 follows sample 3.
+    let lsb = 9.80665 / 256_000.0;
+    assert!((adxl.to_mps2(out[4])[2] - input[9].accel[2]).abs() <= lsb);
+    let c = device(&adxl).counters();
+    assert_eq!((c.samples_loaded, c.samples_dropped, c.samples_discarded), (7, 5, 0));
+    assert_eq!(device(&adxl).period_shortfall(), 0);
+}
+
+#[test]
+fn a_reset_mid_run_clears_the_fifo_and_time_goes_on_in_standby() {
+    let mut input = signal(40);
+    input[13].reset = true;
+    let config = Config { fifo_watermark: 15, ..Config::default() }; // 5 samples a period
+    let mut adxl = driver(&input, config);
+    assert_eq!((tick(&mut adxl), tick(&mut adxl)), (5, 5));
+    // Samples 10..13 enter, 13 resets the part: the FIFO (13 samples, unread) is cleared, 13
+    // and 14 are due in standby.
+    assert_eq!(tick(&mut adxl), 3);
+    let dev = device(&adxl);
+    assert_eq!(dev.fifo_len(), 0);
+    assert_eq!([0x28, 0x29, 0x2C, 0x2D].map(|r| dev.peek_register(r)), [0x00, 0x60, 0x81, 0x01]);
+    assert_eq!((dev.counters().resets, dev.counters().samples_discarded), (1, 15));
+    assert!(!adxl.config_matches().unwrap());
+    // Standby: the harness's period stays 5 samples, and they are lost.
+    assert_eq!(tick(&mut adxl), 0);
+    assert_eq!(device(&adxl).counters().samples_discarded, 20);
+    assert_eq!(device(&adxl).period_samples(), 5);
+    // Reconfigured, the part measures from the next period on, at sample 20.
+    adxl.init(config).unwrap();
+    assert!(adxl.config_matches().unwrap());
+    assert_eq!(tick(&mut adxl), 5);
+    let mut out = [RawSample::default(); 8];
+    assert_eq!(adxl.read_fifo(&mut out).unwrap().samples, 5);
+    assert!((adxl.to_mps2(out[0])[2] - input[20].accel[2]).abs() <= 9.80665 / 256_000.0);
+    let c = device(&adxl).counters();
+    assert_eq!((c.samples_loaded, c.resets, c.samples_discarded), (18, 1, 20));
+}
+
+#[test]
+fn a_recording_that_ends_mid_period_reports_its_shortfall() {
+    let input = signal(7);
+    let mut adxl = driver(&input, Config { fifo_watermark: 15, ..Config::default() });
+    assert_eq!((tick(&mut adxl), device(&adxl).period_shortfall()), (5, 0));
+    assert_eq!((tick(&mut adxl), device(&adxl).period_shortfall()), (2, 3));
+    assert_eq!((tick(&mut adxl), device(&adxl).period_shortfall()), (0, 5));
+}
+
 fn header_error(e: HeaderError) -> Result<CsvColumns, CsvError> {
     Err(CsvError::Header(e))
 }
@@ -252,7 +356,7 @@ fn csv_header_columns() {
         CsvColumns::from_header("\u{feff} t ,truth_force,az,ay,ax,truth_phase,fault_stuck,fault_nack\r\n").unwrap();
     assert_eq!((cols.column_count(), cols.ignored(), cols.has_faults()), (8, 2, true));
     let s = cols.parse_line("0.5, 1.0, 3, 2, 1, 9.9, 1, 4\r").unwrap();
-    assert_eq!(s, FeedSample { accel: [1.0, 2.0, 3.0], nack: 4, stuck: true });
+    assert_eq!(s, FeedSample { accel: [1.0, 2.0, 3.0], nack: 4, stuck: true, ..Default::default() });
     assert_eq!(cols.parse_record("0.5,1.0,3,2,1,9.9,0,").unwrap(), (0.5, FeedSample::new([1.0, 2.0, 3.0])));
 
     let name = ColumnName::new;
@@ -276,6 +380,36 @@ fn csv_header_columns() {
     let dup = CsvColumns::from_header("t,ax,ay,az,ax").unwrap_err();
     assert_eq!(dup, CsvError::Header(HeaderError::Duplicate { name: name("ax"), first: 2, second: 5 }));
     assert_eq!(std::format!("{dup}"), "CSV header: duplicate column name `ax`: columns 2 and 5");
+}
+
+#[test]
+fn csv_fault_columns_in_any_order() {
+    let header = "t,fault_reset,ax,fault_garbage,ay,fault_drop,az,fault_timeout,fault_stuck,fault_nack,truth_x";
+    let cols = CsvColumns::from_header(header).unwrap();
+    assert_eq!((cols.column_count(), cols.ignored(), cols.has_faults()), (11, 1, true));
+    let s = cols.parse_line("0.25,1,1.5,7,2.5,1,3.5,9,0,3,0.1").unwrap();
+    let want = FeedSample {
+        accel: [1.5, 2.5, 3.5],
+        nack: 3,
+        timeout: 9,
+        garbage: 7,
+        stuck: false,
+        dropped: true,
+        reset: true,
+    };
+    assert_eq!(s, want);
+    // Empty fault cells mean no fault; flags are 0 or 1, counts 0..=255.
+    assert_eq!(cols.parse_line("0.25,,1.5,,2.5,,3.5,,,,0.1").unwrap(), FeedSample::new([1.5, 2.5, 3.5]));
+    let bad = |column| Err(CsvError::BadField { column });
+    assert_eq!(cols.parse_line("0.25,2,1.5,7,2.5,1,3.5,9,0,3,0.1"), bad(1));
+    assert_eq!(cols.parse_line("0.25,1,1.5,256,2.5,1,3.5,9,0,3,0.1"), bad(3));
+    assert_eq!(cols.parse_line("0.25,1,1.5,7,2.5,0.5,3.5,9,0,3,0.1"), bad(5));
+    assert_eq!(cols.parse_line("0.25,1,1.5,7,2.5,1,3.5,-1,0,3,0.1"), bad(7));
+    // Every fault column is one of the published names.
+    for name in FAULT_COLUMNS {
+        let cols = CsvColumns::from_header(&std::format!("t,ax,ay,az,{name}")).unwrap();
+        assert_eq!((cols.ignored(), cols.has_faults()), (0, true), "{name}");
+    }
 }
 
 #[test]

@@ -18,8 +18,9 @@ use std::path::{Path, PathBuf};
 pub enum OscillatorCommand {
     /// Simulate a scenario into a data CSV.
     ///
-    /// Columns: t, ax, ay, az, fault_nack, fault_stuck, truth_x, truth_v, truth_force,
-    /// truth_force_amplitude, truth_accel.
+    /// Columns: t, ax, ay, az, fault_nack, fault_timeout, fault_garbage, fault_stuck,
+    /// fault_drop, fault_reset, truth_x, truth_v, truth_force, truth_force_amplitude,
+    /// truth_accel.
     Simulate {
         /// Scenario file (default: the built-in demo scenario).
         #[arg(long, value_name = "TOML")]
@@ -28,7 +29,9 @@ pub enum OscillatorCommand {
         #[arg(long, value_name = "CSV")]
         out: PathBuf,
         /// Add one fault of each kind to the scenario's own: a 3-transaction I²C NACK burst at
-        /// 25 % of the run, registers stuck for 50 ms at 40 %, 20 ms of 3 g on x at 75 %.
+        /// 25 % of the run, 2 timeouts at 30 %, 3 garbage reads at 35 %, registers stuck for
+        /// 50 ms at 40 %, no samples for 20 ms at 50 %, a sensor reset at 60 %, 20 ms of 3 g on
+        /// x at 75 %.
         #[arg(long)]
         faults: bool,
     },

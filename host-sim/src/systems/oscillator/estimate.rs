@@ -31,7 +31,8 @@ use std::path::Path;
 
 /// The channels the estimator's input may hold (besides `t` and `truth_*`): the accelerometer
 /// axes and the virtual-device fault columns. Only `ax` is used.
-pub const KNOWN_CHANNELS: [&str; 5] = ["ax", "ay", "az", "fault_nack", "fault_stuck"];
+pub const KNOWN_CHANNELS: [&str; 9] =
+    ["ax", "ay", "az", "fault_nack", "fault_timeout", "fault_garbage", "fault_stuck", "fault_drop", "fault_reset"];
 
 /// How to run and judge the estimator.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -189,8 +189,8 @@ impl Scenario {
     /// Runs the reference simulation and the sensor model.
     ///
     /// The x axis reads the mode's acceleration (replaced during a [`Fault::Saturation`]) plus
-    /// noise and bias, clipped; y and z read noise and bias only. `fault_nack` and `fault_stuck`
-    /// carry the virtual-device faults; they do not alter `ax`.
+    /// noise and bias, clipped; y and z read noise and bias only. The `fault_*` columns carry
+    /// the virtual-device faults; they do not alter `ax`.
     pub fn simulate(&self) -> Recording {
         let n = self.samples();
         let osc = Oscillator::new(self.mode, self.force.clone());
@@ -202,7 +202,11 @@ impl Scenario {
             ay: Vec::with_capacity(n),
             az: Vec::with_capacity(n),
             fault_nack: vec![0; n],
+            fault_timeout: vec![0; n],
+            fault_garbage: vec![0; n],
             fault_stuck: vec![false; n],
+            fault_drop: vec![false; n],
+            fault_reset: vec![false; n],
             truth_x: Vec::with_capacity(n),
             truth_v: Vec::with_capacity(n),
             truth_force: Vec::with_capacity(n),
@@ -226,16 +230,31 @@ impl Scenario {
             rec.truth_accel.push(s.a);
         }
         for f in &self.faults {
+            let at = f.first_sample(&rec.t);
             match *f {
-                Fault::NackBurst { t, transactions } => {
-                    if let Some(k) = rec.t.iter().position(|&tk| tk >= t - fault::TIME_TOLERANCE) {
-                        rec.fault_nack[k] = rec.fault_nack[k].saturating_add(transactions);
+                Fault::NackBurst { transactions, .. }
+                | Fault::Timeout { transactions, .. }
+                | Fault::Garbage { transactions, .. } => {
+                    let column = match f {
+                        Fault::NackBurst { .. } => &mut rec.fault_nack,
+                        Fault::Timeout { .. } => &mut rec.fault_timeout,
+                        _ => &mut rec.fault_garbage,
+                    };
+                    if let Some(cell) = at.and_then(|k| column.get_mut(k)) {
+                        *cell = cell.saturating_add(transactions);
                     }
                 }
-                Fault::Stuck { .. } => {
-                    for (k, &tk) in rec.t.iter().enumerate() {
+                Fault::Reset { .. } => {
+                    if let Some(cell) = at.and_then(|k| rec.fault_reset.get_mut(k)) {
+                        *cell = true;
+                    }
+                }
+                Fault::Stuck { .. } | Fault::Dropout { .. } => {
+                    let column =
+                        if matches!(f, Fault::Stuck { .. }) { &mut rec.fault_stuck } else { &mut rec.fault_drop };
+                    for (cell, &tk) in column.iter_mut().zip(&rec.t) {
                         if f.covers(tk) {
-                            rec.fault_stuck[k] = true;
+                            *cell = true;
                         }
                     }
                 }

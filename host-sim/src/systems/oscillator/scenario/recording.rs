@@ -17,8 +17,17 @@ pub struct Recording {
     pub az: Vec<f64>,
     /// NACK-burst instruction for the virtual device: transactions to refuse from this sample.
     pub fault_nack: Vec<u8>,
+    /// Timeout instruction for the virtual device: transactions to time out from this sample.
+    pub fault_timeout: Vec<u8>,
+    /// Garbage instruction for the virtual device: transactions to answer with `0xFF` bytes
+    /// from this sample.
+    pub fault_garbage: Vec<u8>,
     /// Stuck-registers instruction for the virtual device.
     pub fault_stuck: Vec<bool>,
+    /// Dropped-sample instruction for the virtual device: it produces nothing for this sample.
+    pub fault_drop: Vec<bool>,
+    /// Reset instruction for the virtual device: it resets to its defaults at this sample.
+    pub fault_reset: Vec<bool>,
     /// True modal displacement, m.
     pub truth_x: Vec<f64>,
     /// True modal velocity, m/s.
@@ -34,12 +43,16 @@ pub struct Recording {
 
 impl Recording {
     /// The CSV columns after `t`, in order.
-    pub const CHANNELS: [&'static str; 10] = [
+    pub const CHANNELS: [&'static str; 14] = [
         "ax",
         "ay",
         "az",
         "fault_nack",
+        "fault_timeout",
+        "fault_garbage",
         "fault_stuck",
+        "fault_drop",
+        "fault_reset",
         "truth_x",
         "truth_v",
         "truth_force",
@@ -60,14 +73,18 @@ impl Recording {
     /// The recording as a [`DataFile`] with the columns of [`Recording::CHANNELS`] (fault
     /// columns as 0/1 and counts).
     pub fn to_data_file(&self) -> DataFile {
-        let nack: Vec<f64> = self.fault_nack.iter().map(|&n| f64::from(n)).collect();
-        let stuck: Vec<f64> = self.fault_stuck.iter().map(|&s| if s { 1.0 } else { 0.0 }).collect();
+        let count = |v: &[u8]| v.iter().map(|&n| f64::from(n)).collect::<Vec<f64>>();
+        let flag = |v: &[bool]| v.iter().map(|&s| if s { 1.0 } else { 0.0 }).collect::<Vec<f64>>();
         let columns = vec![
             self.ax.clone(),
             self.ay.clone(),
             self.az.clone(),
-            nack,
-            stuck,
+            count(&self.fault_nack),
+            count(&self.fault_timeout),
+            count(&self.fault_garbage),
+            flag(&self.fault_stuck),
+            flag(&self.fault_drop),
+            flag(&self.fault_reset),
             self.truth_x.clone(),
             self.truth_v.clone(),
             self.truth_force.clone(),
@@ -77,9 +94,9 @@ impl Recording {
         DataFile { names: Self::CHANNELS.iter().map(|s| s.to_string()).collect(), t: self.t.clone(), columns }
     }
 
-    /// The CSV text: `t,ax,ay,az,fault_nack,fault_stuck,truth_x,truth_v,truth_force,
-    /// truth_force_amplitude,truth_accel`, numbers in shortest round-trip form, fault columns as
-    /// integers.
+    /// The CSV text: `t,ax,ay,az,fault_nack,fault_timeout,fault_garbage,fault_stuck,fault_drop,
+    /// fault_reset,truth_x,truth_v,truth_force,truth_force_amplitude,truth_accel`, numbers in
+    /// shortest round-trip form, fault columns as integers.
     pub fn to_csv_string(&self) -> String {
         self.csv(Path::new("<memory>")).unwrap_or_else(|e| format!("# inconsistent recording: {e}\n"))
     }

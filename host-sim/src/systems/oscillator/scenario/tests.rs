@@ -33,7 +33,8 @@ fn default_recording_has_the_demo_physics_and_sensor_noise() {
     // Steady acceleration amplitude before the step: Ω²|X| = 7737 × 0.62 mm = 4.80 m/s².
     let peak = r.truth_accel[4_000..6_000].iter().fold(0.0f64, |m, a| m.max(a.abs()));
     assert!((peak - 4.796).abs() < 0.01, "{peak}");
-    assert!(r.fault_nack.iter().all(|&n| n == 0) && r.fault_stuck.iter().all(|&s| !s));
+    assert!(r.fault_nack.iter().chain(&r.fault_timeout).chain(&r.fault_garbage).all(|&n| n == 0));
+    assert!(r.fault_stuck.iter().chain(&r.fault_drop).chain(&r.fault_reset).all(|&s| !s));
 }
 
 #[test]
@@ -50,19 +51,46 @@ fn the_seed_fixes_the_noise() {
 fn faults_land_on_the_right_samples() {
     let s = Scenario { faults: Fault::demo_set(12.0), ..Default::default() };
     let r = s.simulate();
-    let nack: Vec<(usize, u8)> = r.fault_nack.iter().copied().enumerate().filter(|(_, n)| *n > 0).collect();
-    assert_eq!(nack, [(3_000, 3)]);
-    let stuck: Vec<usize> = (0..r.len()).filter(|&k| r.fault_stuck[k]).collect();
+    let counts = |v: &[u8]| v.iter().copied().enumerate().filter(|(_, n)| *n > 0).collect::<Vec<(usize, u8)>>();
+    let flags = |v: &[bool]| (0..r.len()).filter(|&k| v[k]).collect::<Vec<usize>>();
+    assert_eq!(counts(&r.fault_nack), [(3_000, 3)]);
+    assert_eq!(counts(&r.fault_timeout), [(3_600, 2)]);
+    assert_eq!(counts(&r.fault_garbage), [(4_200, 3)]);
+    let stuck = flags(&r.fault_stuck);
     assert_eq!(stuck.len(), 50);
     assert_eq!((stuck[0], stuck[49]), (4_800, 4_849));
+    assert_eq!(flags(&r.fault_drop), (6_000..6_020).collect::<Vec<_>>());
+    assert_eq!(flags(&r.fault_reset), [7_200]);
     // Saturation: 3 g on the x axis reads as the 2 g full scale for 20 samples; truth unchanged.
     let clipped: Vec<usize> = (0..r.len()).filter(|&k| r.ax[k] == 2.0 * G).collect();
     assert_eq!(clipped, (9_000..9_020).collect::<Vec<_>>());
     assert!(r.truth_accel[9_010].abs() < 5.0);
-    // Stuck and NACK faults leave ax alone: same noise as the clean run there.
+    // The virtual-device faults leave ax alone: same noise as the clean run there.
     let clean = Scenario::default().simulate();
     assert_eq!(r.ax[4_800..4_850], clean.ax[4_800..4_850]);
-    assert_eq!(r.ax[3_000], clean.ax[3_000]);
+    assert_eq!(r.ax[6_000..6_020], clean.ax[6_000..6_020]);
+    assert_eq!([r.ax[3_000], r.ax[3_600], r.ax[4_200], r.ax[7_200]], [3_000, 3_600, 4_200, 7_200].map(|k| clean.ax[k]));
+}
+
+#[test]
+fn new_fault_kinds_read_from_toml_and_are_checked() {
+    let text = "[[faults]]\nkind = \"timeout\"\nt = 1.0\ntransactions = 2\n\
+                [[faults]]\nkind = \"garbage\"\nt = 1.5\ntransactions = 4\n\
+                [[faults]]\nkind = \"dropout\"\nt_start = 2.0\nt_end = 2.01\n\
+                [[faults]]\nkind = \"reset\"\nt = 3.0\n";
+    let s = Scenario::from_toml_str(text).unwrap();
+    let want = [
+        Fault::Timeout { t: 1.0, transactions: 2 },
+        Fault::Garbage { t: 1.5, transactions: 4 },
+        Fault::Dropout { t_start: 2.0, t_end: 2.01 },
+        Fault::Reset { t: 3.0 },
+    ];
+    assert_eq!(s.faults, want);
+    assert_eq!(s.faults.iter().map(Fault::kind).collect::<Vec<_>>(), ["timeout", "garbage", "dropout", "reset"]);
+    let e = |t: &str| format!("{:#}", Scenario::from_toml_str(t).unwrap_err());
+    assert!(e("[[faults]]\nkind = \"dropout\"\nt_start = 2.0\nt_end = 1.0\n").contains("faults[0]"));
+    assert!(e("[[faults]]\nkind = \"reset\"\nt = nan\n").contains("reset: t must be finite"));
+    assert!(e("[[faults]]\nkind = \"timeout\"\nt = 1.0\ntransactions = 300\n").contains("integer `300`, expected u8"));
 }
 
 #[test]
@@ -77,10 +105,11 @@ fn csv_has_exactly_the_contract_columns() {
     let mut lines = text.lines();
     assert_eq!(
         lines.next().unwrap(),
-        "t,ax,ay,az,fault_nack,fault_stuck,truth_x,truth_v,truth_force,truth_force_amplitude,truth_accel"
+        "t,ax,ay,az,fault_nack,fault_timeout,fault_garbage,fault_stuck,fault_drop,fault_reset,truth_x,truth_v,\
+         truth_force,truth_force_amplitude,truth_accel"
     );
     let row2: Vec<&str> = lines.nth(2).unwrap().split(',').collect();
-    assert_eq!((row2[0], row2[4], row2[5], row2[9]), ("0.002", "0", "1", "5"));
+    assert_eq!((row2[0], row2[4], row2[7], row2[8], row2[13]), ("0.002", "0", "1", "0", "5"));
     assert_eq!(text.lines().count(), 11);
 }
 
