@@ -2,6 +2,7 @@
 //! same CSV text the QEMU image reads, the parsing of its output (the image's or the host
 //! run's), and the original two-pass host features as an oracle for the streaming ones.
 
+use crate::faulty::FaultPlan;
 use crate::report::frames;
 use anyhow::{anyhow, bail, Result};
 use edgekf::systems::crank::{ClearanceEstimate, FEATURES};
@@ -119,55 +120,14 @@ pub fn reference_features(x: &[f64], rate: f64, window_s: f64) -> ([f64; FEATURE
     (acc.map(|v| (v / k).max(1e-12).ln()), windows)
 }
 
-/// What [`faulty_csv`] does to a crank HIL file, and the counts the node must report for it.
-pub mod faulty {
-    /// Data lines (sample numbers) deleted from the file: missing, stepped as missing samples
-    /// by their `t`.
-    pub const DELETED: std::ops::Range<usize> = 5000..5010;
-    /// A sample whose line is replaced by garbage without a `t`: not stepped itself, stepped as
-    /// missing when the next line's `t` shows it.
-    pub const GARBAGE: usize = 12_000;
-    /// A sample whose value is emptied: stepped as missing, at its time.
-    pub const EMPTY_CELL: usize = 7000;
-    /// A junk line is inserted after this sample: not stepped.
-    pub const JUNK_AFTER: usize = 15_000;
-    /// A sample whose value reads NaN: stepped as missing.
-    pub const NAN: usize = 16_000;
-    /// Lines that do not parse: the garbage, the empty cell, the junk, the NaN.
-    pub const BAD_LINES: u32 = 4;
-    /// Of those, lines without a `t`: the garbage and the junk.
-    pub const UNTIMED_LINES: u32 = 2;
-    /// Samples stepped as missing for lines missing from the file: the deleted and the garbage.
-    pub const MISSING_LINES: u32 = 11;
-    /// Samples the estimator skipped: the missing lines, the empty cell and the NaN.
-    pub const SKIPPED: u32 = MISSING_LINES + 2;
-}
+/// What [`faulty_csv`] does to a crank HIL file (the counts the node must report follow from
+/// it).
+pub const FAULTS: FaultPlan =
+    FaultPlan { deleted: 5000..5010, garbage: 12_000, empty_cell: 7000, junk_after: 15_000, nan: 16_000 };
 
-/// `text` (the output of [`csv`]) with the faults of [`faulty`].
+/// `text` (the output of [`csv`]) with the faults of [`FAULTS`].
 pub fn faulty_csv(text: &str) -> String {
-    let mut out = String::new();
-    for (k, line) in text.lines().enumerate() {
-        let Some(sample) = k.checked_sub(1) else {
-            out.push_str(line);
-            out.push('\n');
-            continue;
-        };
-        if faulty::DELETED.contains(&sample) {
-            continue;
-        }
-        let t = line.split(',').next().unwrap_or("");
-        match sample {
-            faulty::GARBAGE => out.push_str("\u{1}%garbage%"),
-            faulty::EMPTY_CELL => out.push_str(&format!("{t},")),
-            faulty::NAN => out.push_str(&format!("{t},NaN")),
-            _ => out.push_str(line),
-        }
-        out.push('\n');
-        if sample == faulty::JUNK_AFTER {
-            out.push_str("junk,,\n");
-        }
-    }
-    out
+    FAULTS.apply(text)
 }
 
 /// Checks a run over [`faulty_csv`] of a recording of `samples` samples against the clean
@@ -178,12 +138,13 @@ pub fn faulty_csv(text: &str) -> String {
 /// `tolerance` (relative) of the clean run's then. Returns the clearance's relative difference.
 pub fn check_faulty_run(run: &CrankRun, clean: &CrankRun, samples: usize, tolerance: f64) -> Result<f64> {
     let counts = (run.samples, run.skipped, run.bad_lines, run.untimed_lines, run.missing_lines, run.time_jumps);
-    let want = (samples as u32, faulty::SKIPPED, faulty::BAD_LINES, faulty::UNTIMED_LINES, faulty::MISSING_LINES, 0);
+    // Skipped: the missing lines, the empty cell and the NaN.
+    let missing = FAULTS.missing_lines();
+    let want = (samples as u32, missing + 2, FaultPlan::BAD_LINES, FaultPlan::UNTIMED_LINES, missing, 0);
     if counts != want {
         bail!("(samples, skipped, bad, untimed, missing, jumps) = {counts:?}, expected {want:?}");
     }
-    let skipped =
-        |k: usize| faulty::DELETED.contains(&k) || [faulty::GARBAGE, faulty::EMPTY_CELL, faulty::NAN].contains(&k);
+    let skipped = |k: usize| FAULTS.unusable(k);
     let window = edgekf_firmware::systems::crank::WINDOW;
     let mut usable = 0;
     let mut closes = Vec::new();

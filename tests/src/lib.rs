@@ -12,6 +12,7 @@
 
 pub mod checks;
 pub mod crank;
+pub mod faulty;
 pub mod host;
 pub mod qemu;
 pub mod report;

@@ -2,6 +2,7 @@
 //! parsing of its output (the image's or the host run's), and the accuracy measure shared by
 //! the tests.
 
+use crate::faulty::FaultPlan;
 use crate::report::frames;
 use anyhow::{anyhow, Result};
 use edgekf_firmware::line_feed::ChannelReader;
@@ -59,55 +60,17 @@ pub fn disk_rms_error(reports: &[RotorReport], rec: &Recording, t0: f64) -> f64 
     worst
 }
 
-/// What [`faulty_csv`] does to a rotor HIL file, and the counts the node must report for it.
-pub mod faulty {
-    /// Data lines (sample numbers) deleted from the file: missing, bridged by their `t`.
-    pub const DELETED: std::ops::Range<usize> = 1500..1520;
-    /// A sample whose line is replaced by garbage without a `t`: not stepped, bridged when
-    /// the next line's `t` shows it missing.
-    pub const GARBAGE: usize = 2500;
-    /// A sample whose first probe's cell is emptied: stepped as missing, at its time.
-    pub const EMPTY_CELL: usize = 1800;
-    /// A junk line is inserted after this sample: not stepped.
-    pub const JUNK_AFTER: usize = 3000;
-    /// A sample whose first probe reads NaN: stepped as missing.
-    pub const NAN: usize = 3200;
-    /// Lines that do not parse: the garbage, the empty cell, the junk, the NaN.
-    pub const BAD_LINES: u32 = 4;
-    /// Of those, lines without a `t`: the garbage and the junk.
-    pub const UNTIMED_LINES: u32 = 2;
-    /// Samples bridged for lines missing from the file: the deleted ones and the garbage one.
-    pub const MISSING_LINES: u32 = 21;
-    /// When the last fault is over, s.
-    pub const CLEAR_AT: f64 = 3.201;
-}
+/// What [`faulty_csv`] does to a rotor HIL file (the counts the node must report follow from
+/// it).
+pub const FAULTS: FaultPlan =
+    FaultPlan { deleted: 1500..1520, garbage: 2500, empty_cell: 1800, junk_after: 3000, nan: 3200 };
 
-/// The HIL file `csv` (a header and one line per sample) with the faults of [`faulty`].
+/// When the last fault of [`FAULTS`] is over, s.
+pub const FAULTS_CLEAR_AT: f64 = 3.201;
+
+/// The HIL file `csv` (a header and one line per sample) with the faults of [`FAULTS`].
 pub fn faulty_csv(csv: &str) -> String {
-    let mut out = String::new();
-    for (k, line) in csv.lines().enumerate() {
-        let Some(sample) = k.checked_sub(1) else {
-            out.push_str(line);
-            out.push('\n');
-            continue;
-        };
-        if faulty::DELETED.contains(&sample) {
-            continue;
-        }
-        let mut fields: Vec<&str> = line.split(',').collect();
-        match sample {
-            faulty::GARBAGE => fields = vec!["#\u{1}garbage"],
-            faulty::EMPTY_CELL => fields[1] = "",
-            faulty::NAN => fields[1] = "NaN",
-            _ => {}
-        }
-        out.push_str(&fields.join(","));
-        out.push('\n');
-        if sample == faulty::JUNK_AFTER {
-            out.push_str("1.2x,abc,,,\n");
-        }
-    }
-    out
+    FAULTS.apply(csv)
 }
 
 /// Worst RMS error over the disk nodes' x and y for numbered reports with `t ≥ t0`, m.
@@ -136,12 +99,12 @@ pub fn disk_rms_error_numbered(reports: &[(u32, RotorReport)], rec: &Recording, 
 /// the clean run's RMS. Returns the disk error and that mismatch, for the log.
 pub fn check_faulty_run(lines: &[String], clean: &[(u32, RotorReport)], rec: &Recording) -> Result<(f64, f64)> {
     let end = end(lines)?;
-    let lines_read = rec.t.len() as u32 - faulty::DELETED.len() as u32 + 1;
+    let lines_read = rec.t.len() as u32 - FAULTS.deleted.len() as u32 + 1;
     let expected = RotorEnd {
         samples: lines_read,
-        bad_lines: faulty::BAD_LINES,
-        untimed_lines: faulty::UNTIMED_LINES,
-        missing_lines: faulty::MISSING_LINES,
+        bad_lines: FaultPlan::BAD_LINES,
+        untimed_lines: FaultPlan::UNTIMED_LINES,
+        missing_lines: FAULTS.missing_lines(),
         time_jumps: 0,
         ..end
     };
@@ -150,8 +113,7 @@ pub fn check_faulty_run(lines: &[String], clean: &[(u32, RotorReport)], rec: &Re
     }
     let reports = parse_numbered(lines)?;
     let numbers: Vec<u32> = reports.iter().map(|(k, _)| *k).collect();
-    let want: Vec<u32> =
-        (0..rec.t.len()).filter(|k| !faulty::DELETED.contains(k) && *k != faulty::GARBAGE).map(|k| k as u32).collect();
+    let want: Vec<u32> = (0..rec.t.len()).filter(|k| !FAULTS.lost(*k)).map(|k| k as u32).collect();
     if numbers != want {
         anyhow::bail!("reported samples are not every sample but the bridged ones (the clock slipped)");
     }
@@ -159,10 +121,9 @@ pub fn check_faulty_run(lines: &[String], clean: &[(u32, RotorReport)], rec: &Re
     if err > 1e-6 {
         anyhow::bail!("disk RMS error {err} m for t ≥ 1 s");
     }
-    let after = faulty::CLEAR_AT + 0.5;
+    let after = FAULTS_CLEAR_AT + 0.5;
     let (mut d2, mut r2) = (0.0f64, 0.0f64);
-    let kept =
-        |(k, _): &&(u32, RotorReport)| !faulty::DELETED.contains(&(*k as usize)) && *k as usize != faulty::GARBAGE;
+    let kept = |(k, _): &&(u32, RotorReport)| !FAULTS.lost(*k as usize);
     for ((k, a), (kc, c)) in reports.iter().zip(clean.iter().filter(kept)) {
         if *k != *kc {
             anyhow::bail!("sample {k} against clean sample {kc}");

@@ -68,6 +68,13 @@ struct Candidate<E> {
     over_resonance: bool,
 }
 
+/// One channel's normalised innovations and the lines fitted on them.
+struct ChannelFits<E> {
+    channel: usize,
+    u: Vec<f64>,
+    cands: Vec<Candidate<E>>,
+}
+
 /// The most impulsive bands tried per channel.
 const BANDS: usize = 3;
 
@@ -92,7 +99,7 @@ pub fn stage<S: LoopSystem>(
     let Some(fs) = sample_rate(&traces.t) else { return out };
     let n_meas = run.measurements().max(2) as f64;
     let cost = |p: usize| 0.5 * p as f64 * n_meas.ln();
-    let mut per_channel: Vec<(usize, Vec<f64>, Vec<Candidate<S::Effect>>)> = Vec::new();
+    let mut per_channel: Vec<ChannelFits<S::Effect>> = Vec::new();
     for (ch, (innovation, variance)) in run.innovation.iter().zip(&run.variance).enumerate() {
         let u: Vec<f64> = innovation.iter().zip(variance).map(|(e, s)| e / s.sqrt()).collect();
         // The band must lie above the lines and be wide enough to carry their harmonics; the
@@ -159,7 +166,7 @@ pub fn stage<S: LoopSystem>(
                 });
             }
         }
-        per_channel.push((ch, u, cands));
+        per_channel.push(ChannelFits { channel: ch, u, cands });
     }
     let pays = |c: &Candidate<S::Effect>| c.delta > c.penalty && c.halves[0].min(c.halves[1]) >= half_gain * c.penalty;
     let score = |c: &Candidate<S::Effect>| c.delta - c.penalty;
@@ -169,10 +176,10 @@ pub fn stage<S: LoopSystem>(
     per_channel.sort_by(|a, b| {
         let best =
             |cs: &[Candidate<S::Effect>]| cs.iter().filter(|c| pays(c)).map(score).fold(f64::NEG_INFINITY, f64::max);
-        best(&b.2).total_cmp(&best(&a.2))
+        best(&b.cands).total_cmp(&best(&a.cands))
     });
     let mut accepted: Vec<(ImpactLine<S::Effect>, f64)> = Vec::new();
-    for (ch, u, cands) in per_channel {
+    for ChannelFits { channel: ch, u, cands } in per_channel {
         let variance = &run.variance[ch];
         let shadows: Vec<Option<(ImpactLine<S::Effect>, f64)>> = cands
             .iter()
