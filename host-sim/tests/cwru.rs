@@ -96,4 +96,3 @@ fn the_healthy_record_has_no_bearing_defect() {
     let Some(r) = diagnose("097") else { return };
     assert!(named(&r).is_empty(), "{:?}", r.effects_added);
 }
-

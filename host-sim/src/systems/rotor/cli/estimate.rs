@@ -141,11 +141,13 @@ fn print_summary(model: &RotorModel, red: &ReducedRotor, file: &DataFile, est: &
             any_truth = true;
             let e = &est.displacement[2 * node + d];
             if red.force_nodes.contains(&node) || red.channels.iter().any(|c| c == &format!("n{node}_{dir}")) {
-                println!(
-                    "n{node}_{dir}: RMS error {:.3} µm for t ≥ 1 s ({:.3} µm over the whole run)",
-                    rms_error(&est.t, e, truth, 1.0) * 1e6,
-                    rms_error(&est.t, e, truth, f64::NEG_INFINITY) * 1e6
-                );
+                let whole = rms_error(&est.t, e, truth, f64::NEG_INFINITY) * 1e6;
+                let settled = rms_error(&est.t, e, truth, 1.0) * 1e6;
+                if settled.is_finite() {
+                    println!("n{node}_{dir}: RMS error {settled:.3} µm for t ≥ 1 s ({whole:.3} µm over the whole run)");
+                } else {
+                    println!("n{node}_{dir}: RMS error {whole:.3} µm over the whole run (none after 1 s)");
+                }
             }
         }
     }
