@@ -18,14 +18,20 @@ fn compiled_constants_are_current() {
     );
 }
 
-#[test]
-fn node_estimator_meets_the_disk_target_in_f32() {
+/// Four seconds of the paper rotor (seed `seed`) and its HIL file.
+fn recording(seed: u64) -> (edgekf_sim::systems::rotor::Recording, String) {
     let cfg = RotorConfig::load(Path::new(CONFIG)).unwrap();
     let rec = RotorModel::from_config(&cfg)
         .unwrap()
-        .simulate(&SimOptions { duration: 4.0, seed: 11, ..SimOptions::default() })
+        .simulate(&SimOptions { duration: 4.0, seed, ..SimOptions::default() })
         .unwrap();
     let csv = rec.to_data_file().to_csv_string().unwrap();
+    (rec, csv)
+}
+
+#[test]
+fn node_estimator_meets_the_disk_target_in_f32() {
+    let (rec, csv) = recording(11);
     let reports = run_host(csv.as_bytes()).unwrap();
     let err = disk_rms_error(&reports, &rec, 1.0);
     eprintln!("firmware rotor estimator on the host (f32): disk RMS error {:.3} µm for t ≥ 1 s", err * 1e6);
@@ -45,12 +51,7 @@ fn switch_schedule_uses_the_configured_sample_rate() {
 /// `STEADY_AFTER`, differ from it on, and reach the same disk error and NIS.
 #[test]
 fn steady_state_switch_matches_the_time_varying_filter() {
-    let cfg = RotorConfig::load(Path::new(CONFIG)).unwrap();
-    let rec = RotorModel::from_config(&cfg)
-        .unwrap()
-        .simulate(&SimOptions { duration: 4.0, seed: 7, ..SimOptions::default() })
-        .unwrap();
-    let csv = rec.to_data_file().to_csv_string().unwrap();
+    let (rec, csv) = recording(7);
     let node = run_host(csv.as_bytes()).unwrap();
     let tv = run_host_with(csv.as_bytes(), RotorEstimator::with_switch_at(None)).unwrap();
     let k0 = STEADY_AFTER as usize;
@@ -79,12 +80,7 @@ fn steady_state_switch_matches_the_time_varying_filter() {
 /// of `edgekf_tests::rotor::check_faulty_run`).
 #[test]
 fn missing_and_garbage_lines_are_bridged_counted_and_recovered_from() {
-    let cfg = RotorConfig::load(Path::new(CONFIG)).unwrap();
-    let rec = RotorModel::from_config(&cfg)
-        .unwrap()
-        .simulate(&SimOptions { duration: 4.0, seed: 7, ..SimOptions::default() })
-        .unwrap();
-    let csv = rec.to_data_file().to_csv_string().unwrap();
+    let (rec, csv) = recording(7);
     assert!(csv.starts_with("t,n5_x,"), "the first probe is the second column");
     let clean = parse_numbered(&edgekf_tests::host::lines::<RotorImage>(csv.as_bytes()).unwrap()).unwrap();
     let lines = edgekf_tests::host::lines::<RotorImage>(faulty_csv(&csv).as_bytes()).unwrap();

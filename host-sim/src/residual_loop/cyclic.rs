@@ -67,6 +67,12 @@ pub fn white(u: &[f64]) -> (f64, [f64; 2]) {
     (halves[0] + halves[1], halves)
 }
 
+/// Mean of `u²` over the finite samples (the innovations' variance about zero).
+fn mean_square(u: &[f64]) -> f64 {
+    let finite = || u.iter().filter(|v| v.is_finite());
+    finite().map(|v| v * v).sum::<f64>() / finite().count().max(1) as f64
+}
+
 /// The exact discrete mode for unit intensity: transition `A` and the process noise `Q₁` of
 /// white acceleration of density 1 over one sample.
 fn discrete(hz: f64, damping: f64, fs: f64) -> Option<([f64; 4], [f64; 4])> {
@@ -151,8 +157,7 @@ fn ascend(
     start: Resonance,
     coords: &[Coordinate],
 ) -> Option<Fit> {
-    let variance = u.iter().filter(|v| v.is_finite()).map(|v| v * v).sum::<f64>()
-        / u.iter().filter(|v| v.is_finite()).count().max(1) as f64;
+    let variance = mean_square(u);
     let mut m = start;
     let mut best = filter(u, fs, &m, g, None)?;
     for _ in 0..3 {
@@ -194,8 +199,7 @@ fn ascend(
 /// The resonance without impacts (`σ_d = 0`) fitted to `u` in `band` (Hz): the alternative a
 /// fault's impacts must beat.
 pub fn fit_background(u: &[f64], fs: f64, band: (f64, f64)) -> Option<Fit> {
-    let variance = u.iter().filter(|v| v.is_finite()).map(|v| v * v).sum::<f64>()
-        / u.iter().filter(|v| v.is_finite()).count().max(1) as f64;
+    let variance = mean_square(u);
     let centre = 0.5 * (band.0 + band.1);
     let damping = (0.25 * (band.1 - band.0) / centre).clamp(0.005, 0.2);
     let start = Resonance { hz: centre, damping, noise: variance, background: 0.05 * variance, impacts: 0.0 };
