@@ -1,7 +1,6 @@
-//! Bearing defects the way they appear on real machines, on a synthetic twin of the CWRU rig
-//! (`configs/rotor_cwru.toml`, 12 kHz, accelerometers on both housings): each housing rings its
-//! own resonance near 3 kHz under broadband forces, the motor adds line-frequency harmonics,
-//! the sensors their noise, and a defect of the drive-end bearing sends impacts at its line's
+//! Bearing defects the way they appear on real machines, on the synthetic twin of the CWRU rig
+//! (`loop_system::twin`): each housing rings its own resonance near 3 kHz, the motor adds
+//! line-frequency harmonics, and a defect of the drive-end bearing sends impacts at its line's
 //! rate, with 1.5 % slip and, for the inner race, the load zone's modulation at the shaft
 //! rate, through the drive-end housing's resonance. Nothing in the configuration declares the
 //! resonances, the tones or the defect, and the motor runs 0.4 % below its declared speed.
@@ -12,48 +11,18 @@
 use edgekf_sim::io::data::DataFile;
 use edgekf_sim::residual_loop::{LoopOptions, LoopReport};
 use edgekf_sim::systems::rotor::bearing_geometry::BearingLine;
-use edgekf_sim::systems::rotor::loop_system::inject::{
-    inject_bearing_defect, inject_resonance, inject_tones, DefectSignal,
-};
+use edgekf_sim::systems::rotor::loop_system::twin::{true_speed, Twin};
 use edgekf_sim::systems::rotor::loop_system::{close_loop, RotorLoopOptions};
-use edgekf_sim::systems::rotor::{RotorConfig, RotorModel, SimOptions};
+use edgekf_sim::systems::rotor::RotorModel;
 use std::f64::consts::TAU;
 
 fn rig() -> RotorModel {
-    let cfg = RotorConfig::from_toml_str(include_str!("../configs/rotor_cwru.toml")).unwrap();
-    RotorModel::from_config(&cfg).unwrap()
-}
-
-/// The shaft's true speed, rad/s: 0.4 % below the declared.
-fn true_speed(model: &RotorModel) -> f64 {
-    model.config().operation.speed * 0.996
+    edgekf_sim::systems::rotor::loop_system::twin::rig().unwrap()
 }
 
 /// Two seconds of the rig, with a drive-end defect on `line` if given.
 fn recording(model: &RotorModel, defect: Option<BearingLine>, seed: u64) -> DataFile {
-    let speed = true_speed(model);
-    let opts = SimOptions { duration: 2.0, seed, speed: Some(speed), ..SimOptions::default() };
-    let mut d = model.simulate(&opts).unwrap().to_data_file();
-    let tones = [(60.0, 0.03, 0.3), (120.0, 0.08, 1.1), (180.0, 0.02, 2.0), (360.0, 0.04, 0.7)];
-    for (channel, hz, k) in [("n1_ay", 3050.0, 1), ("n11_ay", 3420.0, 2)] {
-        inject_resonance(&mut d, channel, hz, 0.04, 0.25, seed * 10 + k).unwrap();
-        inject_tones(&mut d, channel, &tones).unwrap();
-    }
-    if let Some(line) = defect {
-        let shaft_hz = speed / TAU;
-        let order = model.config().bearings[0].geometry.unwrap().order(line);
-        let signal = DefectSignal {
-            frequency_hz: order * shaft_hz,
-            peak: 1.5,
-            resonance_hz: 3050.0,
-            damping: 0.04,
-            slip: 0.015,
-            modulation_hz: (line == BearingLine::Bpfi).then_some(shaft_hz),
-            load_zone: 0.5,
-        };
-        inject_bearing_defect(&mut d, "n1_ay", &signal, seed + 100).unwrap();
-    }
-    d
+    Twin { defect, ..Twin::default() }.record(model, seed).unwrap()
 }
 
 /// The loop's first stage alone (no effect of the model's own is searched for).

@@ -232,7 +232,7 @@ fn a_toy_system_runs_through_the_registry_end_to_end() {
         about: "a one-degree-of-freedom oscillator",
         command: || clap::Command::new("toy").subcommand(clap::Command::new("hello")),
         run: |_| Ok(()),
-        close_loop: Some(LoopEntry { about: "the toy's loop", args: |c| c, run: toy_loop }),
+        close_loop: Some(LoopEntry { about: "the toy's loop", args: |c| c, run: toy_loop, baseline: None }),
         demo: None::<DemoPart>,
     });
     let dir = std::env::temp_dir().join(format!("edgekf-toy-{}", std::process::id()));

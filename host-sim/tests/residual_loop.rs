@@ -163,3 +163,35 @@ fn a_delayed_probe_is_found() {
     assert!((e.value - 2e-3).abs() < 0.2 * 2e-3, "delay {:.3e}", e.value);
     assert!(r.after.consistent, "{}", r.stopped);
 }
+
+/// What the model allows (`[bounds]`): a best fit at or beyond a bound is refused as "outside
+/// what the model allows", never kept. Disk 12 is 60 % heavier than declared (beyond the
+/// default ±30 % of a parameter); with `[bounds] force = 1.0` a 1.5 N 2× force is beyond its bound.
+#[test]
+fn fits_beyond_the_bounds_are_refused() {
+    use edgekf_sim::residual_loop::bounds::OUTSIDE;
+    use edgekf_sim::systems::rotor::loop_system::effects::Parameter;
+    use edgekf_sim::systems::rotor::{RotorModel, SimOptions};
+    let declared = Case::declared().unwrap();
+    let mut heavy = declared.config().clone();
+    Parameter::DiskMass(0).apply(&mut heavy, 1.6).unwrap();
+    let opts = SimOptions { duration: 3.0, seed: 41, ..SimOptions::default() };
+    let data = RotorModel::from_config(&heavy).unwrap().simulate(&opts).unwrap().to_data_file();
+    let options = LoopOptions { screen_parameters: false, max_effects: 1, ..LoopOptions::default() };
+    let r = close_loop(&declared, &data, &options, &Default::default()).unwrap();
+    let refusal = r.refused.iter().find(|x| x.kind == "parameter" && x.location == "disk 12").unwrap();
+    assert!(refusal.reason.starts_with(OUTSIDE), "{refusal:?}");
+    assert!((refusal.value.unwrap() - 1.3).abs() < 0.02, "{refusal:?}");
+    for e in &r.effects_added {
+        assert!(!(e.kind == "parameter" && (e.value - 1.0).abs() > 0.3), "kept {e:?}");
+    }
+    // A force beyond `[bounds] force`.
+    let mut cfg = declared.config().clone();
+    cfg.bounds.force = Some(1.0);
+    let strict = RotorModel::from_config(&cfg).unwrap();
+    let r = close_loop(&strict, &Case::TwoX.data(5).unwrap(), &options, &Default::default()).unwrap();
+    let refusal = r.refused.iter().find(|x| x.kind == "harmonic_force" && x.location == "node 12").unwrap();
+    assert!(refusal.reason.starts_with(OUTSIDE) && refusal.reason.contains("beyond the bound"), "{refusal:?}");
+    assert!((refusal.value.unwrap() - 1.5).abs() < 0.3, "{refusal:?}");
+    assert!(!r.effects_added.iter().any(|e| e.kind == "harmonic_force" && e.value > 1.0), "{:?}", r.effects_added);
+}

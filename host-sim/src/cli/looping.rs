@@ -23,6 +23,9 @@ pub struct LoopArgs {
     /// Directory for report.json and report.html.
     #[arg(long, value_name = "DIR")]
     pub report: PathBuf,
+    /// A healthy baseline (`edgekf baseline <system>`): the loop asks what changed since.
+    #[arg(long, value_name = "TOML")]
+    pub baseline: Option<PathBuf>,
     /// At most this many effects.
     #[arg(long, value_name = "N", default_value_t = 4)]
     pub max_effects: usize,
@@ -38,6 +41,8 @@ pub struct LoopRequest {
     pub config: PathBuf,
     /// `--data`.
     pub data: PathBuf,
+    /// `--baseline`.
+    pub baseline: Option<PathBuf>,
     /// The engine's options from the common flags.
     pub options: LoopOptions,
 }
@@ -69,14 +74,16 @@ pub fn run(registry: &[SystemEntry], m: &ArgMatches, command_line: &str) -> Resu
         .and_then(|s| s.close_loop.as_ref())
         .expect("clap only accepts registered names");
     let args = LoopArgs::from_arg_matches(sub).map_err(|e| anyhow::anyhow!("{e}"))?;
-    check_folder(&args.report, &REPORT_FILES, &[Some(&args.data), Some(&args.config)])?;
+    check_folder(&args.report, &REPORT_FILES, &[Some(&args.data), Some(&args.config), args.baseline.as_deref()])?;
     let request = LoopRequest {
         config: args.config.clone(),
         data: args.data.clone(),
+        baseline: args.baseline.clone(),
         options: LoopOptions { max_effects: args.max_effects, progress: !args.quiet, ..LoopOptions::default() },
     };
     let mut report = (entry.run)(&request, sub)?;
     fill_source(&mut report, &args.data, &args.config, command_line)?;
+    report.source.baseline = args.baseline.as_ref().map(|b| b.display().to_string());
     print!("{}", summary_table(&report));
     write_report(&report, &args.report)?;
     println!("wrote {0}/report.json and {0}/report.html", args.report.display());
@@ -87,13 +94,13 @@ pub fn run(registry: &[SystemEntry], m: &ArgMatches, command_line: &str) -> Resu
 pub fn fill_source(report: &mut LoopReport, data: &Path, config: &Path, command_line: &str) -> Result<()> {
     let bytes = std::fs::read(data).with_context(|| format!("{}: cannot read", data.display()))?;
     report.source.data = Some(data.display().to_string());
-    report.source.data_sha256 = Some(hex(&Sha256::digest(&bytes)));
+    report.source.data_sha256 = Some(hex_sha256(&bytes));
     report.source.config = Some(config.display().to_string());
     report.source.command = Some(command_line.to_string());
     Ok(())
 }
 
-/// Lower-case hex of `bytes`.
-fn hex(bytes: &[u8]) -> String {
-    bytes.iter().map(|b| format!("{b:02x}")).collect()
+/// SHA-256 of `bytes`, lower-case hex.
+pub fn hex_sha256(bytes: &[u8]) -> String {
+    Sha256::digest(bytes).iter().map(|b| format!("{b:02x}")).collect()
 }

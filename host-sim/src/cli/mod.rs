@@ -5,6 +5,7 @@
 //! * [`registry`]: the row type ([`SystemEntry`]) and the helpers that turn a system's clap
 //!   `Subcommand` into one;
 //! * [`looping`]: `edgekf loop <system>`: the flags every loop shares, the run, the report files;
+//! * [`baseline`]: `edgekf baseline <system>`: a healthy baseline learned from a recording;
 //! * [`demo`]: `edgekf demo`: every system's demo part in the registry's order.
 //!
 //! ```
@@ -14,6 +15,7 @@
 //! assert!(help.contains("rotor") && help.contains("loop") && help.contains("demo"));
 //! ```
 
+pub mod baseline;
 pub mod demo;
 pub mod looping;
 pub mod registry;
@@ -49,7 +51,7 @@ pub fn command(registry: &[SystemEntry]) -> clap::Command {
     for s in registry {
         cmd = cmd.subcommand((s.command)().name(s.name).about(s.about));
     }
-    cmd.subcommand(looping::command(registry))
+    cmd.subcommand(looping::command(registry)).subcommand(baseline::command(registry))
 }
 
 /// Runs the command line `args` (the program's name first) against `registry`. Usage errors,
@@ -66,6 +68,7 @@ where
     match name {
         "demo" => demo::run(registry, sub),
         "loop" => looping::run(registry, sub, &command_line),
+        "baseline" => baseline::run(registry, sub, &command_line),
         _ => {
             let system = registry.iter().find(|s| s.name == name).expect("clap only accepts registered names");
             (system.run)(sub)

@@ -31,6 +31,9 @@ pub struct LoopEntry {
     pub args: fn(clap::Command) -> clap::Command,
     /// Loads the configuration, reads the data and closes the loop.
     pub run: fn(&super::looping::LoopRequest, &ArgMatches) -> Result<LoopReport>,
+    /// Learns a healthy baseline (`edgekf baseline <system>`) and returns the file's text, if
+    /// the system has baselines.
+    pub baseline: Option<fn(&super::baseline::BaselineRequest) -> Result<String>>,
 }
 
 /// A system's part of `edgekf demo`.

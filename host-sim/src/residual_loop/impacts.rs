@@ -181,13 +181,21 @@ pub fn stage<S: LoopSystem>(
     let mut accepted: Vec<(ImpactLine<S::Effect>, f64)> = Vec::new();
     for ChannelFits { channel: ch, u, cands } in per_channel {
         let variance = &run.variance[ch];
+        // A line is shadowed by a defect kept on another channel whose combination line it is,
+        // or by a stronger line on this one whose combination line it is (105's BSF at
+        // 71.8 Hz is its BPFI's 161.7 − 3 × 30.0 Hz).
         let shadows: Vec<Option<(ImpactLine<S::Effect>, f64)>> = cands
             .iter()
             .map(|c| {
+                let stronger = cands
+                    .iter()
+                    .filter(|o| pays(o) && o.evidence.prominence_db > c.evidence.prominence_db)
+                    .map(|o| (o.line, o.evidence.hz));
                 accepted
                     .iter()
-                    .find(|(a, hz)| a.effect != c.line.effect && combination(a, *hz, c.evidence.hz, search))
                     .copied()
+                    .chain(stronger)
+                    .find(|(a, hz)| a.effect != c.line.effect && combination(a, *hz, c.evidence.hz, search))
             })
             .collect();
         let known: Vec<usize> = (0..cands.len())
@@ -240,7 +248,7 @@ pub fn stage<S: LoopSystem>(
             } else if let Some((a, hz)) = shadows[i] {
                 let first = sys.label(&a.effect);
                 format!(
-                    "its line at {:.2} Hz is a combination line of the {} at {} ({hz:.2} Hz) found first",
+                    "its line at {:.2} Hz is a combination line of the {} at {} ({hz:.2} Hz), a stronger line",
                     c.evidence.hz,
                     first.detail.line.as_deref().unwrap_or(first.kind.as_str()),
                     first.location

@@ -12,6 +12,8 @@
 //! * [`report`]: what a run reports (`report.json`'s layout);
 //! * [`onset`]: effects that start mid-run (the onset's placement, the halves after it);
 //! * [`signature`]: the innovations' statistics and what is left unexplained;
+//! * [`baseline`]: a healthy baseline's source and the comparison of a record with it;
+//! * [`bounds`]: what the model allows an effect to be (`[bounds]`), refusals beyond it;
 //! * [`envelope`]: envelope analysis (kurtogram, squared envelope, lines in its spectrum);
 //! * [`cyclic`]: a resonance rung by periodic impacts, fitted to the innovations by likelihood;
 //! * [`impacts`]: the first stage, periodic impacts named by envelope lines and taken out;
@@ -19,6 +21,8 @@
 //!   covariance converges, then frozen);
 //! * [`optimize`]: the one-dimensional maximum-likelihood fit of an effect's scalar.
 
+pub mod baseline;
+pub mod bounds;
 pub mod cyclic;
 pub mod envelope;
 pub mod filter;

@@ -31,7 +31,7 @@ pub struct AddedEffect {
     pub explains: Vec<f64>,
     /// Gain in log-likelihood.
     pub delta_log_likelihood: f64,
-    /// Its cost: `½ p ln n`.
+    /// Its cost: `½ p ln n`, plus a baseline's gain floor over the run.
     pub bic_penalty: f64,
 }
 
@@ -122,7 +122,7 @@ pub struct Trial {
     /// The gain in the first and in the second half of the run (of the stretch after the
     /// onset, for a change-point fit).
     pub delta_halves: [f64; 2],
-    /// `½ p ln n`.
+    /// `½ p ln n`, plus a baseline's gain floor over the run.
     pub bic_penalty: f64,
     /// Kept.
     pub accepted: bool,

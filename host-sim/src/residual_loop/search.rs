@@ -7,6 +7,7 @@
 //! acceptance rule, the identifiability verdicts and the report, so they read the same for a
 //! machine, a mechanism or a vehicle.
 
+use super::bounds::OUTSIDE;
 use super::envelope::LineSearch;
 use super::filter::Run;
 use super::impacts::{self, ImpactLine};
@@ -32,6 +33,13 @@ pub struct LoopOptions {
     /// Each half of the run must gain at least this fraction of an effect's BIC cost: an
     /// effect that only helps part of the run is not a constant property of the machine.
     pub half_gain: f64,
+    /// Log-likelihood per scalar measurement an effect must gain beyond its BIC cost: what a
+    /// healthy baseline's own record would still gain from its best next effect (0 without
+    /// a baseline). A change must be larger than what the healthy machine leaves unexplained.
+    /// It is scaled by the current model's NIS per channel (at least 1): on a record whose
+    /// innovations carry k times the power the model expects, a wrong effect gains about k
+    /// times more.
+    pub gain_floor: f64,
     /// Two locations of the same kind whose log-likelihoods differ by less than this are
     /// reported as not identifiable from each other.
     pub identifiable_margin: f64,
@@ -51,6 +59,7 @@ impl Default for LoopOptions {
             signatures: SignatureOptions::default(),
             max_effects: 4,
             half_gain: 0.25,
+            gain_floor: 0.0,
             identifiable_margin: 2.0,
             screen_parameters: true,
             envelope: LineSearch::default(),
@@ -90,6 +99,12 @@ pub trait LoopSystem {
     fn parameters(&self, effect: &Self::Effect) -> usize;
     /// The range of the effect's scalar and the grid points to search it with, if it has one.
     fn scalar(&self, effect: &Self::Effect) -> Option<(ScalarRange, usize)>;
+    /// The largest size the model allows `effect`'s [`value`](LoopSystem::value) to reach
+    /// (a force's bound, [`bounds`](super::bounds)), if it has one beside its scalar's range: a
+    /// fit beyond it is refused as [`OUTSIDE`] what the model allows. None by default.
+    fn limit(&self, _effect: &Self::Effect) -> Option<f64> {
+        None
+    }
     /// The size the report gives `effect` in the model of `run` (a state's size over the
     /// settled part of the effect's stretch: [`onset::settled_mean`]).
     fn value(&self, model: &Self::Model, run: &Run, effect: &Applied<Self::Effect>) -> f64;
@@ -122,11 +137,28 @@ pub trait LoopSystem {
     /// Time, channels, virtual rows and truth for the report's plots (the engine fills in
     /// the runs before and after).
     fn traces(&self) -> Traces;
-    /// The system's own part of the report (none by default).
-    fn section(&self) -> SystemSection {
+    /// The system's own part of the report, from the model and run the loop ended with (none
+    /// by default).
+    fn section(&self, _model: &Self::Model, _run: &Run) -> SystemSection {
         SystemSection::default()
     }
 }
+
+/// A fit at or beyond what the model allows ([`bounds`](super::bounds)): refused, with the
+/// value it reached.
+#[derive(Debug)]
+struct OutOfBounds {
+    value: f64,
+    why: String,
+}
+
+impl std::fmt::Display for OutOfBounds {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}: {}", OUTSIDE, self.why)
+    }
+}
+
+impl std::error::Error for OutOfBounds {}
 
 /// A candidate fitted to the data.
 struct Fitted<E, M> {
@@ -156,11 +188,19 @@ struct Engine<'a, S: LoopSystem> {
     t: Vec<f64>,
     /// Scalar measurements in the run (for the BIC).
     n_meas: f64,
+    /// The current model's NIS per channel, at least 1 (scales the gain floor).
+    nis_scale: std::cell::Cell<f64>,
 }
 
 impl<S: LoopSystem> Engine<'_, S> {
-    /// `½ p ln n` for the effect's parameters, and one more for a fitted onset.
+    /// `½ p ln n` for the effect's parameters, and one more for a fitted onset, plus the
+    /// baseline's [`gain_floor`](LoopOptions::gain_floor) over the run.
     fn penalty(&self, e: &S::Effect, onset: bool) -> f64 {
+        self.bic(e, onset) + self.options.gain_floor * self.nis_scale.get() * self.n_meas
+    }
+
+    /// `½ p ln n` alone.
+    fn bic(&self, e: &S::Effect, onset: bool) -> f64 {
         0.5 * (self.sys.parameters(e) + usize::from(onset)) as f64 * self.n_meas.ln()
     }
 
@@ -211,9 +251,16 @@ impl<S: LoopSystem> Engine<'_, S> {
                 let edge = (10.0 * range.tolerance).max(0.01 * (range.high - range.low));
                 let at = |bound: f64| (x - bound).abs() <= edge && bound != range.neutral;
                 if at(range.low) || at(range.high) {
-                    return Err(anyhow!(
-                        "the likelihood peaks at the edge of the scalar's range ({x:.4}): not an estimate"
-                    ));
+                    let shown = |v: f64| if range.log { v.exp() } else { v };
+                    return Err(OutOfBounds {
+                        value: shown(x),
+                        why: format!(
+                            "the likelihood still rises at the edge of the range it may take ({:.4} … {:.4})",
+                            shown(range.low),
+                            shown(range.high)
+                        ),
+                    }
+                    .into());
                 }
                 x
             }
@@ -221,6 +268,14 @@ impl<S: LoopSystem> Engine<'_, S> {
         };
         let applied = Applied { effect: cand, theta, onset_s };
         let (model, run) = self.sys.run(&with(theta))?;
+        if let Some(limit) = self.sys.limit(&cand) {
+            let value = self.sys.value(&model, &run, &applied);
+            if value.abs() > limit {
+                let unit = self.sys.label(&cand).unit;
+                return Err(OutOfBounds { value, why: format!("{value:.4} {unit} beyond the bound of {limit:.4} {unit}") }
+                    .into());
+            }
+        }
         let delta = run.log_likelihood() - base.log_likelihood();
         let halves = onset::halves(&run, base, applied.first_sample(&self.t));
         let mut label = self.sys.label(&cand);
@@ -333,7 +388,7 @@ impl<S: LoopSystem> Engine<'_, S> {
                     refused.push(Refused {
                         kind: label.kind,
                         location: label.location.clone(),
-                        value: None,
+                        value: e.downcast_ref::<OutOfBounds>().map(|o| o.value),
                         reason: format!("{e:#}"),
                     });
                 }
@@ -430,7 +485,7 @@ impl<S: LoopSystem> Engine<'_, S> {
             if effects.iter().any(|x| x.effect == e) {
                 continue;
             }
-            let penalty = self.penalty(&e, false);
+            let penalty = self.bic(&e, false);
             let label = self.sys.label(&e);
             let mut worst: f64 = 0.0;
             for theta in thetas {
@@ -513,7 +568,13 @@ pub fn search<S: LoopSystem>(sys: &mut S, options: &LoopOptions) -> Result<LoopR
         (cur_model, cur_run) = sys.run(&effects)?;
     }
     let sys = &*sys;
-    let engine = Engine { sys, options, t: traces.t.clone(), n_meas: cur_run.measurements().max(2) as f64 };
+    let engine = Engine {
+        sys,
+        options,
+        t: traces.t.clone(),
+        n_meas: cur_run.measurements().max(2) as f64,
+        nis_scale: std::cell::Cell::new(1.0),
+    };
     let mut current = sys.summarise(&cur_run);
     let mut added: Vec<Kept<S::Effect>> = Vec::new();
     let mut trials = found.trials;
@@ -532,6 +593,7 @@ pub fn search<S: LoopSystem>(sys: &mut S, options: &LoopOptions) -> Result<LoopR
             break;
         }
         iteration += 1;
+        engine.nis_scale.set(if current.nis_mean.is_finite() { current.nis_mean.max(1.0) } else { 1.0 });
         let mut chosen = None;
         let mut evaluated = Vec::new();
         for tier in sys.candidates(&current, &effects) {
@@ -609,6 +671,7 @@ pub fn search<S: LoopSystem>(sys: &mut S, options: &LoopOptions) -> Result<LoopR
         u.extend(partial);
         u
     };
+    let section = sys.section(&cur_model, &cur_run);
     let traces = Traces { before: base_run, after: cur_run, ..traces };
     Ok(LoopReport {
         schema_version: SCHEMA_VERSION,
@@ -622,7 +685,7 @@ pub fn search<S: LoopSystem>(sys: &mut S, options: &LoopOptions) -> Result<LoopR
         refused,
         trials,
         stopped,
-        section: sys.section(),
+        section,
         traces,
     })
 }

@@ -9,8 +9,31 @@ use edgekf::residual::{locate_peak, NisBounds, PeakClass, PeakTolerance, Running
 use serde::Serialize;
 use std::collections::BTreeMap;
 
-/// Welch segment length of the innovation spectra.
+/// Welch segment length of the innovation spectra up to [`FINE_ABOVE_HZ`].
 pub const SEGMENT: usize = 1024;
+/// The segment length above it: at 12 kHz, 1024 samples would make 11.7 Hz bins, too coarse
+/// to tell a shaft order or a defect line from its neighbours.
+pub const FINE_SEGMENT: usize = 4096;
+/// Sample rate above which the spectra use [`FINE_SEGMENT`], Hz.
+pub const FINE_ABOVE_HZ: f64 = 4096.0;
+
+/// A channel's Welch spectrum: bin width (Hz), PSD and its strongest peaks (Hz, dB).
+type Spectrum = (f64, Vec<f32>, Vec<(f64, f64)>);
+
+/// The Welch spectrum of `z` in segments of `N` at `rate` Hz, peaks above `peak_db`.
+fn welch_spectrum<const N: usize>(z: &[f64], rate: f64, peak_db: f32) -> Option<Spectrum>
+where
+    edgekf::residual::FftLen<N>: edgekf::residual::FftSize,
+{
+    let mut w = Welch::<N>::new(rate as f32)?;
+    for &v in z {
+        w.push(v);
+    }
+    (w.blocks() > 0).then(|| {
+        let peaks = w.peaks::<8>(peak_db).iter().map(|p| (p.frequency_hz as f64, p.prominence_db as f64)).collect();
+        (w.bin_width_hz() as f64, w.psd().to_vec(), peaks)
+    })
+}
 
 /// What counts as a signature.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -235,13 +258,14 @@ pub fn summarise(run: &Run, ctx: &SummaryContext<'_>, o: &SignatureOptions) -> R
     let keep: Vec<usize> = (0..t.len()).filter(|&k| t[k] - t0 >= o.settle).collect();
     let mut out = Vec::new();
     let mut spectra = Vec::new();
-    let mut bin_width_hz = sample_rate / SEGMENT as f64;
+    let fine = sample_rate > FINE_ABOVE_HZ;
+    let mut bin_width_hz = sample_rate / if fine { FINE_SEGMENT } else { SEGMENT } as f64;
     for (i, channel) in channels.iter().enumerate() {
         let name = &channel.name;
         let mut stats = RunningStats::<f64>::new();
         let mut nis = RunningStats::<f64>::new();
         let mut white = WhitenessWindow::<f64, 2048>::new();
-        let mut welch = Welch::<SEGMENT>::new(sample_rate as f32);
+        let mut zs = Vec::with_capacity(keep.len());
         let mut z2 = Vec::with_capacity(keep.len());
         for &k in &keep {
             let e = run.innovation[i][k];
@@ -254,19 +278,21 @@ pub fn summarise(run: &Run, ctx: &SummaryContext<'_>, o: &SignatureOptions) -> R
             z2.push((t[k] - t0, e * e / s));
             let z = e / s.sqrt();
             white.push(z);
-            if let Some(w) = welch.as_mut() {
-                w.push(z);
-            }
+            zs.push(z);
         }
         let lb = white.ljung_box(20);
         let mut peaks = Vec::new();
-        match welch.as_ref().filter(|w| w.blocks() > 0) {
-            Some(w) => {
-                bin_width_hz = w.bin_width_hz() as f64;
-                spectra.push(w.psd().to_vec());
+        let spectrum = if fine {
+            welch_spectrum::<FINE_SEGMENT>(&zs, sample_rate, o.peak_db)
+        } else {
+            welch_spectrum::<SEGMENT>(&zs, sample_rate, o.peak_db)
+        };
+        match spectrum {
+            Some((width, psd, found)) => {
+                bin_width_hz = width;
+                spectra.push(psd);
                 let tol = PeakTolerance::new(1.2 * bin_width_hz);
-                for p in w.peaks::<8>(o.peak_db).iter() {
-                    let f = p.frequency_hz as f64;
+                for (f, prominence_db) in found {
                     let located = locate_peak(f, speed, naturals, &tol).class;
                     let line = named_line(f, &lines.named, tol.abs_hz, !matches!(located, PeakClass::Unexplained));
                     let (class, order) = if let Some((i, h)) = line {
@@ -288,7 +314,7 @@ pub fn summarise(run: &Run, ctx: &SummaryContext<'_>, o: &SignatureOptions) -> R
                     };
                     peaks.push(PeakSignature {
                         frequency_hz: f,
-                        prominence_db: p.prominence_db as f64,
+                        prominence_db,
                         class: class.replace("/1x", "x"),
                         order,
                         line,

@@ -200,7 +200,13 @@ fn match_order<T: Real>(
         let p = (libm::round(ratio.as_f64() * q as f64) as u32).max(1);
         let reference = T::of_f64(p as f64 / q as f64) * f_run;
         let distance_hz = peak_hz - reference;
-        let within_tolerance = distance_hz.abs() <= allowed(reference, tolerance.order_rel);
+        // An order is resolvable only while the speed's uncertainty there is under a quarter
+        // of the spacing of the orders around it (and the resolution under half of it): at
+        // 138× every line is within 0.5 % of some order.
+        let spacing = f_run / T::of_f64((q * q) as f64);
+        let resolvable = tolerance.order_rel * reference < spacing / T::of_f64(4.0)
+            && tolerance.abs_hz < spacing / T::of_f64(2.0);
+        let within_tolerance = resolvable && distance_hz.abs() <= allowed(reference, tolerance.order_rel);
         let g = gcd(p, q);
         OrderMatch { ratio, order: Order { numerator: p / g, denominator: q / g }, distance_hz, within_tolerance }
     };
@@ -253,6 +259,20 @@ mod tests {
         let o = loc.order.unwrap();
         assert_eq!((o.order, o.within_tolerance), (order(2, 1), false));
         assert!((o.distance_hz - 0.8).abs() < 1e-9);
+    }
+
+    #[test]
+    fn high_orders_that_cannot_be_resolved_are_not_orders() {
+        // 30 Hz running speed known to 0.5 %: at 138× = 4140 Hz that is ±20.7 Hz, more than the
+        // 30 Hz between orders could tell apart.
+        let omega = 30.0 * core::f64::consts::TAU;
+        let tol = PeakTolerance::new(12.0);
+        assert_eq!(locate_peak(4144.3, omega, &[], &tol).class, PeakClass::Unexplained);
+        // Low orders still are: 2× within 12 + 0.3 Hz, spacing 30 Hz.
+        assert_eq!(locate_peak(61.0, omega, &[], &tol).class, PeakClass::Order(order(2, 1)));
+        // With a finer bin the high order resolves again (1 + 2.07 Hz < 7.5 Hz).
+        let fine = PeakTolerance { order_rel: 0.0005, ..PeakTolerance::new(1.0) };
+        assert_eq!(locate_peak(4140.5, omega, &[], &fine).class, PeakClass::Order(order(138, 1)));
     }
 
     #[test]

@@ -72,6 +72,10 @@ pub struct RotorConfig {
     /// How gaps in a recording's time column are bridged (`[timeline]`).
     #[serde(default)]
     pub timeline: crate::io::timeline::TimelineOptions,
+    /// What the residual loop allows an effect to be (`[bounds]`; the force's default is the
+    /// rotor's [`weight`](RotorConfig::weight)).
+    #[serde(default)]
+    pub bounds: crate::residual_loop::bounds::Bounds,
 }
 
 /// The virtual-sensing filter's noise levels for a machine (`[filter]`), e.g. from `edgekf
@@ -538,7 +542,23 @@ impl RotorConfig {
             .map_err(|e| RotorError::Config { origin: None, message: e.to_string() })?;
         cfg.validate()?;
         cfg.timeline.validate().map_err(|message| RotorError::Config { origin: None, message })?;
+        cfg.bounds.validate().map_err(|message| RotorError::Config { origin: None, message })?;
         Ok(cfg)
+    }
+
+    /// The rotor's weight, N: shaft, disks and point masses under standard gravity (the
+    /// default bound of a force the residual loop may add).
+    pub fn weight(&self) -> f64 {
+        let shaft: f64 = self
+            .shaft
+            .sections
+            .iter()
+            .map(|s| std::f64::consts::FRAC_PI_4 * (s.diameter.powi(2) - s.inner_diameter.powi(2)) * s.length)
+            .sum::<f64>()
+            * self.shaft.density;
+        let disks: f64 = self.disks.iter().map(|d| d.mass).sum();
+        let masses: f64 = self.masses.iter().map(|m| m.mass).sum();
+        9.80665 * (shaft + disks + masses)
     }
 
     /// Reads, parses and validates a configuration file; errors name the file.

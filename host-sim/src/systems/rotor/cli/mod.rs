@@ -398,7 +398,30 @@ pub fn close_loop(
     let known: Vec<&str> = channels.iter().map(String::as_str).collect();
     let file = crate::cli::registry::read_data(&request.data, &known, cfg.operation.sample_rate, &cfg.timeline)?;
     let rotor = super::loop_system::RotorLoopOptions { speed_band: args.estimate_speed, ..Default::default() };
-    super::loop_system::close_loop(&model, &file, &request.options, &rotor)
+    match &request.baseline {
+        Some(path) => {
+            let baseline = super::loop_system::baseline::RotorBaseline::load(path)?;
+            super::loop_system::close_loop_from(&model, &file, &request.options, &rotor, &baseline)
+        }
+        None => super::loop_system::close_loop(&model, &file, &request.options, &rotor),
+    }
+}
+
+/// `edgekf baseline rotor`: the configuration and the healthy recording, the baseline learned
+/// from them (the running speed read from the data within ±10 % of the configured one).
+pub fn baseline(request: &crate::cli::baseline::BaselineRequest) -> anyhow::Result<String> {
+    use super::loop_system::baseline::{learn, BaselineOptions};
+    let args = &request.args;
+    let cfg =
+        RotorConfig::load(&args.config).with_context(|| format!("{}: cannot load the rotor", args.config.display()))?;
+    let model = RotorModel::from_config(&cfg)?;
+    let channels: Vec<String> = cfg.sensors.iter().map(|s| s.channel_name()).collect();
+    let known: Vec<&str> = channels.iter().map(String::as_str).collect();
+    let file = crate::cli::registry::read_data(&args.data, &known, cfg.operation.sample_rate, &cfg.timeline)?;
+    let options = BaselineOptions { max_parts: args.max_parts, condition: args.condition.clone(), ..Default::default() };
+    let mut b = learn(&model, &file, &request.options, &Default::default(), &options)?;
+    b.source = request.source.clone();
+    b.to_toml()
 }
 
 /// The rotor's part of `edgekf demo`: the paper rotor with an undeclared heavier disk, the loop

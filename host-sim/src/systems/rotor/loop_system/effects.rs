@@ -11,6 +11,8 @@ use crate::residual_loop::search::EffectKind;
 use crate::systems::rotor::bearing_geometry::BearingLine;
 use crate::systems::rotor::estimate::ReducedRotor;
 use crate::systems::rotor::{dof, RotorConfig, RotorModel, SensorKind};
+use super::healthy::{oscillator, ModeSpec, ModeTarget};
+use crate::residual_loop::bounds::Bounds;
 use anyhow::{anyhow, bail, Context, Result};
 use edgekf::linalg::expm;
 use nalgebra::DMatrix;
@@ -126,6 +128,13 @@ pub enum Effect {
         /// Channel index.
         channel: usize,
     },
+    /// A channel reads the signal through a first-order lag of time constant `τ` (a sensor's
+    /// or its conditioning's low-pass the configuration does not declare): one state per
+    /// effect, `ẏ = (C x − y) / τ`, read instead of `C x`. Value: `τ`, s.
+    SensorLag {
+        /// Channel index.
+        channel: usize,
+    },
     /// A force rotating forward at `order ×` the running speed at a node (misalignment at 2×,
     /// looseness at 3×…): two states rotating at `order·Ω` entering the modal equations through
     /// the node's mode-shape rows, with the static correction of the truncated modes. Value:
@@ -173,6 +182,7 @@ impl Effect {
             Effect::SensorBias { .. } => EffectKind::SensorBias,
             Effect::SensorScale { .. } => EffectKind::SensorScale,
             Effect::SensorDelay { .. } => EffectKind::SensorDelay,
+            Effect::SensorLag { .. } => EffectKind::SensorLag,
             Effect::HarmonicForce { .. } => EffectKind::HarmonicForce,
             Effect::UnknownInput { .. } => EffectKind::UnknownInput,
             Effect::Parameter(_) => EffectKind::Parameter,
@@ -185,7 +195,7 @@ impl Effect {
     pub fn signature(&self) -> &'static str {
         match self {
             Effect::SensorBias { .. } => "a channel's innovation mean many standard errors from zero",
-            Effect::SensorScale { .. } | Effect::SensorDelay { .. } => {
+            Effect::SensorScale { .. } | Effect::SensorDelay { .. } | Effect::SensorLag { .. } => {
                 "a 1x (or natural-frequency) line on one channel that the other channels do not share"
             }
             Effect::HarmonicForce { .. } => "a line at an integer order of the running speed",
@@ -203,7 +213,7 @@ impl Effect {
     /// Number of states the effect adds for a model with `channels` sensor channels.
     pub fn states(&self, channels: usize) -> usize {
         match self {
-            Effect::SensorBias { .. } => 1,
+            Effect::SensorBias { .. } | Effect::SensorLag { .. } => 1,
             Effect::HarmonicForce { .. } | Effect::UnknownInput { .. } => 2,
             Effect::ExtraMode { .. } => 2 * channels,
             Effect::SensorScale { .. }
@@ -213,18 +223,27 @@ impl Effect {
         }
     }
 
-    /// The scalar the search fits by maximum likelihood, if the effect has one.
-    pub fn scalar(&self, sample_rate: f64) -> Option<ScalarRange> {
+    /// The scalar the search fits by maximum likelihood, if the effect has one, within what
+    /// `bounds` allow at `sample_rate` Hz: a parameter's or a sensor scale's factor within
+    /// `1 ± bounds.parameter`,
+    /// a delay from 0 (a sensor cannot read the future) to `bounds.delay`, a lag's time
+    /// constant from a tenth of a sample (none) to `bounds.lag`.
+    pub fn scalar(&self, sample_rate: f64, bounds: &Bounds) -> Option<ScalarRange> {
         match *self {
-            Effect::SensorScale { .. } => {
-                Some(ScalarRange { low: 0.5f64.ln(), high: 2f64.ln(), neutral: 0.0, log: true, tolerance: 1e-5 })
+            Effect::SensorScale { .. } | Effect::Parameter(_) => {
+                let (low, high) = bounds.factor_range();
+                Some(ScalarRange { low: low.ln(), high: high.ln(), neutral: 0.0, log: true, tolerance: 1e-5 })
             }
-            Effect::SensorDelay { .. } => {
-                let t = 10.0 / sample_rate;
-                Some(ScalarRange { low: -t, high: t, neutral: 0.0, log: false, tolerance: 1e-4 / sample_rate })
-            }
-            Effect::Parameter(_) => {
-                Some(ScalarRange { low: 0.25f64.ln(), high: 4f64.ln(), neutral: 0.0, log: true, tolerance: 1e-5 })
+            Effect::SensorDelay { .. } => Some(ScalarRange {
+                low: 0.0,
+                high: bounds.delay_s(sample_rate),
+                neutral: 0.0,
+                log: false,
+                tolerance: 1e-4 / sample_rate,
+            }),
+            Effect::SensorLag { .. } => {
+                let none = (0.1 / sample_rate).ln();
+                Some(ScalarRange { low: none, high: bounds.lag.ln(), neutral: none, log: true, tolerance: 1e-3 })
             }
             Effect::ExtraMode { seed_mhz } => {
                 let f = seed_mhz as f64 * 1e-3;
@@ -240,7 +259,9 @@ impl Effect {
         match self {
             Effect::SensorBias { .. } => 1,
             Effect::ExtraMode { .. } => 2 * channels + 1,
-            Effect::SensorScale { .. } | Effect::SensorDelay { .. } | Effect::Parameter(_) => 1,
+            Effect::SensorScale { .. } | Effect::SensorDelay { .. } | Effect::SensorLag { .. } | Effect::Parameter(_) => {
+                1
+            }
             _ => self.states(channels),
         }
     }
@@ -251,7 +272,8 @@ impl Effect {
         match *self {
             Effect::SensorBias { channel: c }
             | Effect::SensorScale { channel: c }
-            | Effect::SensorDelay { channel: c } => channel(c),
+            | Effect::SensorDelay { channel: c }
+            | Effect::SensorLag { channel: c } => channel(c),
             Effect::HarmonicForce { node, .. } | Effect::UnknownInput { node } => format!("node {node}"),
             Effect::Parameter(p) => p.component(cfg),
             Effect::ExtraMode { .. } => "all channels".to_string(),
@@ -266,7 +288,7 @@ impl Effect {
         match self {
             Effect::SensorBias { .. } => "m",
             Effect::SensorScale { .. } | Effect::Parameter(_) => "1",
-            Effect::SensorDelay { .. } => "s",
+            Effect::SensorDelay { .. } | Effect::SensorLag { .. } => "s",
             Effect::HarmonicForce { .. } | Effect::UnknownInput { .. } => "N",
             Effect::BearingDefect { .. } => "m/s^2",
             Effect::ExtraMode { .. } => "Hz",
@@ -334,6 +356,8 @@ pub struct AugmentedModel {
     pub displacement: DMatrix<f64>,
     /// The effects with their scalar, and the index of their first state.
     pub effects: Vec<(Effect, f64, usize)>,
+    /// The unbalance forces' states (`F_x`, `F_y` per unbalance node, N).
+    pub unbalance: std::ops::Range<usize>,
 }
 
 /// What [`augment`] needs besides the reduced model: the static stiffness of the FE model (for
@@ -451,7 +475,9 @@ pub fn augment(
                 qc[(s, s)] = tuning.bias_psd;
                 p0[(s, s)] = tuning.bias_std.powi(2);
             }
-            Effect::SensorScale { channel } | Effect::SensorDelay { channel } => channel_ok(channel)?,
+            Effect::SensorScale { channel } | Effect::SensorDelay { channel } | Effect::SensorLag { channel } => {
+                channel_ok(channel)?
+            }
             Effect::HarmonicForce { node, order } => {
                 rotating(&mut a, s, order as f64 * red.speed);
                 let t = Target { a: &mut a, c: &mut c, displacement: &mut displacement };
@@ -476,20 +502,10 @@ pub fn augment(
                 if !(theta.is_finite() && theta > 0.0) {
                     bail!("an extra mode needs a positive frequency, not {theta}");
                 }
-                let w = 2.0 * std::f64::consts::PI * theta;
-                let zeta = tuning.mode_damping;
                 for ch in 0..m {
-                    let (q, v) = (s + 2 * ch, s + 2 * ch + 1);
-                    a[(q, v)] = 1.0;
-                    a[(v, q)] = -w * w;
-                    a[(v, v)] = -2.0 * zeta * w;
-                    c[(ch, q)] = 1.0;
-                    // White acceleration of density psd gives a stationary displacement
-                    // variance psd / (4 ζ ω³).
-                    let var = tuning.mode_std.powi(2) * red.r[(ch, ch)];
-                    qc[(v, v)] = var * 4.0 * zeta * w.powi(3);
-                    p0[(q, q)] = var;
-                    p0[(v, v)] = var * w * w;
+                    let level = tuning.mode_std * red.r[(ch, ch)].sqrt();
+                    let t = ModeTarget { a: &mut a, qc: &mut qc, c: &mut c, p0: &mut p0 };
+                    oscillator(t, s + 2 * ch, ch, ModeSpec { hz: theta, zeta: tuning.mode_damping, level })?;
                 }
             }
             Effect::Parameter(_) => {}
@@ -524,7 +540,26 @@ pub fn augment(
             _ => {}
         }
     }
-    Ok(AugmentedModel { a, qc, c, r: red.r.clone(), p0, displacement, effects: placed })
+    // A lag reads what the channel read so far through `ẏ = (C x − y) / τ`, starting from it.
+    for &(e, theta, s) in &placed {
+        if let Effect::SensorLag { channel } = e {
+            let tau = theta.exp();
+            if !(tau.is_finite() && tau > 0.0) {
+                bail!("a sensor lag needs a positive time constant, not {tau}");
+            }
+            let row = c.row(channel).clone_owned();
+            for j in 0..ns {
+                a[(s, j)] += row[j] / tau;
+            }
+            a[(s, s)] -= 1.0 / tau;
+            p0[(s, s)] = (&row * &p0 * row.transpose())[(0, 0)];
+            c.row_mut(channel).fill(0.0);
+            c[(channel, s)] = 1.0;
+        }
+    }
+    let u0 = 2 * red.frequencies_hz.len();
+    let unbalance = u0..u0 + 2 * red.force_nodes.len();
+    Ok(AugmentedModel { a, qc, c, r: red.r.clone(), p0, displacement, effects: placed, unbalance })
 }
 
 /// `e^{−Aτ}`: maps the state now to the state `τ` ago along the noise-free dynamics (of the

@@ -7,15 +7,22 @@
 //!   `harmonic_force`, `unknown_input`, `parameter`, `extra_mode`, `bearing_defect`) composed
 //!   onto the reduced rotor's public matrices;
 //! * [`speed`]: the running speed read from the data;
+//! * [`healthy`]: what a healthy machine shows that the model lacks, as parts of the model;
+//!   [`baseline`]: those parts learned from a healthy recording, and what changed since;
 //! * [`inject`]: undeclared effects added to simulated data; [`cases`]: the ones the tests and
-//!   the README use.
+//!   the README use; [`twin`]: a synthetic twin of the CWRU bearing rig.
 
+pub mod baseline;
 pub mod cases;
 pub mod effects;
+pub mod healthy;
 pub mod inject;
 pub mod speed;
+pub mod twin;
 
 use self::effects::{apply_parameters, augment, AugmentedModel, Effect, EffectTuning, Flexibility, Parameter};
+use self::baseline::RotorBaseline;
+use self::healthy::Healthy;
 use self::speed::{estimate_speed, RunningSpeed};
 use crate::io::data::DataFile;
 use crate::residual_loop::filter::{run_state_space, Run, StateSpace};
@@ -51,7 +58,14 @@ pub struct RotorLoopOptions {
 pub struct RotorSystem<'a> {
     cfg: &'a RotorConfig,
     model: &'a RotorModel,
+    /// The reduced rotor as declared.
+    bare: ReducedRotor,
+    /// The reduced rotor with the healthy parts in place.
     red: ReducedRotor,
+    /// What a healthy machine shows beside the declared model (none without a baseline).
+    healthy: Healthy,
+    /// The baseline the record is compared with (`baseline_comparison`), if any.
+    baseline: Option<RotorBaseline>,
     flex: Flexibility,
     /// Sensor channels with their offsets removed.
     columns: Vec<Vec<f64>>,
@@ -106,20 +120,35 @@ impl<'a> RotorSystem<'a> {
         rotor: &RotorLoopOptions,
         running: RunningSpeed,
     ) -> Result<Self> {
+        Self::healthy(model, data, options, rotor, running, Healthy::default())
+    }
+
+    /// As [`RotorSystem::at_speed`], with the `healthy` parts in the base model (a baseline's).
+    pub fn healthy(
+        model: &'a RotorModel,
+        data: &'a DataFile,
+        options: &LoopOptions,
+        rotor: &RotorLoopOptions,
+        running: RunningSpeed,
+        healthy: Healthy,
+    ) -> Result<Self> {
         let cfg = model.config();
         let speed = running.hz * TAU;
         let rotor = &RotorLoopOptions { tuning: rotor.tuning.with_filter(&cfg.filter), ..*rotor };
-        let red = reduce(model, speed, &rotor.tuning)?;
-        let columns: Vec<Vec<f64>> = red
+        let bare = reduce(model, speed, &rotor.tuning)?;
+        let columns: Vec<Vec<f64>> = bare
             .channels
             .iter()
-            .zip(&red.offsets)
-            .map(|(name, off)| {
+            .zip(&bare.offsets)
+            .enumerate()
+            .map(|(ch, (name, off))| {
+                let off = off + healthy.offset(ch);
                 data.column(name)
                     .map(|c| c.iter().map(|v| v - off).collect())
                     .ok_or_else(|| anyhow!("the data file has no channel {name}"))
             })
             .collect::<Result<_>>()?;
+        let red = healthy.apply(&bare)?;
         let mut force_sites: Vec<usize> =
             cfg.disks.iter().map(|d| d.node).chain(red.force_nodes.iter().copied()).collect();
         force_sites.sort_unstable();
@@ -151,7 +180,10 @@ impl<'a> RotorSystem<'a> {
             cfg,
             model,
             flex: Flexibility::new(model, speed),
+            bare,
             red,
+            healthy,
+            baseline: None,
             columns,
             data,
             rows,
@@ -180,6 +212,118 @@ impl<'a> RotorSystem<'a> {
     pub fn base_log_likelihood(&self) -> Result<f64> {
         Ok(self.run(&[])?.1.log_likelihood())
     }
+
+    /// The healthy parts in the base model.
+    pub fn healthy_parts(&self) -> &Healthy {
+        &self.healthy
+    }
+
+    /// The system with `baseline`'s parts in its base model, comparing the record with it in
+    /// the report (`baseline_comparison`).
+    pub fn from_baseline(
+        model: &'a RotorModel,
+        data: &'a DataFile,
+        options: &LoopOptions,
+        rotor: &RotorLoopOptions,
+        running: RunningSpeed,
+        baseline: &RotorBaseline,
+    ) -> Result<Self> {
+        let bare = RotorSystem::at_speed(model, data, options, rotor, running)?;
+        let healthy = baseline.healthy(&bare.red.channels)?;
+        let mut sys = Self::healthy(model, data, options, rotor, running, healthy)?;
+        sys.baseline = Some(baseline.clone());
+        Ok(sys)
+    }
+
+    /// The sensor channels' names, in the filter's order.
+    pub fn channel_names(&self) -> &[String] {
+        &self.red.channels
+    }
+
+    /// The unit of channel `name` (`m/s^2`, `m`, `V`).
+    pub fn channel_unit(&self, name: &str) -> String {
+        channel(name).unit
+    }
+
+    /// The data's sample times, s.
+    pub fn times(&self) -> &[f64] {
+        &self.data.t
+    }
+
+    /// Samples per second.
+    pub fn sample_rate(&self) -> f64 {
+        self.red.sample_rate
+    }
+
+    /// Each channel's declared measurement-noise standard deviation per sample.
+    pub fn declared_noise(&self) -> Vec<f64> {
+        (0..self.channels()).map(|ch| self.bare.r[(ch, ch)].sqrt()).collect()
+    }
+
+    /// The disks' nodes.
+    pub fn disk_nodes(&self) -> Vec<usize> {
+        self.cfg.disks.iter().map(|d| d.node).collect()
+    }
+
+    /// The nodes whose unbalance the filter estimates.
+    pub fn unbalance_nodes(&self) -> &[usize] {
+        &self.red.force_nodes
+    }
+
+    /// Runs the filter with `effects` as [`LoopSystem::run`] does, with other healthy parts
+    /// in the base model (their offsets are not used: the data's were taken out when the
+    /// system was built). How a baseline is fitted.
+    pub fn run_healthy(&self, healthy: &Healthy, effects: &[Applied<Effect>]) -> Result<(AugmentedModel, Run)> {
+        self.run_on(&healthy.apply(&self.bare)?, healthy, effects)
+    }
+
+    /// The filter over the data with `applied` on `red` (the reduced rotor with `healthy`'s
+    /// parts in place), re-reducing the rotor when a component parameter is changed.
+    fn run_on(&self, red: &ReducedRotor, healthy: &Healthy, applied: &[Applied<Effect>]) -> Result<(AugmentedModel, Run)> {
+        if applied.iter().any(|e| e.onset_s.is_some()) {
+            return Err(anyhow!("the rotor's effects act from the start of the run (no onset)"));
+        }
+        let effects: Vec<(Effect, f64)> =
+            healthy.forces.iter().map(|e| (*e, 0.0)).chain(applied.iter().map(|e| (e.effect, e.theta))).collect();
+        let effects = effects.as_slice();
+        let cols: Vec<&[f64]> = self.columns.iter().map(Vec::as_slice).collect();
+        let dt = 1.0 / red.sample_rate;
+        let tuning = &self.rotor.effects;
+        let m = if effects.iter().any(|(e, _)| matches!(e, Effect::Parameter(_))) {
+            let cfg = apply_parameters(self.cfg, effects)?;
+            let model = RotorModel::from_config(&cfg)?;
+            let red = healthy.apply(&reduce(&model, red.speed, &self.rotor.tuning)?)?;
+            let flex = Flexibility::new(&model, red.speed);
+            augment(&red, &model, &flex, effects, tuning)?
+        } else {
+            augment(red, self.model, &self.flex, effects, tuning)?
+        };
+        let run = run_filter(&m, dt, &cols, &self.rows)?;
+        Ok((m, run))
+    }
+
+    /// The running speed, Hz, and where it came from.
+    pub fn speed(&self) -> RunningSpeed {
+        self.speed
+    }
+
+    /// The unbalance at each unbalance node in the model of `run`, kg·m: the settled size of
+    /// its force phasor over Ω².
+    pub fn unbalance(&self, model: &AugmentedModel, run: &Run) -> Vec<(usize, f64)> {
+        let first = model.effects.iter().map(|(e, _, _)| e.states(self.channels())).sum::<usize>();
+        let s = &run.effect_states;
+        let w2 = self.red.speed.powi(2);
+        self.red
+            .force_nodes
+            .iter()
+            .enumerate()
+            .map(|(j, &node)| {
+                let (x, y) = (&s[first + 2 * j], &s[first + 2 * j + 1]);
+                let size: Vec<f64> = x.iter().zip(y).map(|(a, b)| a.hypot(*b)).collect();
+                (node, settled_mean(&size, 0) / w2)
+            })
+            .collect()
+    }
 }
 
 impl LoopSystem for RotorSystem<'_> {
@@ -190,28 +334,10 @@ impl LoopSystem for RotorSystem<'_> {
         "rotor"
     }
 
-    /// Composes the augmented model (re-reducing the rotor when a component parameter is
-    /// changed) and runs the filter over the data.
+    /// Composes the augmented model (the healthy parts, then the effects; re-reducing the
+    /// rotor when a component parameter is changed) and runs the filter over the data.
     fn run(&self, applied: &[Applied<Effect>]) -> Result<(AugmentedModel, Run)> {
-        if applied.iter().any(|e| e.onset_s.is_some()) {
-            return Err(anyhow!("the rotor's effects act from the start of the run (no onset)"));
-        }
-        let effects: Vec<(Effect, f64)> = applied.iter().map(|e| (e.effect, e.theta)).collect();
-        let effects = effects.as_slice();
-        let cols: Vec<&[f64]> = self.columns.iter().map(Vec::as_slice).collect();
-        let dt = 1.0 / self.red.sample_rate;
-        let tuning = &self.rotor.effects;
-        let m = if effects.iter().any(|(e, _)| matches!(e, Effect::Parameter(_))) {
-            let cfg = apply_parameters(self.cfg, effects)?;
-            let model = RotorModel::from_config(&cfg)?;
-            let red = reduce(&model, self.red.speed, &self.rotor.tuning)?;
-            let flex = Flexibility::new(&model, self.red.speed);
-            augment(&red, &model, &flex, effects, tuning)?
-        } else {
-            augment(&self.red, self.model, &self.flex, effects, tuning)?
-        };
-        let run = run_filter(&m, dt, &cols, &self.rows)?;
-        Ok((m, run))
+        self.run_on(&self.red, &self.healthy, applied)
     }
 
     fn summarise(&self, run: &Run) -> RunSummary {
@@ -279,9 +405,12 @@ impl LoopSystem for RotorSystem<'_> {
         }
         named.extend(modes.into_iter().map(|seed_mhz| Effect::ExtraMode { seed_mhz }));
         if structural || !s.nis_consistent {
-            for channel in 0..self.channels() {
+            // With a baseline the sensors are as it found them: a sensor's scale, delay and
+            // lag do not change between a healthy and a faulty record of the same rig.
+            for channel in (0..self.channels()).filter(|_| self.baseline.is_none()) {
                 named.push(Effect::SensorScale { channel });
                 named.push(Effect::SensorDelay { channel });
+                named.push(Effect::SensorLag { channel });
             }
             named.extend(Parameter::all(self.cfg).into_iter().map(Effect::Parameter));
         }
@@ -324,7 +453,14 @@ impl LoopSystem for RotorSystem<'_> {
     /// natural frequency crosses a line.
     fn scalar(&self, e: &Effect) -> Option<(ScalarRange, usize)> {
         let grid = if matches!(e, Effect::Parameter(_)) { 7 } else { 4 };
-        e.scalar(self.red.sample_rate).map(|r| (r, grid))
+        e.scalar(self.red.sample_rate, &self.cfg.bounds).map(|r| (r, grid))
+    }
+
+    /// A force (harmonic or unknown) may not exceed `[bounds] force`, by default the rotor's
+    /// weight: a larger one is the force standing in for something else.
+    fn limit(&self, e: &Effect) -> Option<f64> {
+        matches!(e, Effect::HarmonicForce { .. } | Effect::UnknownInput { .. })
+            .then(|| self.cfg.bounds.force_n(self.cfg.weight()))
     }
 
     /// The fitted scalar (a factor as `exp θ`), or the effect states' size once settled.
@@ -340,7 +476,7 @@ impl LoopSystem for RotorSystem<'_> {
             Effect::SensorBias { .. } => settled(&|k| s[offset][k]),
             Effect::HarmonicForce { .. } => settled(&|k| s[offset][k].hypot(s[offset + 1][k])),
             Effect::UnknownInput { .. } => settled(&|k| s[offset][k].powi(2) + s[offset + 1][k].powi(2)).sqrt(),
-            Effect::SensorScale { .. } | Effect::Parameter(_) => applied.theta.exp(),
+            Effect::SensorScale { .. } | Effect::SensorLag { .. } | Effect::Parameter(_) => applied.theta.exp(),
             Effect::SensorDelay { .. } | Effect::ExtraMode { .. } => applied.theta,
             // Valued by the envelope stage, which fits it.
             Effect::BearingDefect { .. } => f64::NAN,
@@ -401,13 +537,35 @@ impl LoopSystem for RotorSystem<'_> {
         }
     }
 
-    /// `running_speed`: the speed the loop used and where it came from.
-    fn section(&self) -> SystemSection {
+    /// `running_speed`: the speed the loop used and where it came from; with a baseline, the
+    /// baseline it started from (`baseline`) and the record's levels beside its
+    /// (`baseline_comparison`).
+    fn section(&self, model: &AugmentedModel, run: &Run) -> SystemSection {
         let mut section = SystemSection::default();
         if let Ok(v) = serde_json::to_value(self.speed) {
             section.fields.insert("running_speed".into(), v);
         }
         section.lines.push(("running speed".into(), self.speed.describe()));
+        if let Some(b) = &self.baseline {
+            let about = serde_json::json!({
+                "condition": b.condition,
+                "data": b.source.data,
+                "data_sha256": b.source.data_sha256,
+                "speed_hz": b.speed_hz,
+                "resonances": b.resonances.len(),
+                "synchronous_forces": b.forces.len(),
+            });
+            section.fields.insert("baseline".into(), about);
+            let what = b.condition.as_deref().map(|c| format!(" ({c})")).unwrap_or_default();
+            section.lines.push(("baseline".into(), format!("learned on {}{what}", b.source.data)));
+            let rows = b.compare(self, model, run);
+            for c in &rows {
+                section.lines.push(("compared".into(), c.describe()));
+            }
+            if let Ok(v) = serde_json::to_value(&rows) {
+                section.fields.insert("baseline_comparison".into(), v);
+            }
+        }
         section
     }
 }
@@ -437,26 +595,53 @@ pub fn close_loop(
     options: &LoopOptions,
     rotor: &RotorLoopOptions,
 ) -> Result<LoopReport> {
-    let declared_hz = model.config().operation.speed / TAU;
-    let speed = match rotor.speed_band {
-        Some(band) => {
-            if options.progress {
-                eprintln!("loop: estimating the running speed within ±{:.0} % of {declared_hz:.3} Hz", band * 100.0);
-            }
-            let s = estimate_speed(model, data, options, rotor, band)?;
-            if options.progress {
-                eprintln!(
-                    "loop: running speed {:.4} Hz ({:+.2} % from the configured speed; spectral line at {:.4} Hz)",
-                    s.hz,
-                    (s.hz / declared_hz - 1.0) * 100.0,
-                    s.spectral_hz.unwrap_or(f64::NAN)
-                );
-            }
-            s
-        }
-        None => RunningSpeed { hz: declared_hz, declared_hz, source: "config", spectral_hz: None },
-    };
+    let speed = running_speed(model, data, options, rotor)?;
     search(&mut RotorSystem::at_speed(model, data, options, rotor, speed)?, options)
+}
+
+/// As [`close_loop`], asking what changed since `baseline`: its parts (offsets, noise levels,
+/// resonances, synchronous forces) are in the base model, only the running speed is read from
+/// `data` (within `rotor.speed_band`, default ±10 %), an effect must gain more than
+/// [`baseline::FLOOR_MARGIN`] times what the baseline's own record leaves unexplained, and the
+/// report compares the record's unbalance and order levels with the baseline's
+/// (`baseline_comparison`).
+pub fn close_loop_from(
+    model: &RotorModel,
+    data: &DataFile,
+    options: &LoopOptions,
+    rotor: &RotorLoopOptions,
+    baseline: &RotorBaseline,
+) -> Result<LoopReport> {
+    let rotor = &RotorLoopOptions { speed_band: rotor.speed_band.or(Some(0.1)), ..*rotor };
+    let options = &LoopOptions { gain_floor: baseline::FLOOR_MARGIN * baseline.gain_floor, ..*options };
+    let speed = running_speed(model, data, options, rotor)?;
+    search(&mut RotorSystem::from_baseline(model, data, options, rotor, speed, baseline)?, options)
+}
+
+/// The configured running speed, or the one read from the data with `rotor.speed_band`.
+fn running_speed(
+    model: &RotorModel,
+    data: &DataFile,
+    options: &LoopOptions,
+    rotor: &RotorLoopOptions,
+) -> Result<RunningSpeed> {
+    let declared_hz = model.config().operation.speed / TAU;
+    let Some(band) = rotor.speed_band else {
+        return Ok(RunningSpeed { hz: declared_hz, declared_hz, source: "config", spectral_hz: None });
+    };
+    if options.progress {
+        eprintln!("loop: estimating the running speed within ±{:.0} % of {declared_hz:.3} Hz", band * 100.0);
+    }
+    let s = estimate_speed(model, data, options, rotor, band)?;
+    if options.progress {
+        eprintln!(
+            "loop: running speed {:.4} Hz ({:+.2} % from the configured speed; spectral line at {:.4} Hz)",
+            s.hz,
+            (s.hz / declared_hz - 1.0) * 100.0,
+            s.spectral_hz.unwrap_or(f64::NAN)
+        );
+    }
+    Ok(s)
 }
 
 /// Runs the filter of `model` over `columns` (`[channel][k]`, offsets removed) at `dt`, and
@@ -465,7 +650,9 @@ fn run_filter(model: &AugmentedModel, dt: f64, columns: &[&[f64]], rows: &[usize
     let n = model.a.nrows();
     let m = model.c.nrows();
     let out_rows = DMatrix::from_fn(rows.len(), n, |i, j| model.displacement[(rows[i], j)]);
-    let effect_idx: Vec<usize> = model.effects.iter().flat_map(|(e, _, s)| *s..*s + e.states(m)).collect();
+    // The effects' states, then the unbalance forces' (read by `RotorSystem::unbalance`).
+    let effect_idx: Vec<usize> =
+        model.effects.iter().flat_map(|(e, _, s)| *s..*s + e.states(m)).chain(model.unbalance.clone()).collect();
     let ss = StateSpace { a: &model.a, qc: &model.qc, c: &model.c, r: &model.r, p0: &model.p0 };
     run_state_space(&ss, dt, columns, &out_rows, &effect_idx)
 }

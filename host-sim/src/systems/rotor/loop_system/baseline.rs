@@ -1,0 +1,485 @@
+//! A rotor's healthy baseline (`edgekf baseline rotor`): learned from a recording of a good
+//! machine, it is what that machine shows and the declared model lacks, each part named and
+//! fitted by maximum likelihood on the innovations, and kept only when it pays for its
+//! parameters (BIC) in both halves of the record:
+//!
+//! * each channel's offset (its mean) and measurement-noise level;
+//! * the housing's or foundation's resonances the sensors see (frequency, damping and the
+//!   level on each channel), one at a time at the strongest line no order explains;
+//! * synchronous forces beside the unbalance (a line at an order: 2×, or a motor's tone that
+//!   sits on one), their states left to the filter;
+//! * the running speed, the estimated unbalance per disk and the 1×–3× levels per channel,
+//!   which a record under diagnosis is compared with (`baseline_comparison`).
+//!
+//! `edgekf loop rotor --baseline` puts these parts into the base model and reads only the
+//! operating point (the running speed) from the record under diagnosis.
+
+use super::healthy::{Healthy, Resonance};
+use super::speed::estimate_speed;
+use super::{Effect, RotorLoopOptions, RotorSystem};
+use crate::io::data::DataFile;
+use crate::residual_loop::baseline::{BaselineSource, Comparison};
+use crate::residual_loop::filter::Run;
+use crate::residual_loop::onset::halves;
+use crate::residual_loop::optimize::maximise;
+use crate::residual_loop::search::{search, Applied, LoopOptions, LoopSystem};
+use crate::systems::rotor::RotorModel;
+use anyhow::{anyhow, bail, Context, Result};
+use serde::{Deserialize, Serialize};
+use std::f64::consts::TAU;
+use std::path::Path;
+
+/// A channel as the baseline found it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ChannelLevel {
+    /// Channel name.
+    pub channel: String,
+    /// Mean, in the channel's unit (taken out of every record before the filter).
+    pub offset: f64,
+    /// Measurement-noise standard deviation per sample, in the channel's unit.
+    pub noise_std: f64,
+}
+
+/// A synchronous force a healthy machine has beside its unbalance.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SynchronousForce {
+    /// Node.
+    pub node: usize,
+    /// Order of the running speed.
+    pub order: u32,
+    /// Its amplitude on the baseline's record, N.
+    pub value: f64,
+}
+
+/// An unbalance as the filter estimated it on the baseline's record.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct UnbalanceLevel {
+    /// Node.
+    pub node: usize,
+    /// kg·m.
+    pub value: f64,
+}
+
+/// A synchronous order's amplitude on a channel.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OrderLevel {
+    /// Channel name.
+    pub channel: String,
+    /// Order of the running speed.
+    pub order: u32,
+    /// Amplitude, in the channel's unit.
+    pub value: f64,
+}
+
+/// A healthy rotor's baseline, as `baseline.toml` holds it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RotorBaseline {
+    /// `rotor`.
+    pub system: String,
+    /// The operating condition it belongs to (a load, say), as the user named it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub condition: Option<String>,
+    /// The running speed on the baseline's record, Hz.
+    pub speed_hz: f64,
+    /// Log-likelihood per scalar measurement the best next effect of the loop's library still
+    /// gains beyond its BIC cost on the baseline's own record, with the baseline's parts in
+    /// place: what a healthy machine leaves unexplained. A change must gain
+    /// [`FLOOR_MARGIN`] times more ([`LoopOptions::gain_floor`]).
+    pub gain_floor: f64,
+    /// Where it was learned.
+    pub source: BaselineSource,
+    /// Offsets and noise levels.
+    #[serde(default, rename = "channel")]
+    pub channels: Vec<ChannelLevel>,
+    /// Resonances outside the rotor model.
+    #[serde(default, rename = "resonance")]
+    pub resonances: Vec<Resonance>,
+    /// Synchronous forces beside the unbalance.
+    #[serde(default, rename = "synchronous_force")]
+    pub forces: Vec<SynchronousForce>,
+    /// The unbalance per unbalance node.
+    #[serde(default, rename = "unbalance")]
+    pub unbalances: Vec<UnbalanceLevel>,
+    /// 1×–3× amplitudes per channel.
+    #[serde(default, rename = "order_level")]
+    pub orders: Vec<OrderLevel>,
+}
+
+/// How much more than its baseline's [`gain_floor`](RotorBaseline::gain_floor) an effect must
+/// gain on a record under diagnosis: two records of the same healthy machine differ, and the
+/// best next effect of one gains up to about twice what it gains on the other (the two halves
+/// of CWRU 097).
+pub const FLOOR_MARGIN: f64 = 2.0;
+
+/// Orders whose levels a baseline records and a record is compared at.
+pub const ORDERS: [u32; 3] = [1, 2, 3];
+
+/// How a baseline is learned.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BaselineOptions {
+    /// At most this many resonances and synchronous forces.
+    pub max_parts: usize,
+    /// The running speed is read from the data within this fraction of the configured one.
+    pub speed_band: f64,
+    /// The operating condition's name, if given.
+    pub condition: Option<String>,
+}
+
+impl Default for BaselineOptions {
+    fn default() -> Self {
+        Self { max_parts: 12, speed_band: 0.1, condition: None }
+    }
+}
+
+impl RotorBaseline {
+    /// Parses `baseline.toml`.
+    pub fn from_toml_str(text: &str) -> Result<Self> {
+        let b: RotorBaseline = crate::io::config::parse_toml(text).map_err(|e| anyhow!("{e}"))?;
+        if b.system != "rotor" {
+            bail!("a baseline of the {}, not of a rotor", b.system);
+        }
+        Ok(b)
+    }
+
+    /// Reads `path`; errors name it.
+    pub fn load(path: &Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path).with_context(|| format!("{}: cannot read", path.display()))?;
+        Self::from_toml_str(&text).with_context(|| format!("{}: not a rotor baseline", path.display()))
+    }
+
+    /// The file's text, with a header that says what it is.
+    pub fn to_toml(&self) -> Result<String> {
+        let body = toml::to_string(self).context("cannot write the baseline as TOML")?;
+        Ok(format!(
+            "# edgekf baseline: what a healthy rotor of this configuration shows that its model lacks.\n\
+             # Learned by `{}`; used by `edgekf loop rotor --baseline`.\n\n{body}",
+            self.source.command
+        ))
+    }
+
+    /// The baseline's parts for a filter reading `channels` (in its order): every channel
+    /// must have been learned.
+    pub fn healthy(&self, channels: &[String]) -> Result<Healthy> {
+        let level = |name: &String| {
+            self.channels.iter().find(|c| &c.channel == name).ok_or_else(|| {
+                let learned: Vec<&str> = self.channels.iter().map(|c| c.channel.as_str()).collect();
+                anyhow!("the baseline has no channel {name} (it was learned on {})", learned.join(", "))
+            })
+        };
+        let levels: Vec<&ChannelLevel> = channels.iter().map(level).collect::<Result<_>>()?;
+        if self.resonances.iter().any(|r| r.drive.len() != channels.len()) {
+            bail!("the baseline's resonances are for {} channels, not {}", self.channels.len(), channels.len());
+        }
+        Ok(Healthy {
+            offsets: levels.iter().map(|c| c.offset).collect(),
+            noise_std: levels.iter().map(|c| Some(c.noise_std)).collect(),
+            resonances: self.resonances.clone(),
+            forces: self.forces.iter().map(|f| Effect::HarmonicForce { node: f.node, order: f.order }).collect(),
+        })
+    }
+
+    /// The record's levels (`unbalance` per disk, `order_level` per channel and order) beside
+    /// the baseline's, from the model and run the loop ended with.
+    pub fn compare(&self, sys: &RotorSystem<'_>, model: &super::AugmentedModel, run: &Run) -> Vec<Comparison> {
+        let mut out = Vec::new();
+        for (node, value) in sys.unbalance(model, run) {
+            if let Some(b) = self.unbalances.iter().find(|u| u.node == node) {
+                out.push(Comparison::new("unbalance", &format!("disk {node}"), None, "kg m", value, b.value));
+            }
+        }
+        for level in order_levels(sys) {
+            if let Some(b) = self.orders.iter().find(|o| o.channel == level.channel && o.order == level.order) {
+                let unit = sys.channel_unit(&level.channel);
+                out.push(Comparison::new("order_level", &level.channel, Some(level.order), &unit, level.value, b.value));
+            }
+        }
+        out
+    }
+}
+
+/// The amplitude of each channel at the orders [`ORDERS`] of the system's running speed
+/// (the channel's projection on the order's cosine and sine over the record).
+pub fn order_levels(sys: &RotorSystem<'_>) -> Vec<OrderLevel> {
+    let hz = sys.speed().hz;
+    let (t, rate) = (sys.times(), sys.sample_rate());
+    let mut out = Vec::new();
+    for (name, col) in sys.channel_names().iter().zip(sys.columns()) {
+        for order in ORDERS {
+            let w = TAU * hz * order as f64;
+            let (mut c, mut s, mut n) = (0.0, 0.0, 0usize);
+            for (k, &v) in col.iter().enumerate() {
+                if v.is_finite() {
+                    let tk = t.get(k).copied().unwrap_or(k as f64 / rate);
+                    c += v * (w * tk).cos();
+                    s += v * (w * tk).sin();
+                    n += 1;
+                }
+            }
+            let value = 2.0 * c.hypot(s) / n.max(1) as f64;
+            out.push(OrderLevel { channel: name.clone(), order, value });
+        }
+    }
+    out
+}
+
+/// One part the learning tried: the parts with it, their run and the gain.
+struct Tried {
+    healthy: Healthy,
+    run: Run,
+    delta: f64,
+    penalty: f64,
+    halves: [f64; 2],
+    what: String,
+}
+
+/// Learns the baseline of `model` from the healthy recording `data`: the running speed, the
+/// channels' offsets, then the noise levels, resonances and synchronous forces by maximum
+/// likelihood (each resonance or force kept only if it pays its BIC cost in both halves), the
+/// noise levels once more, and the levels a record is compared at.
+pub fn learn(
+    model: &RotorModel,
+    data: &DataFile,
+    options: &LoopOptions,
+    rotor: &RotorLoopOptions,
+    b: &BaselineOptions,
+) -> Result<RotorBaseline> {
+    let say = |msg: String| {
+        if options.progress {
+            eprintln!("baseline: {msg}");
+        }
+    };
+    say(format!("estimating the running speed within ±{:.0} %", b.speed_band * 100.0));
+    let speed = estimate_speed(model, data, options, rotor, b.speed_band)?;
+    say(speed.describe());
+    let bare = RotorSystem::at_speed(model, data, options, rotor, speed)?;
+    let m = bare.channel_names().len();
+    let offsets: Vec<f64> = bare.columns().iter().map(|c| finite_mean(c)).collect();
+    let start = Healthy { offsets, noise_std: vec![None; m], ..Healthy::default() };
+    let sys = RotorSystem::healthy(model, data, options, rotor, speed, start.clone())?;
+    let n_meas = sys.run(&[])?.1.measurements().max(2) as f64;
+    let penalty = |p: usize| 0.5 * p as f64 * n_meas.ln();
+    let mut h = fit_noise(&sys, start)?;
+    let mut run = sys.run_healthy(&h, &[])?.1;
+    say(format!("noise levels {:?}: log-likelihood {:.1}", noise(&sys, &h), run.log_likelihood()));
+    for part in 0..b.max_parts {
+        let summary = sys.summarise(&run);
+        let bin = summary.bin_width_hz;
+        // The strongest lines no bearing line names and no part already explains.
+        let mut all: Vec<(f64, f64, Option<u32>)> = summary
+            .channels
+            .iter()
+            .flat_map(|c| c.peaks.iter())
+            .filter(|p| p.line.is_none() && !p.class.starts_with("natural"))
+            .map(|p| (p.prominence_db, p.frequency_hz, p.order))
+            .filter(|&(_, f, _)| !h.resonances.iter().any(|r| (r.frequency_hz - f).abs() < 3.0 * bin))
+            .collect();
+        all.sort_by(|a, b| b.0.total_cmp(&a.0));
+        // A line both channels see is one candidate.
+        let mut peaks: Vec<(f64, f64, Option<u32>)> = Vec::new();
+        for p in all {
+            if !peaks.iter().any(|q| (q.1 - p.1).abs() < 2.0 * bin) {
+                peaks.push(p);
+            }
+        }
+        let mut best: Option<Tried> = None;
+        // A line at an order may be a synchronous force; any line may be a narrow mode (a
+        // motor's tone near an order is one).
+        let tries = peaks.iter().take(3).flat_map(|&(_, f, order)| {
+            let force = order.map(|k| (f, Some(k)));
+            force.into_iter().chain([(f, None)])
+        });
+        for (f, order) in tries {
+            let tried = match order {
+                Some(k) => try_force(&sys, &h, &run, k, penalty(2)),
+                None => try_resonance(&sys, &h, &run, f, bin, penalty(2 + m)),
+            };
+            match tried {
+                Ok(Some(t)) => {
+                    say(format!(
+                        "{}: Δ log-likelihood {:.1}, BIC cost {:.1}, halves {:.1} / {:.1}",
+                        t.what, t.delta, t.penalty, t.halves[0], t.halves[1]
+                    ));
+                    let pays = t.delta > t.penalty && t.halves[0].min(t.halves[1]) >= options.half_gain * t.penalty;
+                    if pays && best.as_ref().is_none_or(|b| t.delta - t.penalty > b.delta - b.penalty) {
+                        best = Some(t);
+                    }
+                }
+                Ok(None) => {}
+                Err(e) => say(format!("a part at {f:.2} Hz: {e:#}")),
+            }
+        }
+        let Some(kept) = best else {
+            say(format!("no further part pays for itself after {part}"));
+            break;
+        };
+        say(format!("kept {}", kept.what));
+        h = kept.healthy;
+        run = kept.run;
+    }
+    h = fit_noise(&sys, h)?;
+    let mut final_sys = RotorSystem::healthy(model, data, options, rotor, speed, h.clone())?;
+    say("measuring what the healthy record leaves unexplained (one round of the loop)".into());
+    let probe = LoopOptions { max_effects: 1, screen_parameters: false, progress: false, gain_floor: 0.0, ..*options };
+    let leftover = search(&mut final_sys, &probe)?;
+    let gain_floor = leftover
+        .trials
+        .iter()
+        .map(|t| (t.delta_log_likelihood - t.bic_penalty) / n_meas)
+        .fold(0.0, f64::max);
+    if let Some(t) = leftover.trials.iter().max_by(|a, b| {
+        (a.delta_log_likelihood - a.bic_penalty).total_cmp(&(b.delta_log_likelihood - b.bic_penalty))
+    }) {
+        say(format!(
+            "best next effect: {} at {} (Δ log-likelihood {:.1}, BIC cost {:.1}): gain floor {gain_floor:.2e} per measurement",
+            t.kind, t.location, t.delta_log_likelihood, t.bic_penalty
+        ));
+    }
+    let final_sys = RotorSystem::healthy(model, data, options, rotor, speed, h.clone())?;
+    let (fm, fr) = final_sys.run(&[])?;
+    let names = final_sys.channel_names().to_vec();
+    let noise_std = noise(&final_sys, &h);
+    let forces = h
+        .forces
+        .iter()
+        .map(|e| {
+            let value = final_sys.value(&fm, &fr, &Applied::new(*e, 0.0));
+            match *e {
+                Effect::HarmonicForce { node, order } => Ok(SynchronousForce { node, order, value }),
+                _ => Err(anyhow!("a healthy force that is not a harmonic force: {e:?}")),
+            }
+        })
+        .collect::<Result<_>>()?;
+    Ok(RotorBaseline {
+        system: "rotor".into(),
+        condition: b.condition.clone(),
+        speed_hz: speed.hz,
+        gain_floor,
+        source: BaselineSource { version: env!("CARGO_PKG_VERSION").into(), ..BaselineSource::default() },
+        channels: names
+            .iter()
+            .zip(&h.offsets)
+            .zip(&noise_std)
+            .map(|((c, &offset), &noise_std)| ChannelLevel { channel: c.clone(), offset, noise_std })
+            .collect(),
+        resonances: h.resonances,
+        forces,
+        unbalances: final_sys
+            .unbalance(&fm, &fr)
+            .into_iter()
+            .map(|(node, value)| UnbalanceLevel { node, value })
+            .collect(),
+        orders: order_levels(&final_sys),
+    })
+}
+
+/// The noise standard deviation of each channel in the model with `h`.
+fn noise(sys: &RotorSystem<'_>, h: &Healthy) -> Vec<f64> {
+    let r = sys.declared_noise();
+    (0..r.len()).map(|ch| h.noise_std.get(ch).copied().flatten().unwrap_or(r[ch])).collect()
+}
+
+fn finite_mean(c: &[f64]) -> f64 {
+    let (s, n) = c.iter().filter(|v| v.is_finite()).fold((0.0, 0usize), |(s, n), v| (s + v, n + 1));
+    if n == 0 {
+        0.0
+    } else {
+        s / n as f64
+    }
+}
+
+/// Each channel's noise level by maximum likelihood (a factor from 1/20 to 20 on its current
+/// level, in turn).
+fn fit_noise(sys: &RotorSystem<'_>, mut h: Healthy) -> Result<Healthy> {
+    for ch in 0..h.noise_std.len() {
+        let now = noise(sys, &h)[ch];
+        let with = |lf: f64| {
+            let mut t = h.clone();
+            t.noise_std[ch] = Some(now * lf.exp());
+            t
+        };
+        let best = maximise(
+            |lf| sys.run_healthy(&with(lf), &[]).ok().map(|(_, r)| r.log_likelihood()),
+            20f64.recip().ln(),
+            20f64.ln(),
+            5,
+            0.01,
+        )
+        .ok_or_else(|| anyhow!("no noise level of channel #{ch} gives a usable filter"))?;
+        h = with(best.x);
+    }
+    Ok(h)
+}
+
+/// A resonance near `f` Hz: its frequency (within a bin), damping and level on each
+/// channel, each by maximum likelihood in turn.
+fn try_resonance(
+    sys: &RotorSystem<'_>,
+    h: &Healthy,
+    base: &Run,
+    f: f64,
+    bin: f64,
+    penalty: f64,
+) -> Result<Option<Tried>> {
+    let levels = noise(sys, h);
+    let mut res = Resonance { frequency_hz: f, damping: 0.02, drive: levels.iter().map(|s| 3.0 * s).collect() };
+    let ll = |r: &Resonance| {
+        let mut t = h.clone();
+        t.resonances.push(r.clone());
+        sys.run_healthy(&t, &[]).ok().map(|(_, run)| run.log_likelihood())
+    };
+    let fail = || anyhow!("no resonance near {f:.2} Hz gives a usable filter");
+    let nyquist = 0.5 * sys.sample_rate();
+    let low = (f - bin).max(0.1);
+    let high = (f + bin).min(0.999 * nyquist);
+    let x = maximise(|v| ll(&Resonance { frequency_hz: v, ..res.clone() }), low, high, 3, 0.02 * bin)
+        .ok_or_else(fail)?;
+    res.frequency_hz = x.x;
+    let x = maximise(|lz| ll(&Resonance { damping: lz.exp(), ..res.clone() }), 2e-4f64.ln(), 0.3f64.ln(), 4, 0.1)
+        .ok_or_else(fail)?;
+    res.damping = x.x.exp();
+    for ch in 0..levels.len() {
+        let at = |ll_: f64| {
+            let mut r = res.clone();
+            r.drive[ch] = levels[ch] * ll_.exp();
+            r
+        };
+        let x = maximise(|v| ll(&at(v)), 0.01f64.ln(), 1000f64.ln(), 4, 0.1).ok_or_else(fail)?;
+        res = at(x.x);
+    }
+    let mut t = h.clone();
+    t.resonances.push(res.clone());
+    let run = sys.run_healthy(&t, &[])?.1;
+    let what = format!(
+        "resonance at {:.2} Hz, ζ {:.4}, levels {:?}",
+        res.frequency_hz,
+        res.damping,
+        res.drive.iter().map(|v| format!("{v:.3e}")).collect::<Vec<_>>()
+    );
+    Ok(Some(Tried { delta: run.log_likelihood() - base.log_likelihood(), halves: halves(&run, base, 0), run, healthy: t, penalty, what }))
+}
+
+/// A synchronous force at `order` on the first disk (1× only where no unbalance is
+/// estimated).
+fn try_force(sys: &RotorSystem<'_>, h: &Healthy, base: &Run, order: u32, penalty: f64) -> Result<Option<Tried>> {
+    let Some(node) = sys.disk_nodes().first().copied() else { return Ok(None) };
+    let e = Effect::HarmonicForce { node, order };
+    if h.forces.contains(&e) || (order == 1 && sys.unbalance_nodes().contains(&node)) {
+        return Ok(None);
+    }
+    let mut t = h.clone();
+    t.forces.push(e);
+    let run = sys.run_healthy(&t, &[])?.1;
+    Ok(Some(Tried {
+        delta: run.log_likelihood() - base.log_likelihood(),
+        halves: halves(&run, base, 0),
+        run,
+        healthy: t,
+        penalty,
+        what: format!("synchronous force {order}x at node {node}"),
+    }))
+}

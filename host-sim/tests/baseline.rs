@@ -1,0 +1,87 @@
+//! The healthy baseline on the synthetic twin of the CWRU rig (`loop_system::twin`): learned
+//! from one healthy recording (its noise levels, the housings' resonances and the motor's
+//! tones, which the configuration does not declare), it lets the loop ask what changed on
+//! another: a bearing defect is named, a grown unbalance is reported as its ratio to the
+//! baseline's, and healthy records get nothing.
+
+use edgekf_sim::residual_loop::{LoopOptions, LoopReport};
+use edgekf_sim::systems::rotor::bearing_geometry::BearingLine;
+use edgekf_sim::systems::rotor::loop_system::baseline::{learn, BaselineOptions, RotorBaseline};
+use edgekf_sim::systems::rotor::loop_system::twin::{rig, Twin};
+use edgekf_sim::systems::rotor::loop_system::{close_loop_from, RotorLoopOptions};
+use edgekf_sim::systems::rotor::RotorModel;
+use std::sync::OnceLock;
+
+fn model() -> &'static RotorModel {
+    static MODEL: OnceLock<RotorModel> = OnceLock::new();
+    MODEL.get_or_init(|| rig().unwrap())
+}
+
+/// The baseline every test here starts from: two seconds of the healthy twin, seed 1.
+fn baseline() -> &'static RotorBaseline {
+    static BASELINE: OnceLock<RotorBaseline> = OnceLock::new();
+    BASELINE.get_or_init(|| {
+        let healthy = Twin::default().record(model(), 1).unwrap();
+        let options = LoopOptions { progress: true, ..LoopOptions::default() };
+        learn(model(), &healthy, &options, &RotorLoopOptions::default(), &BaselineOptions::default()).unwrap()
+    })
+}
+
+fn diagnose(twin: Twin, seed: u64) -> LoopReport {
+    let data = twin.record(model(), seed).unwrap();
+    let options = LoopOptions { screen_parameters: false, ..LoopOptions::default() };
+    close_loop_from(model(), &data, &options, &RotorLoopOptions::default(), baseline()).unwrap()
+}
+
+fn comparison(r: &LoopReport, kind: &str, location: &str) -> serde_json::Value {
+    let rows = r.section.fields.get("baseline_comparison").and_then(|v| v.as_array()).expect("a comparison");
+    rows.iter().find(|c| c["kind"] == kind && c["location"] == location).cloned().unwrap_or_default()
+}
+
+#[test]
+fn the_baseline_learns_the_housings_and_the_noise() {
+    let b = baseline();
+    eprintln!("{}", b.to_toml().unwrap());
+    // Both housings' resonances (3050 and 3420 Hz), within a few hertz.
+    for hz in [3050.0, 3420.0] {
+        assert!(b.resonances.iter().any(|r| (r.frequency_hz - hz).abs() < 10.0), "{hz} Hz: {:?}", b.resonances);
+    }
+    // The speed read from the data: 0.4 % below the declared.
+    assert!((b.speed_hz / (model().config().operation.speed / std::f64::consts::TAU) - 0.996).abs() < 5e-4);
+    // Round trip through the file.
+    assert_eq!(&RotorBaseline::from_toml_str(&b.to_toml().unwrap()).unwrap(), b);
+    assert!(b.gain_floor >= 0.0 && b.gain_floor.is_finite());
+}
+
+#[test]
+fn a_defect_is_named_against_the_baseline() {
+    for (line, seed) in [(BearingLine::Bpfo, 3), (BearingLine::Bpfi, 4)] {
+        let r = diagnose(Twin { defect: Some(line), ..Twin::default() }, seed);
+        let named: Vec<_> =
+            r.effects_added.iter().map(|e| (e.kind.as_str(), e.detail.line.as_deref(), e.location.as_str())).collect();
+        assert_eq!(named, [("bearing_defect", Some(line.name()), "bearing 1")], "{:?}", r.trials);
+    }
+}
+
+#[test]
+fn a_grown_unbalance_is_reported_as_its_ratio_to_the_baseline() {
+    let r = diagnose(Twin { unbalance: 5.0, ..Twin::default() }, 5);
+    let c = comparison(&r, "unbalance", "disk 6");
+    let ratio = c["ratio_to_baseline"].as_f64().unwrap();
+    eprintln!("unbalance ×5: {c}");
+    assert!((4.0..=6.0).contains(&ratio), "{c}");
+    // The filter's unbalance states take the growth: the loop adds nothing for it.
+    assert!(r.effects_added.is_empty(), "{:?}", r.effects_added);
+    // And a record like the baseline's reads about ×1.
+    let same = comparison(&diagnose(Twin::default(), 6), "unbalance", "disk 6");
+    assert!((0.8..=1.25).contains(&same["ratio_to_baseline"].as_f64().unwrap()), "{same}");
+}
+
+#[test]
+fn twenty_healthy_records_get_nothing() {
+    for seed in 30..50 {
+        let r = diagnose(Twin::default(), seed);
+        assert!(r.effects_added.is_empty(), "seed {seed}: {:?}", r.effects_added);
+        eprintln!("healthy seed {seed}: {}", r.stopped);
+    }
+}
