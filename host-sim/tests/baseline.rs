@@ -7,7 +7,7 @@
 use edgekf_sim::residual_loop::{LoopOptions, LoopReport};
 use edgekf_sim::systems::rotor::bearing_geometry::BearingLine;
 use edgekf_sim::systems::rotor::loop_system::baseline::{learn, BaselineOptions, RotorBaseline};
-use edgekf_sim::systems::rotor::loop_system::twin::{rig, Twin};
+use edgekf_sim::systems::rotor::loop_system::twin::{rig, Twin, HEALTHY_UNBALANCE, HOUSINGS};
 use edgekf_sim::systems::rotor::loop_system::{close_loop_from, RotorLoopOptions};
 use edgekf_sim::systems::rotor::RotorModel;
 use std::sync::OnceLock;
@@ -42,9 +42,14 @@ fn comparison(r: &LoopReport, kind: &str, location: &str) -> serde_json::Value {
 fn the_baseline_learns_the_housings_and_the_noise() {
     let b = baseline();
     eprintln!("{}", b.to_toml().unwrap());
-    // Both housings' resonances (3050 and 3420 Hz), within a few hertz.
-    for hz in [3050.0, 3420.0] {
-        assert!(b.resonances.iter().any(|r| (r.frequency_hz - hz).abs() < 10.0), "{hz} Hz: {:?}", b.resonances);
+    // Each housing's resonance (3050 Hz on n1_ay, 3420 Hz on n11_ay, ζ 0.04: 240–270 Hz wide)
+    // within a tenth of its width, broad, and driving that housing's channel.
+    for (ch, (_, hz, _)) in HOUSINGS.iter().enumerate() {
+        let found = b
+            .resonances
+            .iter()
+            .any(|r| (r.frequency_hz - hz).abs() < 0.1 * 2.0 * 0.04 * hz && r.damping > 0.005 && r.drive[ch] > 0.05);
+        assert!(found, "{hz} Hz: {:?}", b.resonances);
     }
     // The speed read from the data: 0.4 % below the declared.
     assert!((b.speed_hz / (model().config().operation.speed / std::f64::consts::TAU) - 0.996).abs() < 5e-4);
@@ -65,7 +70,7 @@ fn a_defect_is_named_against_the_baseline() {
 
 #[test]
 fn a_grown_unbalance_is_reported_as_its_ratio_to_the_baseline() {
-    let r = diagnose(Twin { unbalance: 5.0, ..Twin::default() }, 5);
+    let r = diagnose(Twin { unbalance: 5.0 * HEALTHY_UNBALANCE, ..Twin::default() }, 5);
     let c = comparison(&r, "unbalance", "disk 6");
     let ratio = c["ratio_to_baseline"].as_f64().unwrap();
     eprintln!("unbalance ×5: {c}");
@@ -77,11 +82,23 @@ fn a_grown_unbalance_is_reported_as_its_ratio_to_the_baseline() {
     assert!((0.8..=1.25).contains(&same["ratio_to_baseline"].as_f64().unwrap()), "{same}");
 }
 
-#[test]
-fn twenty_healthy_records_get_nothing() {
-    for seed in 30..50 {
-        let r = diagnose(Twin::default(), seed);
+/// Healthy records of 1 s get nothing: seeds 30–49 with `EDGEKF_LONG=1` (in two tests that run
+/// side by side, about 7 min in release), the first two of each ten otherwise.
+fn healthy_records_get_nothing(seeds: std::ops::Range<u64>) {
+    let count = if std::env::var_os("EDGEKF_LONG").is_some() { seeds.len() } else { 2 };
+    for seed in seeds.take(count) {
+        let r = diagnose(Twin { duration: 1.0, ..Twin::default() }, seed);
         assert!(r.effects_added.is_empty(), "seed {seed}: {:?}", r.effects_added);
         eprintln!("healthy seed {seed}: {}", r.stopped);
     }
+}
+
+#[test]
+fn healthy_records_30_to_39_get_nothing() {
+    healthy_records_get_nothing(30..40);
+}
+
+#[test]
+fn healthy_records_40_to_49_get_nothing() {
+    healthy_records_get_nothing(40..50);
 }

@@ -121,10 +121,17 @@ pub fn check_folder(dir: &Path, names: &[&str], inputs: &[Option<&Path>]) -> Res
 /// assert_eq!(std::fs::read_to_string(&path).unwrap(), "complete\n");
 /// ```
 pub fn write_atomic(path: &Path, contents: impl AsRef<[u8]>) -> std::io::Result<()> {
-    let mut tmp = tempfile::Builder::new()
-        .prefix(&format!(".{}.", path.file_name().and_then(|n| n.to_str()).unwrap_or("edgekf")))
-        .suffix(".partial")
-        .tempfile_in(folder_of(path))?;
+    let prefix = format!(".{}.", path.file_name().and_then(|n| n.to_str()).unwrap_or("edgekf"));
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(&prefix).suffix(".partial");
+    // A temporary file is private (0600); the output is an ordinary file, readable as the
+    // umask allows, like one `std::fs::write` makes.
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        builder.permissions(std::fs::Permissions::from_mode(0o666));
+    }
+    let mut tmp = builder.tempfile_in(folder_of(path))?;
     tmp.write_all(contents.as_ref())?;
     tmp.as_file().sync_all()?;
     tmp.persist(path).map_err(|e| e.error)?;
@@ -139,6 +146,19 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("edgekf-output-{name}-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         dir
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn an_output_is_as_readable_as_an_ordinary_file() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = scratch("mode");
+        let (ours, plain) = (dir.join("report.json"), dir.join("plain.json"));
+        write_atomic(&ours, b"{}").unwrap();
+        std::fs::write(&plain, b"{}").unwrap();
+        let mode = |p: &Path| std::fs::metadata(p).unwrap().permissions().mode() & 0o777;
+        assert_eq!(mode(&ours), mode(&plain));
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[cfg(unix)]

@@ -272,8 +272,11 @@ impl<S: LoopSystem> Engine<'_, S> {
             let value = self.sys.value(&model, &run, &applied);
             if value.abs() > limit {
                 let unit = self.sys.label(&cand).unit;
-                return Err(OutOfBounds { value, why: format!("{value:.4} {unit} beyond the bound of {limit:.4} {unit}") }
-                    .into());
+                return Err(OutOfBounds {
+                    value,
+                    why: format!("{value:.4} {unit} beyond the bound of {limit:.4} {unit}"),
+                }
+                .into());
             }
         }
         let delta = run.log_likelihood() - base.log_likelihood();
@@ -538,6 +541,25 @@ fn explained(before: &RunSummary, after: &RunSummary) -> Vec<f64> {
     out
 }
 
+/// Why `e` is not fitted once the impacts stage has named a defect (`named`): impacts ring
+/// every lightly damped mode of the structure, so a broadband stand-in (a mode the model
+/// lacks, a catch-all input) fitted after them is their ringing, not a further effect. `None`
+/// if `e` is fitted as usual.
+fn rung_by_impacts<S: LoopSystem>(sys: &S, e: &S::Effect, named: &[(S::Effect, AddedEffect)]) -> Option<Refused> {
+    let label = sys.label(e);
+    let (_, defect) = named.first()?;
+    matches!(label.kind, EffectKind::ExtraMode | EffectKind::UnknownInput).then(|| Refused {
+        kind: label.kind,
+        location: label.location,
+        value: None,
+        reason: format!(
+            "not fitted: the impacts of the {} at {} ring every lightly damped mode, and a broadband \
+             stand-in fitted after them is their ringing",
+            defect.kind, defect.location
+        ),
+    })
+}
+
 /// Closes the loop on `sys`: runs its base model, takes out the periodic impacts its
 /// envelope names ([`impacts`]), then adds effects while the innovations are
 /// not consistent and an effect pays for its parameters (BIC) in both halves of the run (of
@@ -599,8 +621,13 @@ pub fn search<S: LoopSystem>(sys: &mut S, options: &LoopOptions) -> Result<LoopR
         for tier in sys.candidates(&current, &effects) {
             let mut fresh: Vec<S::Effect> = Vec::new();
             for e in tier {
-                if !effects.iter().any(|x| x.effect == e) && !fresh.contains(&e) {
-                    fresh.push(e);
+                if effects.iter().any(|x| x.effect == e) || fresh.contains(&e) {
+                    continue;
+                }
+                match rung_by_impacts(sys, &e, &found.added) {
+                    Some(r) if !refused.contains(&r) => refused.push(r),
+                    Some(_) => {}
+                    None => fresh.push(e),
                 }
             }
             if chosen.is_some() || fresh.is_empty() {

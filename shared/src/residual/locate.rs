@@ -204,8 +204,8 @@ fn match_order<T: Real>(
         // of the spacing of the orders around it (and the resolution under half of it): at
         // 138× every line is within 0.5 % of some order.
         let spacing = f_run / T::of_f64((q * q) as f64);
-        let resolvable = tolerance.order_rel * reference < spacing / T::of_f64(4.0)
-            && tolerance.abs_hz < spacing / T::of_f64(2.0);
+        let resolvable =
+            tolerance.order_rel * reference < spacing / T::of_f64(4.0) && tolerance.abs_hz < spacing / T::of_f64(2.0);
         let within_tolerance = resolvable && distance_hz.abs() <= allowed(reference, tolerance.order_rel);
         let g = gcd(p, q);
         OrderMatch { ratio, order: Order { numerator: p / g, denominator: q / g }, distance_hz, within_tolerance }

@@ -418,7 +418,8 @@ pub fn baseline(request: &crate::cli::baseline::BaselineRequest) -> anyhow::Resu
     let channels: Vec<String> = cfg.sensors.iter().map(|s| s.channel_name()).collect();
     let known: Vec<&str> = channels.iter().map(String::as_str).collect();
     let file = crate::cli::registry::read_data(&args.data, &known, cfg.operation.sample_rate, &cfg.timeline)?;
-    let options = BaselineOptions { max_parts: args.max_parts, condition: args.condition.clone(), ..Default::default() };
+    let options =
+        BaselineOptions { max_parts: args.max_parts, condition: args.condition.clone(), ..Default::default() };
     let mut b = learn(&model, &file, &request.options, &Default::default(), &options)?;
     b.source = request.source.clone();
     b.to_toml()

@@ -195,7 +195,14 @@ impl RotorBaseline {
         for level in order_levels(sys) {
             if let Some(b) = self.orders.iter().find(|o| o.channel == level.channel && o.order == level.order) {
                 let unit = sys.channel_unit(&level.channel);
-                out.push(Comparison::new("order_level", &level.channel, Some(level.order), &unit, level.value, b.value));
+                out.push(Comparison::new(
+                    "order_level",
+                    &level.channel,
+                    Some(level.order),
+                    &unit,
+                    level.value,
+                    b.value,
+                ));
             }
         }
         out
@@ -270,17 +277,18 @@ pub fn learn(
         let summary = sys.summarise(&run);
         let bin = summary.bin_width_hz;
         // The strongest lines no bearing line names and no part already explains.
-        let mut all: Vec<(f64, f64, Option<u32>)> = summary
+        let mut all: Vec<(f64, f64, Option<u32>, usize)> = summary
             .channels
             .iter()
-            .flat_map(|c| c.peaks.iter())
-            .filter(|p| p.line.is_none() && !p.class.starts_with("natural"))
-            .map(|p| (p.prominence_db, p.frequency_hz, p.order))
-            .filter(|&(_, f, _)| !h.resonances.iter().any(|r| (r.frequency_hz - f).abs() < 3.0 * bin))
+            .enumerate()
+            .flat_map(|(ch, c)| c.peaks.iter().map(move |p| (ch, p)))
+            .filter(|(_, p)| p.line.is_none() && !p.class.starts_with("natural"))
+            .map(|(ch, p)| (p.prominence_db, p.frequency_hz, p.order, ch))
+            .filter(|&(_, f, _, _)| !h.resonances.iter().any(|r| (r.frequency_hz - f).abs() < 3.0 * bin))
             .collect();
         all.sort_by(|a, b| b.0.total_cmp(&a.0));
         // A line both channels see is one candidate.
-        let mut peaks: Vec<(f64, f64, Option<u32>)> = Vec::new();
+        let mut peaks: Vec<(f64, f64, Option<u32>, usize)> = Vec::new();
         for p in all {
             if !peaks.iter().any(|q| (q.1 - p.1).abs() < 2.0 * bin) {
                 peaks.push(p);
@@ -289,14 +297,14 @@ pub fn learn(
         let mut best: Option<Tried> = None;
         // A line at an order may be a synchronous force; any line may be a narrow mode (a
         // motor's tone near an order is one).
-        let tries = peaks.iter().take(3).flat_map(|&(_, f, order)| {
-            let force = order.map(|k| (f, Some(k)));
-            force.into_iter().chain([(f, None)])
+        let tries = peaks.iter().take(3).flat_map(|&(_, f, order, ch)| {
+            let force = order.map(|k| (f, Some(k), ch));
+            force.into_iter().chain([(f, None, ch)])
         });
-        for (f, order) in tries {
+        for (f, order, ch) in tries {
             let tried = match order {
                 Some(k) => try_force(&sys, &h, &run, k, penalty(2)),
-                None => try_resonance(&sys, &h, &run, f, bin, penalty(2 + m)),
+                None => try_resonance(&sys, &h, &run, (f, ch), bin, penalty(2 + m)),
             };
             match tried {
                 Ok(Some(t)) => {
@@ -326,14 +334,13 @@ pub fn learn(
     say("measuring what the healthy record leaves unexplained (one round of the loop)".into());
     let probe = LoopOptions { max_effects: 1, screen_parameters: false, progress: false, gain_floor: 0.0, ..*options };
     let leftover = search(&mut final_sys, &probe)?;
-    let gain_floor = leftover
+    let gain_floor =
+        leftover.trials.iter().map(|t| (t.delta_log_likelihood - t.bic_penalty) / n_meas).fold(0.0, f64::max);
+    if let Some(t) = leftover
         .trials
         .iter()
-        .map(|t| (t.delta_log_likelihood - t.bic_penalty) / n_meas)
-        .fold(0.0, f64::max);
-    if let Some(t) = leftover.trials.iter().max_by(|a, b| {
-        (a.delta_log_likelihood - a.bic_penalty).total_cmp(&(b.delta_log_likelihood - b.bic_penalty))
-    }) {
+        .max_by(|a, b| (a.delta_log_likelihood - a.bic_penalty).total_cmp(&(b.delta_log_likelihood - b.bic_penalty)))
+    {
         say(format!(
             "best next effect: {} at {} (Δ log-likelihood {:.1}, BIC cost {:.1}): gain floor {gain_floor:.2e} per measurement",
             t.kind, t.location, t.delta_log_likelihood, t.bic_penalty
@@ -415,18 +422,20 @@ fn fit_noise(sys: &RotorSystem<'_>, mut h: Healthy) -> Result<Healthy> {
     Ok(h)
 }
 
-/// A resonance near `f` Hz: its frequency (within a bin), damping and level on each
-/// channel, each by maximum likelihood in turn.
+/// A resonance near `f` Hz, seen on channel `seen`: its frequency, damping and level on each
+/// channel, each by maximum likelihood in turn. It starts on `seen` alone, so that a hump on
+/// one housing is not pulled towards another housing's.
 fn try_resonance(
     sys: &RotorSystem<'_>,
     h: &Healthy,
     base: &Run,
-    f: f64,
+    (f, seen): (f64, usize),
     bin: f64,
     penalty: f64,
 ) -> Result<Option<Tried>> {
     let levels = noise(sys, h);
-    let mut res = Resonance { frequency_hz: f, damping: 0.02, drive: levels.iter().map(|s| 3.0 * s).collect() };
+    let drive = levels.iter().enumerate().map(|(ch, s)| if ch == seen { 3.0 * s } else { 0.01 * s }).collect();
+    let mut res = Resonance { frequency_hz: f, damping: 0.02, drive };
     let ll = |r: &Resonance| {
         let mut t = h.clone();
         t.resonances.push(r.clone());
@@ -434,23 +443,38 @@ fn try_resonance(
     };
     let fail = || anyhow!("no resonance near {f:.2} Hz gives a usable filter");
     let nyquist = 0.5 * sys.sample_rate();
-    let low = (f - bin).max(0.1);
-    let high = (f + bin).min(0.999 * nyquist);
-    let x = maximise(|v| ll(&Resonance { frequency_hz: v, ..res.clone() }), low, high, 3, 0.02 * bin)
-        .ok_or_else(fail)?;
-    res.frequency_hz = x.x;
-    let x = maximise(|lz| ll(&Resonance { damping: lz.exp(), ..res.clone() }), 2e-4f64.ln(), 0.3f64.ln(), 4, 0.1)
-        .ok_or_else(fail)?;
-    res.damping = x.x.exp();
-    for ch in 0..levels.len() {
-        let at = |ll_: f64| {
-            let mut r = res.clone();
-            r.drive[ch] = levels[ch] * ll_.exp();
-            r
-        };
-        let x = maximise(|v| ll(&at(v)), 0.01f64.ln(), 1000f64.ln(), 4, 0.1).ok_or_else(fail)?;
-        res = at(x.x);
+    // A broad housing resonance peaks anywhere in its hump of a noisy spectrum: its centre is
+    // searched within 3 % first (at a moderate damping), and again within two bins once the
+    // damping is known.
+    let centre = |res: &Resonance, half: f64, grid: usize| {
+        let (low, high) = ((res.frequency_hz - half).max(0.1), (res.frequency_hz + half).min(0.999 * nyquist));
+        maximise(|v| ll(&Resonance { frequency_hz: v, ..res.clone() }), low, high, grid, 0.02 * bin)
+            .map(|x| x.x)
+            .ok_or_else(fail)
+    };
+    res.frequency_hz = centre(&res, bin.max(0.03 * f), 9)?;
+    // The levels and the damping trade against each other (too large a level favours a narrow
+    // peak), so they are fitted in turn twice.
+    let fit_levels = |mut res: Resonance| -> Result<Resonance> {
+        for ch in 0..levels.len() {
+            let at = |ll_: f64| {
+                let mut r = res.clone();
+                r.drive[ch] = levels[ch] * ll_.exp();
+                r
+            };
+            let x = maximise(|v| ll(&at(v)), 0.01f64.ln(), 1000f64.ln(), 4, 0.1).ok_or_else(fail)?;
+            res = at(x.x);
+        }
+        Ok(res)
+    };
+    for _ in 0..2 {
+        res = fit_levels(res)?;
+        let x = maximise(|lz| ll(&Resonance { damping: lz.exp(), ..res.clone() }), 2e-4f64.ln(), 0.3f64.ln(), 4, 0.1)
+            .ok_or_else(fail)?;
+        res.damping = x.x.exp();
     }
+    res.frequency_hz = centre(&res, 2.0 * bin, 3)?;
+    res = fit_levels(res)?;
     let mut t = h.clone();
     t.resonances.push(res.clone());
     let run = sys.run_healthy(&t, &[])?.1;
@@ -460,7 +484,14 @@ fn try_resonance(
         res.damping,
         res.drive.iter().map(|v| format!("{v:.3e}")).collect::<Vec<_>>()
     );
-    Ok(Some(Tried { delta: run.log_likelihood() - base.log_likelihood(), halves: halves(&run, base, 0), run, healthy: t, penalty, what }))
+    Ok(Some(Tried {
+        delta: run.log_likelihood() - base.log_likelihood(),
+        halves: halves(&run, base, 0),
+        run,
+        healthy: t,
+        penalty,
+        what,
+    }))
 }
 
 /// A synchronous force at `order` on the first disk (1× only where no unbalance is

@@ -6,13 +6,13 @@
 //! or delay, a component parameter, a mode's frequency), some both. Each says which residual
 //! signatures point to it ([`Effect::signature`]).
 
+use super::healthy::{oscillator, ModeSpec, ModeTarget};
+use crate::residual_loop::bounds::Bounds;
 pub use crate::residual_loop::optimize::ScalarRange;
 use crate::residual_loop::search::EffectKind;
 use crate::systems::rotor::bearing_geometry::BearingLine;
 use crate::systems::rotor::estimate::ReducedRotor;
 use crate::systems::rotor::{dof, RotorConfig, RotorModel, SensorKind};
-use super::healthy::{oscillator, ModeSpec, ModeTarget};
-use crate::residual_loop::bounds::Bounds;
 use anyhow::{anyhow, bail, Context, Result};
 use edgekf::linalg::expm;
 use nalgebra::DMatrix;
@@ -259,9 +259,10 @@ impl Effect {
         match self {
             Effect::SensorBias { .. } => 1,
             Effect::ExtraMode { .. } => 2 * channels + 1,
-            Effect::SensorScale { .. } | Effect::SensorDelay { .. } | Effect::SensorLag { .. } | Effect::Parameter(_) => {
-                1
-            }
+            Effect::SensorScale { .. }
+            | Effect::SensorDelay { .. }
+            | Effect::SensorLag { .. }
+            | Effect::Parameter(_) => 1,
             _ => self.states(channels),
         }
     }

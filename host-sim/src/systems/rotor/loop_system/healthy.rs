@@ -91,7 +91,11 @@ impl Healthy {
         out.force = grow(&red.force, red.force.nrows());
         for (i, res) in self.resonances.iter().enumerate() {
             if res.drive.len() != m {
-                bail!("a resonance at {} Hz with drive levels for {} channels, not {m}", res.frequency_hz, res.drive.len());
+                bail!(
+                    "a resonance at {} Hz with drive levels for {} channels, not {m}",
+                    res.frequency_hz,
+                    res.drive.len()
+                );
             }
             let s = n0 + 2 * m * i;
             for (ch, &level) in res.drive.iter().enumerate() {

@@ -20,8 +20,8 @@ pub mod inject;
 pub mod speed;
 pub mod twin;
 
-use self::effects::{apply_parameters, augment, AugmentedModel, Effect, EffectTuning, Flexibility, Parameter};
 use self::baseline::RotorBaseline;
+use self::effects::{apply_parameters, augment, AugmentedModel, Effect, EffectTuning, Flexibility, Parameter};
 use self::healthy::Healthy;
 use self::speed::{estimate_speed, RunningSpeed};
 use crate::io::data::DataFile;
@@ -279,7 +279,12 @@ impl<'a> RotorSystem<'a> {
 
     /// The filter over the data with `applied` on `red` (the reduced rotor with `healthy`'s
     /// parts in place), re-reducing the rotor when a component parameter is changed.
-    fn run_on(&self, red: &ReducedRotor, healthy: &Healthy, applied: &[Applied<Effect>]) -> Result<(AugmentedModel, Run)> {
+    fn run_on(
+        &self,
+        red: &ReducedRotor,
+        healthy: &Healthy,
+        applied: &[Applied<Effect>],
+    ) -> Result<(AugmentedModel, Run)> {
         if applied.iter().any(|e| e.onset_s.is_some()) {
             return Err(anyhow!("the rotor's effects act from the start of the run (no onset)"));
         }

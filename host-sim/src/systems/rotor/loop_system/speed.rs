@@ -6,7 +6,8 @@
 //! speed (a Hann-windowed DFT of the whole record scanned in steps of a twentieth of its
 //! resolution), then the speed at which the base model's innovations are most likely (the 1×
 //! phasor of the filter only stays locked to the data at the right speed), refined by Brent's
-//! method within a resolution cell of the spectral estimate.
+//! method within a resolution cell of the spectral estimate; the spectral estimate stands if
+//! the likelihood has no maximum inside that cell.
 
 use super::{RotorLoopOptions, RotorSystem};
 use crate::io::data::DataFile;
@@ -116,7 +117,8 @@ pub fn strongest_line(columns: &[Vec<f64>], rate: f64, low: f64, high: f64) -> O
 
 /// Estimates the running speed of `data` within `± band` (a fraction) of the configured
 /// speed of `model`: the strongest line in that band, then the maximum-likelihood speed of the
-/// base model within one spectral resolution cell of it.
+/// base model within one spectral resolution cell of it (or the line itself if the
+/// likelihood still rises at the cell's edge).
 pub fn estimate_speed(
     model: &RotorModel,
     data: &DataFile,
@@ -146,5 +148,9 @@ pub fn estimate_speed(
     };
     let best = maximise(log_likelihood, spectral - cell, spectral + cell, 4, 1e-5 * nominal_hz)
         .ok_or_else(|| anyhow::anyhow!("no speed near {spectral:.3} Hz gives a usable filter"))?;
-    Ok(RunningSpeed { hz: best.x, declared_hz: nominal_hz, source: "estimated", spectral_hz: Some(spectral) })
+    // A likelihood still rising at the edge of the cell is not locked to the 1× line (on a
+    // real record the base model's innovations are dominated by what it lacks): the spectral
+    // line, resolved to a twentieth of the cell, is the better estimate then.
+    let hz = if (best.x - spectral).abs() < 0.9 * cell { best.x } else { spectral };
+    Ok(RunningSpeed { hz, declared_hz: nominal_hz, source: "estimated", spectral_hz: Some(spectral) })
 }
