@@ -456,10 +456,10 @@ fn try_resonance(
     // The levels and the damping trade against each other (too large a level favours a narrow
     // peak), so they are fitted in turn twice.
     let fit_levels = |mut res: Resonance| -> Result<Resonance> {
-        for ch in 0..levels.len() {
+        for (ch, &level) in levels.iter().enumerate() {
             let at = |ll_: f64| {
                 let mut r = res.clone();
-                r.drive[ch] = levels[ch] * ll_.exp();
+                r.drive[ch] = level * ll_.exp();
                 r
             };
             let x = maximise(|v| ll(&at(v)), 0.01f64.ln(), 1000f64.ln(), 4, 0.1).ok_or_else(fail)?;
