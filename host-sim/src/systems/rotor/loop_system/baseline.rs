@@ -244,6 +244,15 @@ struct Tried {
     what: String,
 }
 
+impl Tried {
+    /// Runs the filter with the parts `healthy` and measures the gain over `base`.
+    fn run(sys: &RotorSystem<'_>, healthy: Healthy, base: &Run, penalty: f64, what: String) -> Result<Self> {
+        let run = sys.run_healthy(&healthy, &[])?.1;
+        let (delta, halves) = (run.log_likelihood() - base.log_likelihood(), halves(&run, base, 0));
+        Ok(Self { healthy, run, delta, penalty, halves, what })
+    }
+}
+
 /// Learns the baseline of `model` from the healthy recording `data`: the running speed, the
 /// channels' offsets, then the noise levels, resonances and synchronous forces by maximum
 /// likelihood (each resonance or force kept only if it pays its BIC cost in both halves), the
@@ -475,23 +484,15 @@ fn try_resonance(
     }
     res.frequency_hz = centre(&res, 2.0 * bin, 3)?;
     res = fit_levels(res)?;
-    let mut t = h.clone();
-    t.resonances.push(res.clone());
-    let run = sys.run_healthy(&t, &[])?.1;
     let what = format!(
         "resonance at {:.2} Hz, ζ {:.4}, levels {:?}",
         res.frequency_hz,
         res.damping,
         res.drive.iter().map(|v| format!("{v:.3e}")).collect::<Vec<_>>()
     );
-    Ok(Some(Tried {
-        delta: run.log_likelihood() - base.log_likelihood(),
-        halves: halves(&run, base, 0),
-        run,
-        healthy: t,
-        penalty,
-        what,
-    }))
+    let mut t = h.clone();
+    t.resonances.push(res);
+    Tried::run(sys, t, base, penalty, what).map(Some)
 }
 
 /// A synchronous force at `order` on the first disk (1× only where no unbalance is
@@ -504,13 +505,5 @@ fn try_force(sys: &RotorSystem<'_>, h: &Healthy, base: &Run, order: u32, penalty
     }
     let mut t = h.clone();
     t.forces.push(e);
-    let run = sys.run_healthy(&t, &[])?.1;
-    Ok(Some(Tried {
-        delta: run.log_likelihood() - base.log_likelihood(),
-        halves: halves(&run, base, 0),
-        run,
-        healthy: t,
-        penalty,
-        what: format!("synchronous force {order}x at node {node}"),
-    }))
+    Tried::run(sys, t, base, penalty, format!("synchronous force {order}x at node {node}")).map(Some)
 }
