@@ -19,7 +19,7 @@ pub const OUTSIDE: &str = "outside what the model allows";
 /// assert_eq!(b.factor_range(), (0.5, 1.5));
 /// assert_eq!(b.delay_s(12_000.0), 1e-3);
 /// assert_eq!(Bounds::default().delay_s(10_000.0), 5e-4); // five samples
-/// assert_eq!(Bounds::default().force_n(30.0), 30.0); // the rotor's weight
+/// assert_eq!(Bounds::default().force_n(30.0), 30.0); // the default: the given weight
 /// assert!(toml::from_str::<Bounds>("force = -1").unwrap().validate().is_err());
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
