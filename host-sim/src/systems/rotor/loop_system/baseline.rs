@@ -339,10 +339,11 @@ pub fn learn(
         run = kept.run;
     }
     h = fit_noise(&sys, h)?;
-    let mut final_sys = RotorSystem::healthy(model, data, options, rotor, speed, h.clone())?;
+    // The probe gets a system of its own: the loop may take impacts out of its channels.
+    let mut probe_sys = RotorSystem::healthy(model, data, options, rotor, speed, h.clone())?;
     say("measuring what the healthy record leaves unexplained (one round of the loop)".into());
     let probe = LoopOptions { max_effects: 1, screen_parameters: false, progress: false, gain_floor: 0.0, ..*options };
-    let leftover = search(&mut final_sys, &probe)?;
+    let leftover = search(&mut probe_sys, &probe)?;
     let gain_floor =
         leftover.trials.iter().map(|t| (t.delta_log_likelihood - t.bic_penalty) / n_meas).fold(0.0, f64::max);
     if let Some(t) = leftover
@@ -355,15 +356,14 @@ pub fn learn(
             t.kind, t.location, t.delta_log_likelihood, t.bic_penalty
         ));
     }
-    let final_sys = RotorSystem::healthy(model, data, options, rotor, speed, h.clone())?;
-    let (fm, fr) = final_sys.run(&[])?;
-    let names = final_sys.channel_names().to_vec();
-    let noise_std = noise(&final_sys, &h);
+    let (fm, fr) = sys.run_healthy(&h, &[])?;
+    let names = sys.channel_names().to_vec();
+    let noise_std = noise(&sys, &h);
     let forces = h
         .forces
         .iter()
         .map(|e| {
-            let value = final_sys.value(&fm, &fr, &Applied::new(*e, 0.0));
+            let value = sys.value(&fm, &fr, &Applied::new(*e, 0.0));
             match *e {
                 Effect::HarmonicForce { node, order } => Ok(SynchronousForce { node, order, value }),
                 _ => Err(anyhow!("a healthy force that is not a harmonic force: {e:?}")),
@@ -384,12 +384,8 @@ pub fn learn(
             .collect(),
         resonances: h.resonances,
         forces,
-        unbalances: final_sys
-            .unbalance(&fm, &fr)
-            .into_iter()
-            .map(|(node, value)| UnbalanceLevel { node, value })
-            .collect(),
-        orders: order_levels(&final_sys),
+        unbalances: sys.unbalance(&fm, &fr).into_iter().map(|(node, value)| UnbalanceLevel { node, value }).collect(),
+        orders: order_levels(&sys),
     })
 }
 

@@ -132,10 +132,24 @@ impl<'a> RotorSystem<'a> {
         running: RunningSpeed,
         healthy: Healthy,
     ) -> Result<Self> {
+        Self::build(model, data, options, rotor, running, |_| Ok(healthy))
+    }
+
+    /// The system with the healthy parts `parts` gives for the reduced rotor's channels (in the
+    /// filter's order): the rotor is reduced once, whatever the parts.
+    fn build(
+        model: &'a RotorModel,
+        data: &'a DataFile,
+        options: &LoopOptions,
+        rotor: &RotorLoopOptions,
+        running: RunningSpeed,
+        parts: impl FnOnce(&[String]) -> Result<Healthy>,
+    ) -> Result<Self> {
         let cfg = model.config();
         let speed = running.hz * TAU;
         let rotor = &RotorLoopOptions { tuning: rotor.tuning.with_filter(&cfg.filter), ..*rotor };
         let bare = reduce(model, speed, &rotor.tuning)?;
+        let healthy = parts(&bare.channels)?;
         let columns: Vec<Vec<f64>> = bare
             .channels
             .iter()
@@ -228,9 +242,7 @@ impl<'a> RotorSystem<'a> {
         running: RunningSpeed,
         baseline: &RotorBaseline,
     ) -> Result<Self> {
-        let bare = RotorSystem::at_speed(model, data, options, rotor, running)?;
-        let healthy = baseline.healthy(&bare.red.channels)?;
-        let mut sys = Self::healthy(model, data, options, rotor, running, healthy)?;
+        let mut sys = Self::build(model, data, options, rotor, running, |channels| baseline.healthy(channels))?;
         sys.baseline = Some(baseline.clone());
         Ok(sys)
     }
