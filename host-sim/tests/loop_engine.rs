@@ -124,7 +124,7 @@ impl LoopSystem for Oscillator {
         summarise(run, &ctx, &Default::default())
     }
 
-    fn candidates(&self, s: &RunSummary, _: &[Applied<Effect>]) -> Vec<Vec<Effect>> {
+    fn candidates(&self, s: &RunSummary, _: &Run, _: &Self::Model, _: &[Applied<Effect>]) -> Vec<Vec<Effect>> {
         let mut named = Vec::new();
         if s.channels[0].z.abs() > 5.0 {
             named.push(Effect::Bias);

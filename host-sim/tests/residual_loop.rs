@@ -195,3 +195,27 @@ fn fits_beyond_the_bounds_are_refused() {
     assert!((refusal.value.unwrap() - 1.5).abs() < 0.3, "{refusal:?}");
     assert!(!r.effects_added.iter().any(|e| e.kind == "harmonic_force" && e.value > 1.0), "{:?}", r.effects_added);
 }
+
+#[test]
+fn a_2x_force_between_the_disks_is_placed_where_it_acts() {
+    let r = found(Case::OffDisk, 41);
+    let e = only(&r);
+    assert_eq!((e.kind.as_str(), e.detail.order), ("harmonic_force", Some(2.0)));
+    // Node 17 itself, or a neighbour the probes cannot tell from it (listed as a rival).
+    let near = |l: &str| ["node 16", "node 17", "node 18"].contains(&l);
+    assert!(near(&e.location), "placed at {}", e.location);
+    assert!(
+        e.location == "node 17" || r.not_identifiable.iter().any(|n| n.location == "node 17"),
+        "node 17 is neither the place nor a rival: {:?}",
+        r.not_identifiable
+    );
+}
+
+#[test]
+fn a_mass_between_the_disks_is_a_point_mass_not_a_denser_shaft() {
+    let r = found(Case::PointMass, 43);
+    let e = only(&r);
+    assert_eq!((e.kind.as_str(), e.unit.as_str()), ("point_mass", "kg"));
+    assert!(["node 17", "node 18", "node 19"].contains(&e.location.as_str()), "placed at {}", e.location);
+    assert!((e.value - 0.8).abs() < 0.25 * 0.8, "mass {:.3} kg", e.value);
+}

@@ -20,6 +20,7 @@ pub const OUTSIDE: &str = "outside what the model allows";
 /// assert_eq!(b.delay_s(12_000.0), 1e-3);
 /// assert_eq!(Bounds::default().delay_s(10_000.0), 5e-4); // five samples
 /// assert_eq!(Bounds::default().force_n(30.0), 30.0); // the default: the given weight
+/// assert_eq!(Bounds::default().mass_kg(10.0), 3.0); // the default: 0.3 of the machine's mass
 /// assert!(toml::from_str::<Bounds>("force = -1").unwrap().validate().is_err());
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
@@ -34,11 +35,14 @@ pub struct Bounds {
     pub delay: Option<f64>,
     /// The longest first-order sensor lag (time constant), s (default 1 s).
     pub lag: f64,
+    /// The largest point mass an effect may add, kg (default: `parameter` times the machine's
+    /// mass, as a factor on it would add).
+    pub mass: Option<f64>,
 }
 
 impl Default for Bounds {
     fn default() -> Self {
-        Self { parameter: 0.3, force: None, delay: None, lag: 1.0 }
+        Self { parameter: 0.3, force: None, delay: None, lag: 1.0, mass: None }
     }
 }
 
@@ -48,7 +52,13 @@ impl Bounds {
         if !(self.parameter > 0.0 && self.parameter < 1.0) {
             return Err(format!("bounds.parameter = {} must be in (0, 1) (a factor within 1 ± it)", self.parameter));
         }
-        for (name, v) in [("bounds.force", self.force), ("bounds.delay", self.delay), ("bounds.lag", Some(self.lag))] {
+        let named = [
+            ("bounds.force", self.force),
+            ("bounds.delay", self.delay),
+            ("bounds.lag", Some(self.lag)),
+            ("bounds.mass", self.mass),
+        ];
+        for (name, v) in named {
             if let Some(v) = v {
                 if !(v.is_finite() && v > 0.0) {
                     return Err(format!("{name} = {v} must be positive and finite"));
@@ -71,5 +81,10 @@ impl Bounds {
     /// The largest force, N, for a machine weighing `weight_n`.
     pub fn force_n(&self, weight_n: f64) -> f64 {
         self.force.unwrap_or(weight_n)
+    }
+
+    /// The largest point mass, kg, for a machine of `mass_kg`.
+    pub fn mass_kg(&self, mass_kg: f64) -> f64 {
+        self.mass.unwrap_or(self.parameter * mass_kg)
     }
 }

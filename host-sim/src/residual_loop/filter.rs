@@ -48,6 +48,20 @@ pub struct Run {
     pub effect_states: Vec<Vec<f64>>,
     /// Sample at which the gain was frozen (`None`: time-varying throughout).
     pub frozen_at: Option<usize>,
+    /// The filter as it ended (the last model's transition and rows, the last gain used): what
+    /// [`direction`](super::direction) reads an unmodelled input's innovations from.
+    pub last: Option<FinalFilter>,
+}
+
+/// The filter a run ended with: `x̂⁻ₖ₊₁ = Φ (x̂⁻ₖ + K eₖ)`, `eₖ = yₖ − C x̂⁻ₖ`.
+#[derive(Debug, Clone)]
+pub struct FinalFilter {
+    /// The transition `Φ` over one sample.
+    pub transition: DMatrix<f64>,
+    /// The gain `K`.
+    pub gain: DMatrix<f64>,
+    /// The sensor rows `C`.
+    pub c: DMatrix<f64>,
 }
 
 impl Run {
@@ -170,6 +184,7 @@ pub fn run_segments(
         ..Run::default()
     };
     let mut frozen: Option<Frozen> = None;
+    let mut last_gain: Option<DMatrix<f64>> = None;
     let mut prev_diag: Option<DVector<f64>> = None;
     let max_tv = 3000usize;
     #[allow(clippy::needless_range_loop)]
@@ -217,6 +232,7 @@ pub fn run_segments(
                     }
                 }
                 prev_diag = Some(diag);
+                last_gain = Some(gain);
                 (nis, logdet, sdiag)
             };
             for i in 0..m {
@@ -245,5 +261,7 @@ pub fn run_segments(
             p = &d.a * &p * d.a.transpose() + &d.q;
         }
     }
+    let gain = frozen.map(|f| f.gain).or(last_gain);
+    run.last = gain.map(|gain| FinalFilter { transition: d.a.clone(), gain, c: c.clone() });
     Ok(run)
 }

@@ -16,6 +16,7 @@
 //! * [`bounds`]: what the model allows an effect to be (`[bounds]`), refusals beyond it;
 //! * [`envelope`]: envelope analysis (kurtogram, squared envelope, lines in its spectrum);
 //! * [`cyclic`]: a resonance rung by periodic impacts, fitted to the innovations by likelihood;
+//! * [`direction`]: where an input the model lacks acts, ranked from the innovations' directions;
 //! * [`impacts`]: the first stage, periodic impacts named by envelope lines and taken out;
 //! * [`filter`]: a dynamic-size Kalman filter for the host search (time-varying gain until the
 //!   covariance converges, then frozen);
@@ -24,6 +25,7 @@
 pub mod baseline;
 pub mod bounds;
 pub mod cyclic;
+pub mod direction;
 pub mod envelope;
 pub mod filter;
 pub mod impacts;

@@ -89,10 +89,19 @@ pub trait LoopSystem {
     fn run(&self, effects: &[Applied<Self::Effect>]) -> Result<(Self::Model, Run)>;
     /// The innovations' statistics and the virtual-sensing error of a run.
     fn summarise(&self, run: &Run) -> RunSummary;
-    /// Candidates for the next effect, given the current model's `effects` and the summary of
-    /// its run, in tiers: a later tier is tried only when no candidate of an earlier one is kept
-    /// (the catch-all goes last). The engine drops effects already in the model.
-    fn candidates(&self, summary: &RunSummary, effects: &[Applied<Self::Effect>]) -> Vec<Vec<Self::Effect>>;
+    /// Candidates for the next effect, given the current model's `effects`, its `run` (and
+    /// what it was made with, `model`) and the run's summary, in tiers: a later tier is tried
+    /// only when no candidate of an earlier one is kept (the catch-all goes last). The engine
+    /// drops effects already in the model. A system with many places an effect could act
+    /// ranks them from the run's innovations ([`direction`](super::direction)) and proposes
+    /// the few they point to.
+    fn candidates(
+        &self,
+        summary: &RunSummary,
+        run: &Run,
+        model: &Self::Model,
+        effects: &[Applied<Self::Effect>],
+    ) -> Vec<Vec<Self::Effect>>;
     /// How `effect` reads in the report.
     fn label(&self, effect: &Self::Effect) -> EffectLabel;
     /// Free parameters `effect` costs in the BIC (an onset, when fitted, costs one more).
@@ -618,7 +627,7 @@ pub fn search<S: LoopSystem>(sys: &mut S, options: &LoopOptions) -> Result<LoopR
         engine.nis_scale.set(if current.nis_mean.is_finite() { current.nis_mean.max(1.0) } else { 1.0 });
         let mut chosen = None;
         let mut evaluated = Vec::new();
-        for tier in sys.candidates(&current, &effects) {
+        for tier in sys.candidates(&current, &cur_run, &cur_model, &effects) {
             let mut fresh: Vec<S::Effect> = Vec::new();
             for e in tier {
                 if effects.iter().any(|x| x.effect == e) || fresh.contains(&e) {

@@ -258,7 +258,7 @@ impl LoopSystem for OscillatorSystem<'_> {
 
     /// A bias when the innovations' mean is off; lines at 2× or 3× the drive name a force
     /// there; colour or a wrong NIS the scale and the mode's parameters.
-    fn candidates(&self, s: &RunSummary, _: &[Applied<Effect>]) -> Vec<Vec<Effect>> {
+    fn candidates(&self, s: &RunSummary, _: &Run, _: &Self::Model, _: &[Applied<Effect>]) -> Vec<Vec<Effect>> {
         let mut named = Vec::new();
         let c = &s.channels[0];
         if c.z.abs() >= self.options.signatures.bias_z {

@@ -4,13 +4,14 @@
 //!
 //! ```
 //! use edgekf_sim::systems::rotor::loop_system::cases::Case;
-//! assert_eq!(Case::ALL.len(), 11);
+//! assert_eq!(Case::ALL.len(), 13);
 //! assert!(Case::Scale.describe().contains("5 %"));
 //! ```
 
 use super::effects::Parameter;
 use super::inject::{inject_bias, inject_delay, inject_harmonic_force, inject_scale};
 use crate::io::data::DataFile;
+use crate::systems::rotor::config::PointMassConfig;
 use crate::systems::rotor::{RotorConfig, RotorModel, SimOptions};
 use anyhow::Result;
 
@@ -42,11 +43,17 @@ pub enum Case {
     GainSwitch,
     /// Probe `n32_x` lags the others by 2 ms (two samples).
     Delay,
+    /// A 1.5 N force at 2× at node 17, between the disks (away from every force site the
+    /// model declares).
+    OffDisk,
+    /// A 0.8 kg mass without inertia at node 18, between the disks (a collar the
+    /// configuration does not declare).
+    PointMass,
 }
 
 impl Case {
     /// Every case.
-    pub const ALL: [Case; 11] = [
+    pub const ALL: [Case; 13] = [
         Case::Clean,
         Case::Bias,
         Case::TwoX,
@@ -58,6 +65,8 @@ impl Case {
         Case::SoftBearing,
         Case::GainSwitch,
         Case::Delay,
+        Case::OffDisk,
+        Case::PointMass,
     ];
 
     /// What was done to the data.
@@ -74,6 +83,8 @@ impl Case {
             Case::SoftBearing => "bearing 4 kxx halved",
             Case::GainSwitch => "n5_x gain 1 → 1.15 at 1.5 s",
             Case::Delay => "n32_x lags by 2 ms",
+            Case::OffDisk => "1.5 N at 2×, node 17 (between the disks)",
+            Case::PointMass => "0.8 kg mass at node 18 (between the disks)",
         }
     }
 
@@ -101,11 +112,17 @@ impl Case {
             Case::DiskMass => return with(Parameter::DiskMass(0), 1.10),
             Case::ShaftYoung => return with(Parameter::ShaftYoung, 0.95),
             Case::SoftBearing => return with(Parameter::BearingKxx(0), 0.5),
+            Case::PointMass => {
+                let mut cfg = declared.config().clone();
+                cfg.masses.push(PointMassConfig { node: 18, mass: 0.8, ip: 0.0, id: 0.0 });
+                return simulate(&RotorModel::from_config(&cfg)?);
+            }
             _ => simulate(&declared)?,
         };
         match self {
             Case::Bias => inject_bias(&mut d, "n5_x", 20e-6)?,
             Case::TwoX => inject_harmonic_force(&mut d, &declared, speed, 12, 2.0, 1.5, 0.3)?,
+            Case::OffDisk => inject_harmonic_force(&mut d, &declared, speed, 17, 2.0, 1.5, 0.3)?,
             Case::ThreeX => inject_harmonic_force(&mut d, &declared, speed, 23, 3.0, 1.0, -1.0)?,
             Case::Scale => inject_scale(&mut d, "n32_y", 1.05, None)?,
             Case::Two => {

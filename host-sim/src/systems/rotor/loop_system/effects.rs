@@ -12,6 +12,7 @@ pub use crate::residual_loop::optimize::ScalarRange;
 use crate::residual_loop::search::EffectKind;
 use crate::systems::rotor::bearing_geometry::BearingLine;
 use crate::systems::rotor::estimate::ReducedRotor;
+use crate::systems::rotor::config::PointMassConfig;
 use crate::systems::rotor::{dof, RotorConfig, RotorModel, SensorKind};
 use anyhow::{anyhow, bail, Context, Result};
 use edgekf::linalg::expm;
@@ -153,6 +154,13 @@ pub enum Effect {
     },
     /// A declared component parameter is off by a factor. Value: the factor.
     Parameter(Parameter),
+    /// A mass the configuration does not declare, at a node (a coupling half, a balancing
+    /// weight, a sensor's mount, a crack's lost stiffness read as such): a `[[mass]]` entry
+    /// without inertias, applied to the configuration like a parameter. Value: mass, kg.
+    PointMass {
+        /// Node.
+        node: usize,
+    },
     /// A lightly damped mode the model lacks (a housing or foundation resonance), seen on
     /// every channel with its own amplitude: two states per channel oscillating at the mode's
     /// frequency, driven by white noise. Value: frequency, Hz (fitted; `seed_mhz` is where the
@@ -186,6 +194,7 @@ impl Effect {
             Effect::HarmonicForce { .. } => EffectKind::HarmonicForce,
             Effect::UnknownInput { .. } => EffectKind::UnknownInput,
             Effect::Parameter(_) => EffectKind::Parameter,
+            Effect::PointMass { .. } => EffectKind::PointMass,
             Effect::ExtraMode { .. } => EffectKind::ExtraMode,
             Effect::BearingDefect { .. } => EffectKind::BearingDefect,
         }
@@ -203,6 +212,9 @@ impl Effect {
             Effect::Parameter(_) => {
                 "lines at the natural frequencies (the free response rings elsewhere) or a 1x residual"
             }
+            Effect::PointMass { .. } => {
+                "a 1x residual or natural-frequency lines in the directions a mass at the node would give"
+            }
             Effect::ExtraMode { .. } => "a line at neither an order nor a natural frequency of the model",
             Effect::BearingDefect { .. } => {
                 "a bearing defect line (BPFO, BPFI, BSF, FTF) and its harmonics in the envelope of the most impulsive band"
@@ -219,16 +231,17 @@ impl Effect {
             Effect::SensorScale { .. }
             | Effect::SensorDelay { .. }
             | Effect::Parameter(_)
+            | Effect::PointMass { .. }
             | Effect::BearingDefect { .. } => 0,
         }
     }
 
     /// The scalar the search fits by maximum likelihood, if the effect has one, within what
-    /// `bounds` allow at `sample_rate` Hz: a parameter's or a sensor scale's factor within
-    /// `1 ± bounds.parameter`,
-    /// a delay from 0 (a sensor cannot read the future) to `bounds.delay`, a lag's time
-    /// constant from a tenth of a sample (none) to `bounds.lag`.
-    pub fn scalar(&self, sample_rate: f64, bounds: &Bounds) -> Option<ScalarRange> {
+    /// `bounds` allow at `sample_rate` Hz on a rotor of `mass_kg`: a parameter's or a sensor
+    /// scale's factor within `1 ± bounds.parameter`, a delay from 0 (a sensor cannot read the
+    /// future) to `bounds.delay`, a lag's time constant from a tenth of a sample (none) to
+    /// `bounds.lag`, a point mass from a ten-thousandth of the rotor's (none) to `bounds.mass`.
+    pub fn scalar(&self, sample_rate: f64, bounds: &Bounds, mass_kg: f64) -> Option<ScalarRange> {
         match *self {
             Effect::SensorScale { .. } | Effect::Parameter(_) => {
                 let (low, high) = bounds.factor_range();
@@ -244,6 +257,11 @@ impl Effect {
             Effect::SensorLag { .. } => {
                 let none = (0.1 / sample_rate).ln();
                 Some(ScalarRange { low: none, high: bounds.lag.ln(), neutral: none, log: true, tolerance: 1e-3 })
+            }
+            Effect::PointMass { .. } => {
+                let none = (1e-4 * mass_kg).ln();
+                let high = bounds.mass_kg(mass_kg).ln();
+                Some(ScalarRange { low: none, high, neutral: none, log: true, tolerance: 1e-3 })
             }
             Effect::ExtraMode { seed_mhz } => {
                 let f = seed_mhz as f64 * 1e-3;
@@ -262,7 +280,8 @@ impl Effect {
             Effect::SensorScale { .. }
             | Effect::SensorDelay { .. }
             | Effect::SensorLag { .. }
-            | Effect::Parameter(_) => 1,
+            | Effect::Parameter(_)
+            | Effect::PointMass { .. } => 1,
             _ => self.states(channels),
         }
     }
@@ -275,7 +294,9 @@ impl Effect {
             | Effect::SensorScale { channel: c }
             | Effect::SensorDelay { channel: c }
             | Effect::SensorLag { channel: c } => channel(c),
-            Effect::HarmonicForce { node, .. } | Effect::UnknownInput { node } => format!("node {node}"),
+            Effect::HarmonicForce { node, .. } | Effect::UnknownInput { node } | Effect::PointMass { node } => {
+                format!("node {node}")
+            }
             Effect::Parameter(p) => p.component(cfg),
             Effect::ExtraMode { .. } => "all channels".to_string(),
             Effect::BearingDefect { bearing, .. } => {
@@ -293,7 +314,14 @@ impl Effect {
             Effect::HarmonicForce { .. } | Effect::UnknownInput { .. } => "N",
             Effect::BearingDefect { .. } => "m/s^2",
             Effect::ExtraMode { .. } => "Hz",
+            Effect::PointMass { .. } => "kg",
         }
+    }
+
+    /// Whether it changes the configuration (a parameter, a point mass): the rotor is then
+    /// reduced anew with it ([`apply_parameters`]).
+    pub fn changes_structure(&self) -> bool {
+        matches!(self, Effect::Parameter(_) | Effect::PointMass { .. })
     }
 
     /// The order of the running speed it acts at, if any.
@@ -509,7 +537,7 @@ pub fn augment(
                     oscillator(t, s + 2 * ch, ch, ModeSpec { hz: theta, zeta: tuning.mode_damping, level })?;
                 }
             }
-            Effect::Parameter(_) => {}
+            Effect::Parameter(_) | Effect::PointMass { .. } => {}
         }
         placed.push((e, theta, s));
         next += e.states(m);
@@ -569,16 +597,40 @@ fn delay_matrix(a: &DMatrix<f64>, tau: f64) -> Result<DMatrix<f64>> {
     expm(&(a * -tau)).map_err(|e| anyhow!("cannot form the delay: {e}"))
 }
 
-/// The configuration with the `Parameter` effects of `effects` applied (their scalar is the
-/// log of the factor).
+/// The configuration with the effects of `effects` that change it applied: a `Parameter`'s
+/// factor and a `PointMass`'s mass (their scalar is the log of either).
 pub fn apply_parameters(cfg: &RotorConfig, effects: &[(Effect, f64)]) -> Result<RotorConfig> {
     let mut out = cfg.clone();
     for &(e, theta) in effects {
-        if let Effect::Parameter(p) = e {
-            p.apply(&mut out, theta.exp())?;
+        match e {
+            Effect::Parameter(p) => p.apply(&mut out, theta.exp())?,
+            Effect::PointMass { node } => {
+                let mass = theta.exp();
+                if !(mass.is_finite() && mass > 0.0) {
+                    bail!("a point mass must be positive and finite, not {mass} kg");
+                }
+                out.masses.push(PointMassConfig { node, mass, ip: 0.0, id: 0.0 });
+            }
+            _ => {}
         }
     }
     Ok(out)
+}
+
+/// How a force at `node` at `order ×` the running speed enters `red` (augmented as
+/// [`augment`] would): its columns in the base model's dynamics (`B`, `red.states() × 2`,
+/// for `F_x`, `F_y`) and in the sensor rows (`D`, channels × 2). What
+/// [`direction`](crate::residual_loop::direction) ranks a force's or a mass's places with.
+pub fn force_columns(
+    red: &ReducedRotor,
+    model: &RotorModel,
+    flex: &Flexibility,
+    node: usize,
+    order: u32,
+) -> Result<(DMatrix<f64>, DMatrix<f64>)> {
+    let m = augment(red, model, flex, &[(Effect::HarmonicForce { node, order }, 0.0)], &EffectTuning::default())?;
+    let n0 = red.states();
+    Ok((m.a.view((0, n0), (n0, 2)).clone_owned(), m.c.view((0, n0), (m.c.nrows(), 2)).clone_owned()))
 }
 
 #[cfg(test)]

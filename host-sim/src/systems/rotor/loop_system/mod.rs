@@ -21,10 +21,13 @@ pub mod speed;
 pub mod twin;
 
 use self::baseline::RotorBaseline;
-use self::effects::{apply_parameters, augment, AugmentedModel, Effect, EffectTuning, Flexibility, Parameter};
+use self::effects::{
+    apply_parameters, augment, force_columns, AugmentedModel, Effect, EffectTuning, Flexibility, Parameter,
+};
 use self::healthy::Healthy;
 use self::speed::{estimate_speed, RunningSpeed};
 use crate::io::data::DataFile;
+use crate::residual_loop::direction::{self, open_loop, C64};
 use crate::residual_loop::filter::{run_state_space, Run, StateSpace};
 use crate::residual_loop::impacts::ImpactLine;
 use crate::residual_loop::onset::settled_mean;
@@ -40,6 +43,22 @@ use crate::systems::rotor::{RotorConfig, RotorModel};
 use anyhow::{anyhow, Result};
 use nalgebra::DMatrix;
 use std::f64::consts::TAU;
+
+/// How many nodes a force at an order or a point mass is fitted at: the ones whose inputs
+/// explain most of the innovations at its lines.
+pub const PLACES: usize = 3;
+
+/// Standard gravity, m/s² (a rotor's mass from its weight).
+const STANDARD_GRAVITY: f64 = 9.80665;
+
+/// The input a node is ranked for.
+#[derive(Debug, Clone, Copy)]
+enum Input {
+    /// A force rotating forward (one direction per node).
+    Rotating,
+    /// A mass's inertial force, `x` and `y` independent.
+    Inertial,
+}
 
 /// The rotor's own settings of the loop: its filter's tuning, its effects' noise and priors,
 /// and whether the running speed is read from the data.
@@ -306,7 +325,7 @@ impl<'a> RotorSystem<'a> {
         let cols: Vec<&[f64]> = self.columns.iter().map(Vec::as_slice).collect();
         let dt = 1.0 / red.sample_rate;
         let tuning = &self.rotor.effects;
-        let m = if effects.iter().any(|(e, _)| matches!(e, Effect::Parameter(_))) {
+        let m = if effects.iter().any(|(e, _)| e.changes_structure()) {
             let cfg = apply_parameters(self.cfg, effects)?;
             let model = RotorModel::from_config(&cfg)?;
             let red = healthy.apply(&reduce(&model, red.speed, &self.rotor.tuning)?)?;
@@ -317,6 +336,40 @@ impl<'a> RotorSystem<'a> {
         };
         let run = run_filter(&m, dt, &cols, &self.rows)?;
         Ok((m, run))
+    }
+
+    /// The [`PLACES`] nodes of the shaft where an `input` at `order`'s columns explains most of
+    /// the innovations of `run` (made with `model`) at the lines `hz` (all the force sites if
+    /// nothing can be ranked).
+    fn places(&self, run: &Run, model: &AugmentedModel, hz: &[f64], order: u32, input: Input) -> Vec<usize> {
+        let nodes = self.red.displacement.nrows() / 2;
+        let n = model.a.nrows();
+        let columns: Vec<(usize, DMatrix<f64>, DMatrix<f64>)> = (0..nodes)
+            .filter_map(|node| {
+                let (b, d) = force_columns(&self.red, self.model, &self.flex, node, order).ok()?;
+                let mut padded = DMatrix::<f64>::zeros(n, 2);
+                let rows = b.nrows().min(n);
+                padded.view_mut((0, 0), (rows, 2)).copy_from(&b.rows(0, rows));
+                Some((node, padded, d))
+            })
+            .collect();
+        let response = |i: &usize, f: f64| {
+            let (_, b, d) = &columns[*i];
+            let y = open_loop(&model.a, b, &model.c, d, f)?;
+            Some(match input {
+                // Forward: F_y lags F_x by a quarter turn, F = (1, −i) c.
+                Input::Rotating => {
+                    let forward = y.column(0) - y.column(1) * C64::new(0.0, 1.0);
+                    DMatrix::from_column_slice(forward.nrows(), 1, forward.as_slice())
+                }
+                Input::Inertial => y,
+            })
+        };
+        let ranked = direction::rank(run, hz, self.red.sample_rate, (0..columns.len()).collect(), response);
+        if ranked.is_empty() {
+            return self.force_sites.clone();
+        }
+        ranked.into_iter().take(PLACES).map(|p| columns[p.location].0).collect()
     }
 
     /// The running speed, Hz, and where it came from.
@@ -372,10 +425,18 @@ impl LoopSystem for RotorSystem<'_> {
     }
 
     /// Candidates named directly by a signature (a bias, a line at an order, a bearing line or
-    /// elsewhere), then the structural ones (scales, delays, parameters, 1× forces off the
-    /// unbalance nodes) when the innovations carry lines or colour; the catch-all
-    /// (`unknown_input` at each force site) in a tier of its own.
-    fn candidates(&self, s: &RunSummary, _effects: &[Applied<Effect>]) -> Vec<Vec<Effect>> {
+    /// elsewhere), then the structural ones (scales, delays, parameters, point masses) when the
+    /// innovations carry lines or colour; the catch-all (`unknown_input` at each force site) in
+    /// a tier of its own. A force at an order and a point mass may act at any node: they are
+    /// tried at the [`PLACES`] nodes whose inputs explain most of the innovations at their
+    /// lines ([`direction`]).
+    fn candidates(
+        &self,
+        s: &RunSummary,
+        run: &Run,
+        model: &AugmentedModel,
+        _effects: &[Applied<Effect>],
+    ) -> Vec<Vec<Effect>> {
         let mut named = Vec::new();
         let mut biased: Vec<(f64, usize)> = s
             .channels
@@ -412,8 +473,9 @@ impl LoopSystem for RotorSystem<'_> {
             }
         }
         orders.sort_by(|a, b| b.0.total_cmp(&a.0));
+        let shaft_hz = self.red.speed / TAU;
         for (_, order) in orders {
-            for &node in &self.force_sites {
+            for node in self.places(run, model, &[order as f64 * shaft_hz], order, Input::Rotating) {
                 if order == 1 && self.red.force_nodes.contains(&node) {
                     continue;
                 }
@@ -430,6 +492,15 @@ impl LoopSystem for RotorSystem<'_> {
                 named.push(Effect::SensorLag { channel });
             }
             named.extend(Parameter::all(self.cfg).into_iter().map(Effect::Parameter));
+            // A mass changes the 1× response and the natural frequencies: its inertial force at
+            // the node, in x and y alike. One at a disk is that disk's mass (a parameter).
+            let mut lines = vec![shaft_hz];
+            lines.extend(
+                s.channels.iter().flat_map(|c| &c.peaks).filter(|p| p.class.starts_with("natural")).map(|p| p.frequency_hz),
+            );
+            let disks = self.disk_nodes();
+            let nodes = self.places(run, model, &lines, 1, Input::Inertial).into_iter().filter(|n| !disks.contains(n));
+            named.extend(nodes.map(|node| Effect::PointMass { node }));
         }
         let catch_all = self.force_sites.iter().map(|&node| Effect::UnknownInput { node }).collect();
         vec![named, catch_all]
@@ -466,11 +537,11 @@ impl LoopSystem for RotorSystem<'_> {
         e.parameters(self.channels())
     }
 
-    /// Parameters get a finer grid: a stiffness factor's log-likelihood has side lobes where a
-    /// natural frequency crosses a line.
+    /// Parameters and point masses get a finer grid: a stiffness factor's log-likelihood has
+    /// side lobes where a natural frequency crosses a line.
     fn scalar(&self, e: &Effect) -> Option<(ScalarRange, usize)> {
-        let grid = if matches!(e, Effect::Parameter(_)) { 7 } else { 4 };
-        e.scalar(self.red.sample_rate, &self.cfg.bounds).map(|r| (r, grid))
+        let grid = if e.changes_structure() { 7 } else { 4 };
+        e.scalar(self.red.sample_rate, &self.cfg.bounds, self.cfg.weight() / STANDARD_GRAVITY).map(|r| (r, grid))
     }
 
     /// A force (harmonic or unknown) may not exceed `[bounds] force`, by default the rotor's
@@ -493,7 +564,9 @@ impl LoopSystem for RotorSystem<'_> {
             Effect::SensorBias { .. } => settled(&|k| s[offset][k]),
             Effect::HarmonicForce { .. } => settled(&|k| s[offset][k].hypot(s[offset + 1][k])),
             Effect::UnknownInput { .. } => settled(&|k| s[offset][k].powi(2) + s[offset + 1][k].powi(2)).sqrt(),
-            Effect::SensorScale { .. } | Effect::SensorLag { .. } | Effect::Parameter(_) => applied.theta.exp(),
+            Effect::SensorScale { .. } | Effect::SensorLag { .. } | Effect::Parameter(_) | Effect::PointMass { .. } => {
+                applied.theta.exp()
+            }
             Effect::SensorDelay { .. } | Effect::ExtraMode { .. } => applied.theta,
             // Valued by the envelope stage, which fits it.
             Effect::BearingDefect { .. } => f64::NAN,
