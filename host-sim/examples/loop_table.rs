@@ -22,6 +22,8 @@ fn seed(case: Case) -> u64 {
         Case::SoftBearing => 29,
         Case::GainSwitch => 31,
         Case::Delay => 37,
+        Case::OffDisk => 41,
+        Case::PointMass => 43,
     }
 }
 

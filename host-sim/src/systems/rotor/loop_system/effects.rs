@@ -739,4 +739,39 @@ mod tests {
         // The paper rotor: 2 disk masses, Young, density, and kxx, kyy, cxx, cyy of both bearings.
         assert_eq!(Parameter::all(cfg).len(), 2 + 2 + 8);
     }
+
+    #[test]
+    fn a_point_mass_joins_the_configuration_within_its_bound() {
+        let model = paper();
+        let cfg = model.config();
+        let e = [(Effect::PointMass { node: 18 }, 0.8f64.ln())];
+        let out = apply_parameters(cfg, &e).unwrap();
+        assert_eq!(out.masses.len(), cfg.masses.len() + 1);
+        assert_eq!(*out.masses.last().unwrap(), PointMassConfig { node: 18, mass: 0.8, ip: 0.0, id: 0.0 });
+        assert!(apply_parameters(cfg, &[(Effect::PointMass { node: 18 }, f64::INFINITY)]).is_err());
+        // From a ten-thousandth of the rotor's mass (none) to 0.3 of it (the default bound).
+        let mass = cfg.weight() / 9.80665;
+        let r = e[0].0.scalar(1000.0, &cfg.bounds, mass).unwrap();
+        assert!((r.high.exp() - 0.3 * mass).abs() < 1e-12 && r.neutral == r.low && r.log);
+        assert_eq!((e[0].0.location(&[], cfg), e[0].0.unit()), ("node 18".to_string(), "kg"));
+        assert!(e[0].0.changes_structure());
+    }
+
+    /// A force's columns at a disk are the unbalance's there (the same modal input).
+    #[test]
+    fn force_columns_at_a_disk_are_the_unbalance_columns() {
+        let model = paper();
+        let speed = model.config().operation.speed;
+        let red = reduce(&model, speed, &Tuning::default()).unwrap();
+        let flex = Flexibility::new(&model, speed);
+        let (b, d) = force_columns(&red, &model, &flex, 23, 1).unwrap();
+        let r = red.frequencies_hz.len();
+        let j = model.config().unbalances.iter().position(|u| u.node == 23).unwrap();
+        for k in 0..2 {
+            for i in 0..2 * r {
+                assert!((b[(i, k)] - red.a[(i, 2 * r + 2 * j + k)]).abs() <= 1e-9 * b[(i, k)].abs().max(1e-12));
+            }
+        }
+        assert_eq!((b.nrows(), d.nrows()), (red.states(), red.c.nrows()));
+    }
 }

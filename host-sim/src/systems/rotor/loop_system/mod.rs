@@ -4,7 +4,7 @@
 
 //!
 //! * [`effects`]: the rotor's effect library (`sensor_bias`, `sensor_scale`, `sensor_delay`,
-//!   `harmonic_force`, `unknown_input`, `parameter`, `extra_mode`, `bearing_defect`) composed
+//!   `harmonic_force`, `unknown_input`, `parameter`, `point_mass`, `extra_mode`, `bearing_defect`) composed
 //!   onto the reduced rotor's public matrices;
 //! * [`speed`]: the running speed read from the data;
 //! * [`healthy`]: what a healthy machine shows that the model lacks, as parts of the model;
