@@ -219,3 +219,31 @@ fn a_mass_between_the_disks_is_a_point_mass_not_a_denser_shaft() {
     assert!(["node 17", "node 18", "node 19"].contains(&e.location.as_str()), "placed at {}", e.location);
     assert!((e.value - 0.8).abs() < 0.25 * 0.8, "mass {:.3} kg", e.value);
 }
+
+/// Beyond bearing 33 the probes see a force at node 35 much as one at its neighbours (the
+/// overhang is a lever): the loop places it among them and lists the others it cannot tell
+/// from it under `not_identifiable`, the true node among the place and its rivals.
+#[test]
+fn a_force_on_the_overhang_lists_its_location_rivals() {
+    use edgekf_sim::systems::rotor::loop_system::inject::inject_harmonic_force;
+    let model = Case::declared().unwrap();
+    let speed = model.config().operation.speed;
+    let mut d = Case::Clean.data(41).unwrap();
+    inject_harmonic_force(&mut d, &model, speed, 35, 2.0, 1.5, 0.3).unwrap();
+    let options = LoopOptions { screen_parameters: false, ..LoopOptions::default() };
+    let r = close_loop(&model, &d, &options, &Default::default()).unwrap();
+    println!("{}", summary_table(&r));
+    let e = only(&r);
+    assert_eq!((e.kind.as_str(), e.detail.order), ("harmonic_force", Some(2.0)));
+    let overhang = |l: &str| l.strip_prefix("node ").and_then(|n| n.parse::<usize>().ok()).is_some_and(|n| n >= 32);
+    assert!(overhang(&e.location), "placed at {}", e.location);
+    let rivals: Vec<&str> = r
+        .not_identifiable
+        .iter()
+        .filter(|n| n.kind.as_str() == "harmonic_force")
+        .map(|n| n.location.as_str())
+        .collect();
+    assert!(!rivals.is_empty() && rivals.iter().all(|l| overhang(l)), "rivals {rivals:?}");
+    assert!(e.location == "node 35" || rivals.contains(&"node 35"), "node 35 is neither the place nor a rival: {rivals:?}");
+    assert!(disk_error(&r, false) > 5.0 * disk_error(&r, true), "the force was not taken out of the error");
+}

@@ -48,6 +48,12 @@ use std::f64::consts::TAU;
 /// explain most of the innovations at its lines.
 pub const PLACES: usize = 3;
 
+/// At most this many nodes for a force when more explain as much as the best.
+const MAX_PLACES: usize = 8;
+
+/// Shares of the innovations that close to the best's are ties.
+const TIED_SHARE: f64 = 1e-3;
+
 /// Standard gravity, m/s² (a rotor's mass from its weight).
 const STANDARD_GRAVITY: f64 = 9.80665;
 
@@ -339,8 +345,9 @@ impl<'a> RotorSystem<'a> {
     }
 
     /// The [`PLACES`] nodes of the shaft where an `input` at `order`'s columns explains most of
-    /// the innovations of `run` (made with `model`) at the lines `hz` (all the force sites if
-    /// nothing can be ranked).
+    /// the innovations of `run` (made with `model`) at the lines `hz`, and for a force any
+    /// further ones that explain as much (up to eight); all the force sites if nothing can be
+    /// ranked.
     fn places(&self, run: &Run, model: &AugmentedModel, hz: &[f64], order: u32, input: Input) -> Vec<usize> {
         let nodes = self.red.displacement.nrows() / 2;
         let n = model.a.nrows();
@@ -369,7 +376,14 @@ impl<'a> RotorSystem<'a> {
         if ranked.is_empty() {
             return self.force_sites.clone();
         }
-        ranked.into_iter().take(PLACES).map(|p| columns[p.location].0).collect()
+        // A force's nodes the innovations cannot tell apart (a lever's worth of nodes on an
+        // overhang) are all fitted, so that the fits list them as rivals; a mass's fits cost
+        // dozens of runs each, so it keeps to the best few.
+        let best = ranked[0].explained;
+        let tied = |i: usize, p: &direction::Placement<usize>| {
+            i < PLACES || (matches!(input, Input::Rotating) && i < MAX_PLACES && p.explained >= best - TIED_SHARE)
+        };
+        ranked.iter().enumerate().take_while(|(i, p)| tied(*i, p)).map(|(_, p)| columns[p.location].0).collect()
     }
 
     /// The running speed, Hz, and where it came from.
