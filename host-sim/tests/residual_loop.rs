@@ -244,6 +244,9 @@ fn a_force_on_the_overhang_lists_its_location_rivals() {
         .map(|n| n.location.as_str())
         .collect();
     assert!(!rivals.is_empty() && rivals.iter().all(|l| overhang(l)), "rivals {rivals:?}");
-    assert!(e.location == "node 35" || rivals.contains(&"node 35"), "node 35 is neither the place nor a rival: {rivals:?}");
+    assert!(
+        e.location == "node 35" || rivals.contains(&"node 35"),
+        "node 35 is neither the place nor a rival: {rivals:?}"
+    );
     assert!(disk_error(&r, false) > 5.0 * disk_error(&r, true), "the force was not taken out of the error");
 }

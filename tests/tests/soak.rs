@@ -87,7 +87,8 @@ struct Block {
 
 impl Block {
     fn push(&mut self, nis: f64, err2: f64, truth2: f64) {
-        (self.nis, self.err2, self.truth2, self.n) = (self.nis + nis, self.err2 + err2, self.truth2 + truth2, self.n + 1);
+        (self.nis, self.err2, self.truth2, self.n) =
+            (self.nis + nis, self.err2 + err2, self.truth2 + truth2, self.n + 1);
     }
 
     /// Folds a full block into `soak` (the first block, the start-up transient, is left out).
@@ -118,7 +119,10 @@ fn soak_oscillator(gain: GainMode, n: u64) -> Soak {
     };
     let amplitude = |k: u64| 1.0 + 0.5 * (TAU * k as f64 / fs / 600.0).sin();
     let mut m = truth_at(0);
-    let q = m.q.cholesky().map(|c| c.l()).unwrap_or_else(|| SMatrix::<f64, 4, 4>::from_diagonal(&m.q.diagonal().map(f64::sqrt)));
+    let q =
+        m.q.cholesky()
+            .map(|c| c.l())
+            .unwrap_or_else(|| SMatrix::<f64, 4, 4>::from_diagonal(&m.q.diagonal().map(f64::sqrt)));
     let mut x = SVector::<f64, 4>::new(0.0, 0.0, 1.0, 0.0);
     let mut rng = Lcg(0x50A4_0001);
     let (mut soak, mut block) = (Soak { steps: n, ..Soak::default() }, Block::default());
@@ -163,7 +167,8 @@ fn soak_rotor(switch_at: Option<u32>, n: u64) -> Soak {
     let (a, c, disk) = (matrix(&ROTOR_A), matrix(&ROTOR_C), matrix(&ROTOR_DISK));
     // Q is positive semi-definite: its square root by eigen-decomposition.
     let eig = matrix(&ROTOR_Q).symmetric_eigen();
-    let q_root = eig.eigenvectors * SMatrix::<f64, STATES, STATES>::from_diagonal(&eig.eigenvalues.map(|v| v.max(0.0).sqrt()));
+    let q_root =
+        eig.eigenvectors * SMatrix::<f64, STATES, STATES>::from_diagonal(&eig.eigenvalues.map(|v| v.max(0.0).sqrt()));
     let r_sd: [f64; 4] = std::array::from_fn(|i| ROTOR_R[i][i].sqrt());
     let mut est = RotorEstimator::with_switch_at(switch_at);
     let mut x = SVector::<f64, STATES>::zeros();
@@ -230,8 +235,9 @@ fn soak_joint_ukf(n: u64) -> Soak {
     let (accel_psd, meas_std) = (100.0, 0.05);
     let k_at = |k: u64| k0 * (1.0 + 0.1 * (TAU * k as f64 * dt / 20_000.0).sin());
     let truth = |k_true: f64| {
-        let (a, q) = van_loan::<f64, 2, 4>(&Matrix2::new(0.0, 1.0, -k_true, -c), &Matrix2::new(0.0, 0.0, 0.0, accel_psd), dt)
-            .unwrap();
+        let (a, q) =
+            van_loan::<f64, 2, 4>(&Matrix2::new(0.0, 1.0, -k_true, -c), &Matrix2::new(0.0, 0.0, 0.0, accel_psd), dt)
+                .unwrap();
         (a, q.cholesky().unwrap().unpack())
     };
     let model = JointModel::<_, 2, 1, 3>::new(Mode { dt: dt as f32, damping: c as f32 });
@@ -290,7 +296,11 @@ fn the_oscillator_steady_state_filter_stays_sound() {
 
 #[test]
 fn the_rotor_node_stays_sound() {
-    soak_rotor(Some(edgekf_firmware::systems::rotor::STEADY_AFTER), steps(1_000_000)).check("rotor AKF, node", 1.3, 0.05);
+    soak_rotor(Some(edgekf_firmware::systems::rotor::STEADY_AFTER), steps(1_000_000)).check(
+        "rotor AKF, node",
+        1.3,
+        0.05,
+    );
 }
 
 #[test]

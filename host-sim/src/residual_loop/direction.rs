@@ -3,7 +3,7 @@
 //! A periodic input at frequency `f` that the model lacks leaves in the innovations the phasor
 //! `E = S(z) Y`: `Y` is the sensors' open-loop response to it and
 //! `S(z) = I − C (zI − Φ(I − K C))⁻¹ Φ K`, at `z = e^{i2πf/fs}`, is the filter's output
-//! sensitivity (what its states take up never reaches the innovations: a rotor filter's
+//! sensitivity (what its states take up never reaches the innovations: a machine filter's
 //! unbalance states absorb a 1× force at a disk). Each candidate location gives the directions
 //! `S(z) Yₙ` its input can produce, and the share of the (whitened) innovation phasor they span
 //! ranks the locations. That costs one small solve per location, where fitting costs a filter
@@ -91,7 +91,13 @@ pub fn sensitivity(f: &FinalFilter, hz: f64, sample_rate: f64) -> Option<DMatrix
 /// (`m × q`). Solved a hair off the imaginary axis, so that states that run on their own at
 /// `hz` (a force the filter estimates, rotating there) and are not driven by `u` stay at zero
 /// instead of making the solve singular.
-pub fn open_loop(a: &DMatrix<f64>, b: &DMatrix<f64>, c: &DMatrix<f64>, d: &DMatrix<f64>, hz: f64) -> Option<DMatrix<C64>> {
+pub fn open_loop(
+    a: &DMatrix<f64>,
+    b: &DMatrix<f64>,
+    c: &DMatrix<f64>,
+    d: &DMatrix<f64>,
+    hz: f64,
+) -> Option<DMatrix<C64>> {
     let n = a.nrows();
     if n == 0 {
         return Some(d.map(|v| C64::new(v, 0.0)));
@@ -212,11 +218,8 @@ mod tests {
     fn a_tone_at_one_mass_points_to_that_mass() {
         let (k, c, fs) = (4.0e4, 2.0, 1000.0);
         // States x1, x2, v1, v2 (unit masses).
-        let a = DMatrix::from_row_slice(
-            4,
-            4,
-            &[0., 0., 1., 0., 0., 0., 0., 1., -2. * k, k, -c, 0., k, -2. * k, 0., -c],
-        );
+        let a =
+            DMatrix::from_row_slice(4, 4, &[0., 0., 1., 0., 0., 0., 0., 1., -2. * k, k, -c, 0., k, -2. * k, 0., -c]);
         let qc = DMatrix::from_diagonal(&nalgebra::DVector::from_row_slice(&[0., 0., 1e-2, 1e-2]));
         let cm = DMatrix::from_row_slice(2, 4, &[1., 0., 0., 0., 0., 1., 0., 0.]);
         let r = DMatrix::identity(2, 2) * 1e-12;
@@ -231,7 +234,7 @@ mod tests {
         aug[(5, 4)] = TAU * f;
         let d = crate::residual_loop::filter::discretise(&aug, &DMatrix::zeros(6, 6), dt).unwrap();
         let mut x = DVector::from_row_slice(&[0., 0., 0., 0., 1., 0.]);
-        let mut y = vec![Vec::new(), Vec::new()];
+        let mut y = [Vec::new(), Vec::new()];
         for kk in 0..6000 {
             let noise = |s: u64| 1e-6 * (((kk as u64 * 2654435761 + s) % 1000) as f64 / 500.0 - 1.0);
             y[0].push(x[0] + noise(1));

@@ -510,7 +510,11 @@ impl LoopSystem for RotorSystem<'_> {
             // the node, in x and y alike. One at a disk is that disk's mass (a parameter).
             let mut lines = vec![shaft_hz];
             lines.extend(
-                s.channels.iter().flat_map(|c| &c.peaks).filter(|p| p.class.starts_with("natural")).map(|p| p.frequency_hz),
+                s.channels
+                    .iter()
+                    .flat_map(|c| &c.peaks)
+                    .filter(|p| p.class.starts_with("natural"))
+                    .map(|p| p.frequency_hz),
             );
             let disks = self.disk_nodes();
             let nodes = self.places(run, model, &lines, 1, Input::Inertial).into_iter().filter(|n| !disks.contains(n));
