@@ -139,9 +139,14 @@ impl Bridging {
     }
 }
 
+/// The most rows one gap may add when the file is shorter (more than the file's own rows
+/// otherwise); a longer gap restarts the filters instead.
+pub const MAX_FILL: usize = 100_000;
+
 /// `data` on one timeline: each gap of `timing` up to `max_gap_s` filled with rows of empty
 /// cells (`round(dt / dt_median) − 1` of them, evenly spaced between its ends), longer gaps
-/// marked as restarts; and the channels slower than the file's rate.
+/// (and gaps of more than [`MAX_FILL`] samples and of the file's length) marked as restarts;
+/// and the channels slower than the file's rate.
 ///
 /// ```
 /// use edgekf_sim::io::data::{DataFile, TimingReport};
@@ -161,7 +166,10 @@ pub fn bridge(data: &DataFile, timing: &TimingReport, options: &TimelineOptions)
     let mut gaps = timing.gaps.iter().peekable();
     for k in 0..data.t.len() {
         if let Some(gap) = gaps.next_if(|g| g.index == k) {
-            if gap.dt > options.max_gap_s {
+            // A gap of more samples than the file holds (a corrupt `t` or a tiny period) is not
+            // filled: the rows it would add could exhaust the memory.
+            let too_many = timing.samples_lost_in(gap) > data.t.len().max(MAX_FILL);
+            if gap.dt > options.max_gap_s || too_many {
                 what.restarts.push(Restart { row: out.t.len(), t: gap.t, gap_s: gap.dt });
             } else {
                 let lost = timing.samples_lost_in(gap);
@@ -247,6 +255,17 @@ mod tests {
         assert_eq!(what.restarts[0].row, 100);
         assert_eq!(what.stretches(200), [0..100, 100..200]);
         assert!(what.notices()[0].contains("restart"));
+    }
+
+    /// A 1 s gap is within `max_gap_s`, but at a 1 ns period it is 10⁹ samples: more than the
+    /// file and [`MAX_FILL`] allow, so it is a restart and the memory is safe.
+    #[test]
+    fn a_gap_of_more_samples_than_allowed_is_a_restart() {
+        let mut t: Vec<f64> = (0..100).map(|k| k as f64 * 1e-9).collect();
+        t.extend((0..100).map(|k| 1.0 + k as f64 * 1e-9));
+        let data = file(t);
+        let (b, what) = bridge(&data, &TimingReport::of(&data.t), &TimelineOptions::default());
+        assert_eq!((b.t.len(), what.inserted, what.restarts.len()), (200, 0, 1));
     }
 
     #[test]

@@ -168,3 +168,14 @@ fn writer_refuses_columns_of_the_wrong_length() {
     let e = to_csv_string(Path::new("o.csv"), &["a,b"], &[0.0, 1.0], &[&[1.0, 2.0]]).unwrap_err();
     assert_eq!(e.to_string(), "o.csv:1: column name \"a,b\" holds a comma, quote or line break");
 }
+
+/// A fuzzer's find (`fuzz/fuzz_targets/csv_reader.rs`): a `t` of 6·10⁴² after steps of one
+/// made the count of lost samples overflow. It reads, and the gap is counted.
+#[test]
+fn a_corrupt_time_far_beyond_the_rest_is_counted_not_overflowed() {
+    let bytes = b"t\r1\r6\r61\r66\n401\n\r6001111111111111111111111111111111111111111111";
+    if let Ok((data, report)) = read_from(&bytes[..], Path::new("fuzz.csv"), &["ax"]) {
+        assert!(data.t.windows(2).all(|w| w[0] < w[1]));
+        let _ = report.to_string();
+    }
+}

@@ -83,7 +83,8 @@ impl TimingReport {
     /// Number of samples missing in all the gaps together, each gap counted as
     /// `round(dt / dt_median) − 1` lost samples.
     pub fn missing_samples(&self) -> usize {
-        self.gaps.iter().map(|g| self.samples_lost_in(g)).sum()
+        // Saturating: a gap of 10⁴² periods (a corrupt `t`) counts as many as `usize` holds.
+        self.gaps.iter().fold(0usize, |n, g| n.saturating_add(self.samples_lost_in(g)))
     }
 
     /// Samples lost in one gap: `round(dt / dt_median) − 1`, at least 1.
@@ -167,6 +168,9 @@ mod tests {
         assert_eq!(r.gaps[0], Gap { index: 500, t: t[500], dt: t[500] - t[499] });
         assert!((r.gaps[0].dt - 4e-3).abs() < 1e-12);
         assert_eq!(r.missing_samples(), 3);
+        // A corrupt time far beyond the others is counted, not overflowed (a fuzzer's find).
+        let corrupt = TimingReport::of(&[0.0, 1.0, 2.0, 3.0, 6e42, 7e42]);
+        assert_eq!(corrupt.missing_samples(), usize::MAX);
         assert!(r.max_jitter < 1e-12, "a gap must not count as jitter");
         assert!(!r.uniform);
         assert!(r.notices()[0].contains("3 sample(s)"), "{:?}", r.notices());
