@@ -1,9 +1,11 @@
 //! The host's CSV data reader on arbitrary bytes: it refuses or accepts, never panics; what it
 //! accepts keeps the contract (one value per row and channel, strictly increasing finite `t`),
-//! its report formats, and the writer gives back a file that reads to the same bits.
+//! its report formats, its gaps bridge within bounds, and the writer gives back a file that
+//! reads to the same bits.
 #![no_main]
 
 use edgekf_sim::io::data::{read_from, to_csv_string};
+use edgekf_sim::io::timeline::{bridge, TimelineOptions, MAX_FILL};
 use libfuzzer_sys::fuzz_target;
 use std::path::Path;
 
@@ -19,6 +21,11 @@ fuzz_target!(|bytes: &[u8]| {
     assert_eq!(data.names.len(), data.columns.len());
     assert!(data.columns.iter().all(|c| c.len() == data.t.len()));
     let _ = report.to_string();
+    // The timeline every estimator reads: gaps filled with empty rows or marked as restarts,
+    // never more rows than the file and `MAX_FILL` allow per gap.
+    let (bridged, what) = bridge(&data, &report.timing, &TimelineOptions::default());
+    assert_eq!(bridged.t.len(), data.t.len() + what.inserted);
+    assert!(what.inserted <= report.timing.gaps.len() * data.t.len().max(MAX_FILL));
 
     let names: Vec<&str> = data.names.iter().map(String::as_str).collect();
     let columns: Vec<&[f64]> = data.columns.iter().map(Vec::as_slice).collect();
