@@ -48,26 +48,37 @@ fn settled(run: &Run) -> std::ops::Range<usize> {
 /// ```
 pub fn phasor(run: &Run, hz: f64, sample_rate: f64) -> DVector<C64> {
     let range = settled(run);
+    let sd = innovation_sd(run, &range);
     let len = range.len().max(1) as f64;
     let w = TAU * hz / sample_rate;
     DVector::from_fn(run.innovation.len(), |ch, _| {
-        let (mut sum, mut weights, mut var, mut nvar) = (C64::new(0.0, 0.0), 0.0, 0.0, 0.0);
+        let (mut sum, mut weights) = (C64::new(0.0, 0.0), 0.0);
         for k in range.clone() {
-            let (e, v) = (run.innovation[ch][k], run.variance[ch][k]);
-            if !(e.is_finite() && v.is_finite()) {
+            let e = run.innovation[ch][k];
+            if !e.is_finite() {
                 continue;
             }
             let hann = 0.5 - 0.5 * (TAU * (k - range.start) as f64 / len).cos();
             sum += C64::from_polar(hann * e, -w * k as f64);
             weights += hann;
-            var += v;
-            nvar += 1.0;
         }
-        if weights <= 0.0 || var <= 0.0 {
+        if weights <= 0.0 || sd[ch] <= 0.0 {
             return C64::new(0.0, 0.0);
         }
-        sum * (2.0 / weights) / (var / nvar).sqrt()
+        sum * (2.0 / weights) / sd[ch]
     })
+}
+
+/// Each channel's innovation standard deviation over `range`, as the filter predicted it (the
+/// mean of its `S` diagonal over the samples that have one).
+fn innovation_sd(run: &Run, range: &std::ops::Range<usize>) -> Vec<f64> {
+    run.variance
+        .iter()
+        .map(|v| {
+            let vals: Vec<f64> = v[range.clone()].iter().copied().filter(|x| x.is_finite()).collect();
+            (vals.iter().sum::<f64>() / vals.len().max(1) as f64).sqrt()
+        })
+        .collect()
 }
 
 /// The filter's output sensitivity `S(z)` at `hz` (see the module's doc), or `None` when the
@@ -166,16 +177,8 @@ pub fn rank<L>(
     response: impl Fn(&L, f64) -> Option<DMatrix<C64>>,
 ) -> Vec<Placement<L>> {
     let Some(last) = &run.last else { return Vec::new() };
-    let range = settled(run);
     // The channels' innovation standard deviations, to whiten the directions as the phasors are.
-    let sd: Vec<f64> = run
-        .variance
-        .iter()
-        .map(|v| {
-            let vals: Vec<f64> = v[range.clone()].iter().copied().filter(|x| x.is_finite()).collect();
-            (vals.iter().sum::<f64>() / vals.len().max(1) as f64).sqrt()
-        })
-        .collect();
+    let sd = innovation_sd(run, &settled(run));
     let lines: Vec<(f64, DVector<C64>, DMatrix<C64>)> = hz
         .iter()
         .filter_map(|&f| {

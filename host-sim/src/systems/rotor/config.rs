@@ -546,9 +546,15 @@ impl RotorConfig {
         Ok(cfg)
     }
 
-    /// The rotor's weight, N: shaft, disks and point masses under standard gravity (the
+    /// The rotor's weight, N: its [`mass`](RotorConfig::mass) under standard gravity (the
     /// default bound of a force the residual loop may add).
     pub fn weight(&self) -> f64 {
+        9.80665 * self.mass()
+    }
+
+    /// The rotor's mass, kg: shaft, disks and point masses (the default bound of a point mass
+    /// the residual loop may add is a share of it).
+    pub fn mass(&self) -> f64 {
         let shaft: f64 = self
             .shaft
             .sections
@@ -558,7 +564,7 @@ impl RotorConfig {
             * self.shaft.density;
         let disks: f64 = self.disks.iter().map(|d| d.mass).sum();
         let masses: f64 = self.masses.iter().map(|m| m.mass).sum();
-        9.80665 * (shaft + disks + masses)
+        shaft + disks + masses
     }
 
     /// Reads, parses and validates a configuration file; errors name the file.

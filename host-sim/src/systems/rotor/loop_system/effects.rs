@@ -750,7 +750,7 @@ mod tests {
         assert_eq!(*out.masses.last().unwrap(), PointMassConfig { node: 18, mass: 0.8, ip: 0.0, id: 0.0 });
         assert!(apply_parameters(cfg, &[(Effect::PointMass { node: 18 }, f64::INFINITY)]).is_err());
         // From a ten-thousandth of the rotor's mass (none) to 0.3 of it (the default bound).
-        let mass = cfg.weight() / 9.80665;
+        let mass = cfg.mass();
         let r = e[0].0.scalar(1000.0, &cfg.bounds, mass).unwrap();
         assert!((r.high.exp() - 0.3 * mass).abs() < 1e-12 && r.neutral == r.low && r.log);
         assert_eq!((e[0].0.location(&[], cfg), e[0].0.unit()), ("node 18".to_string(), "kg"));

@@ -54,9 +54,6 @@ const MAX_PLACES: usize = 8;
 /// Shares of the innovations that close to the best's are ties.
 const TIED_SHARE: f64 = 1e-3;
 
-/// Standard gravity, m/s² (a rotor's mass from its weight).
-const STANDARD_GRAVITY: f64 = 9.80665;
-
 /// The input a node is ranked for.
 #[derive(Debug, Clone, Copy)]
 enum Input {
@@ -559,7 +556,7 @@ impl LoopSystem for RotorSystem<'_> {
     /// side lobes where a natural frequency crosses a line.
     fn scalar(&self, e: &Effect) -> Option<(ScalarRange, usize)> {
         let grid = if e.changes_structure() { 7 } else { 4 };
-        e.scalar(self.red.sample_rate, &self.cfg.bounds, self.cfg.weight() / STANDARD_GRAVITY).map(|r| (r, grid))
+        e.scalar(self.red.sample_rate, &self.cfg.bounds, self.cfg.mass()).map(|r| (r, grid))
     }
 
     /// A force (harmonic or unknown) may not exceed `[bounds] force`, by default the rotor's
