@@ -28,4 +28,4 @@ pub use steady::{
 };
 #[cfg(feature = "alloc")]
 pub use steady::{DSteadyState, DSteadyStateFilter};
-pub use ukf::{MerweSigmaPoints, SigmaWeights, UkfError, UkfModel, UnscentedKalmanFilter};
+pub use ukf::{MerweSigmaPoints, SigmaWeights, UkfError, UkfMeasurement, UkfModel, UnscentedKalmanFilter};

@@ -44,6 +44,22 @@ pub trait UkfModel<T: Real, const N: usize, const M: usize> {
     fn h(&self, x: &SVector<T, N>) -> SVector<T, M>;
 }
 
+/// A further measurement of a [`UkfModel`]'s state, `y = h(x) + v`, applied with
+/// [`UnscentedKalmanFilter::update_with`]; same rules for `h` as [`UkfModel::h`].
+pub trait UkfMeasurement<T: Real, const N: usize, const K: usize> {
+    /// The noise-free measurement of state `x`.
+    fn h(&self, x: &SVector<T, N>) -> SVector<T, K>;
+}
+
+/// A model's own measurement as a [`UkfMeasurement`].
+struct ModelMeasurement<'a, F>(&'a F);
+
+impl<T: Real, const N: usize, const M: usize, F: UkfModel<T, N, M>> UkfMeasurement<T, N, M> for ModelMeasurement<'_, F> {
+    fn h(&self, x: &SVector<T, N>) -> SVector<T, M> {
+        self.0.h(x)
+    }
+}
+
 /// Van der Merwe's scaled sigma points (filterpy's `MerweScaledSigmaPoints`).
 ///
 /// With `λ = α² (n + κ) − n` the `2n + 1` points are `x`, `x + √((n+λ)P)` column `i` and
@@ -369,14 +385,49 @@ impl<T: Real, const N: usize, const M: usize> UnscentedKalmanFilter<T, N, M> {
         model: &F,
         y: &SVector<T, M>,
     ) -> Result<Innovation<T, M>, FilterError> {
+        let r = self.r;
+        self.update_with(&ModelMeasurement(model), y, &r)
+    }
+
+    /// Measurement update with another set of `K` measurements, `y = h(x) + v` with
+    /// `v ~ N(0, r)`: for sensors slower than the filter's step (a 5 Hz velocity log beside a
+    /// 50 Hz IMU) or groups of channels that may be missing on their own. Same guards and counts
+    /// as [`update`](Self::update).
+    ///
+    /// ```
+    /// use edgekf::filter::{MerweSigmaPoints, UkfMeasurement, UkfModel, UnscentedKalmanFilter};
+    /// use nalgebra::{Matrix1, Matrix2, Vector1, Vector2};
+    /// /// Position and velocity; position measured every step.
+    /// struct Track;
+    /// impl UkfModel<f64, 2, 1> for Track {
+    ///     fn f(&self, x: &Vector2<f64>) -> Vector2<f64> { Vector2::new(x[0] + 0.1 * x[1], x[1]) }
+    ///     fn h(&self, x: &Vector2<f64>) -> Vector1<f64> { Vector1::new(x[0]) }
+    /// }
+    /// /// A velocity log, now and then.
+    /// struct Log;
+    /// impl UkfMeasurement<f64, 2, 1> for Log {
+    ///     fn h(&self, x: &Vector2<f64>) -> Vector1<f64> { Vector1::new(x[1]) }
+    /// }
+    /// let points = MerweSigmaPoints { alpha: 0.5, beta: 2.0, kappa: 1.0 };
+    /// let mut ukf = UnscentedKalmanFilter::new(points, Matrix2::identity() * 1e-9, Matrix1::new(1e-4),
+    ///     Vector2::zeros(), Matrix2::identity()).unwrap();
+    /// ukf.update_with(&Log, &Vector1::new(2.0), &Matrix1::new(1e-6)).unwrap();
+    /// assert!((ukf.state()[1] - 2.0).abs() < 1e-3);
+    /// ```
+    pub fn update_with<const K: usize, H: UkfMeasurement<T, N, K>>(
+        &mut self,
+        model: &H,
+        y: &SVector<T, K>,
+        r: &SMatrix<T, K, K>,
+    ) -> Result<Innovation<T, K>, FilterError> {
         if y.iter().any(|v| !v.is_finite()) {
             self.health.refused_updates = self.health.refused_updates.saturating_add(1);
             return Err(FilterError::NonFiniteMeasurement);
         }
         let x = self.x;
         let center = model.h(&x);
-        let mut plus = SMatrix::<T, M, N>::zeros();
-        let mut minus = SMatrix::<T, M, N>::zeros();
+        let mut plus = SMatrix::<T, K, N>::zeros();
+        let mut minus = SMatrix::<T, K, N>::zeros();
         // State deviations of the actual sigma points, `(x ± l) − x` as filterpy forms them.
         let mut dx_plus = SMatrix::<T, N, N>::zeros();
         let mut dx_minus = SMatrix::<T, N, N>::zeros();
@@ -388,9 +439,9 @@ impl<T: Real, const N: usize, const M: usize> UnscentedKalmanFilter<T, N, M> {
             dx_minus.set_column(k, &(sm - x));
         }
         let (z_pred, pzz, dz_plus, dz_minus) = moments(&self.weights, &center, &plus, &minus);
-        let s = pzz + self.r;
+        let s = pzz + r;
         // The centre point's state deviation is exactly zero: it adds nothing to `Pxz`.
-        let mut pxz = SMatrix::<T, N, M>::zeros();
+        let mut pxz = SMatrix::<T, N, K>::zeros();
         let side = self.weights.side;
         for (dx, dz) in
             dx_plus.column_iter().zip(dz_plus.column_iter()).chain(dx_minus.column_iter().zip(dz_minus.column_iter()))
@@ -419,6 +470,14 @@ impl<T: Real, const N: usize, const M: usize> UnscentedKalmanFilter<T, N, M> {
         self.p -= wt.transpose() * wt;
         self.guard();
         Ok(Innovation { residual, s, nis: white.norm_squared() })
+    }
+
+    /// Replaces the state's covariance with `p` (a change-point detector reopening a parameter
+    /// it had settled), through the same guard as every step: a `p` that is not positive
+    /// definite resets to `P₀` and is counted.
+    pub fn set_covariance(&mut self, p: SMatrix<T, N, N>) {
+        self.p = p;
+        self.guard();
     }
 
     /// Symmetrises `P`, refreshes the sigma-point factor, and resets what is broken (see the

@@ -4,7 +4,9 @@
 //!
 //! * [`oscillator`]: a single mode driven by a harmonic force at a known frequency (the
 //!   unbalance pattern of rotating machines), estimated from one accelerometer axis;
-//! * [`crank`]: a slider-crank's joint clearance from its crank angular acceleration.
+//! * [`crank`]: a slider-crank's joint clearance from its crank angular acceleration;
+//! * [`uuv`]: an underwater vehicle's thruster health from its IMU, depth, heading and DVL.
 
 pub mod crank;
 pub mod oscillator;
+pub mod uuv;

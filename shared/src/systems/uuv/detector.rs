@@ -1,0 +1,113 @@
+//! Per-thruster change detection (CUSUM) and the declared status (see [`DetectorSettings`]).
+
+use super::settings::DetectorSettings;
+use crate::Real;
+
+/// What the node declares about a thruster.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Status {
+    /// Healthy.
+    Healthy,
+    /// Declared: thrust below the `degraded` fraction.
+    Degraded,
+    /// Declared: thrust below the `failed` fraction.
+    Failed,
+}
+
+impl Status {
+    /// `healthy`, `degraded` or `failed`, as in the estimate CSV.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Status::Healthy => "healthy",
+            Status::Degraded => "degraded",
+            Status::Failed => "failed",
+        }
+    }
+
+    /// Degraded or failed.
+    pub const fn declared(self) -> bool {
+        !matches!(self, Status::Healthy)
+    }
+}
+
+/// One thruster's CUSUM and status.
+///
+/// ```
+/// use edgekf::systems::uuv::{DetectorSettings, Status, ThrusterMonitor};
+/// let mut m = ThrusterMonitor::<f64>::new(&DetectorSettings::default());
+/// // White scores never alarm; a sustained shift of −4σ does within a few samples.
+/// assert!(!m.score(0.5) && !m.score(-0.8));
+/// let alarm_after = (1..20).find(|_| m.score(-4.0));
+/// assert_eq!(alarm_after, Some(5)); // 3σ a sample above the drift, past 12
+/// assert_eq!(m.status(0.05, 0.02), Status::Failed);
+/// assert_eq!(m.status(0.5, 0.02), Status::Degraded);
+/// assert_eq!(m.status(0.95, 0.02), Status::Healthy);
+/// ```
+#[derive(Debug, Clone, Copy)]
+pub struct ThrusterMonitor<T> {
+    up: T,
+    down: T,
+    drift: T,
+    threshold: T,
+    sigmas: T,
+    degraded: T,
+    failed: T,
+    status: Status,
+    alarms: u32,
+}
+
+impl<T: Real> ThrusterMonitor<T> {
+    /// A monitor of a healthy thruster.
+    pub fn new(s: &DetectorSettings) -> Self {
+        let t = T::of_f64;
+        Self {
+            up: T::zero(),
+            down: T::zero(),
+            drift: t(s.drift),
+            threshold: t(s.threshold),
+            sigmas: t(s.sigmas),
+            degraded: t(s.degraded),
+            failed: t(s.failed),
+            status: Status::Healthy,
+            alarms: 0,
+        }
+    }
+
+    /// Adds one whitened score; `true` when the CUSUM alarms (it then restarts). A non-finite
+    /// score is skipped.
+    pub fn score(&mut self, z: T) -> bool {
+        if !z.is_finite() {
+            return false;
+        }
+        self.up = (self.up + z - self.drift).max(T::zero());
+        self.down = (self.down - z - self.drift).max(T::zero());
+        if self.up > self.threshold || self.down > self.threshold {
+            self.up = T::zero();
+            self.down = T::zero();
+            self.alarms = self.alarms.saturating_add(1);
+            true
+        } else {
+            false
+        }
+    }
+
+    /// The status after the factor's estimate `k` with standard deviation `sd`.
+    pub fn status(&mut self, k: T, sd: T) -> Status {
+        let (lo, hi) = (k - self.sigmas * sd, k + self.sigmas * sd);
+        self.status = match self.status {
+            Status::Healthy if hi < self.failed => Status::Failed,
+            Status::Healthy if hi < self.degraded => Status::Degraded,
+            Status::Degraded if hi < self.failed => Status::Failed,
+            Status::Degraded | Status::Failed if lo > self.degraded => Status::Healthy,
+            Status::Failed if lo > self.failed => Status::Degraded,
+            s => s,
+        };
+        self.status
+    }
+
+    /// CUSUM alarms so far (each reopened the factor).
+    pub fn alarms(&self) -> u32 {
+        self.alarms
+    }
+}

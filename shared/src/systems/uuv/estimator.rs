@@ -1,0 +1,488 @@
+//! The paper's joint UKF of the vehicle's state and its thrusters' health factors, with the
+//! nuisance states a careful engineer adds, and a change detector per thruster on top.
+//!
+//! Per sample: predict one midpoint step through [`ReducedDynamics`] with the commands in force
+//! since the last sample, then three updates, each applied only if its channels are present:
+//! the IMU (specific force and rates, which see the thrust directly), depth and heading, and the
+//! DVL when it has a new reading. The IMU innovation feeds each thruster's CUSUM
+//! ([`ThrusterMonitor`]).
+
+use super::detector::{Status, ThrusterMonitor};
+use super::dynamics::{Attitude, Drive, Nu, ReducedDynamics};
+use super::settings::{EstimatorSettings, Layout, VELOCITY};
+use super::vehicle::Vehicle;
+use crate::filter::{FilterHealth, MerweSigmaPoints, UkfError, UkfMeasurement, UkfModel, UnscentedKalmanFilter};
+use crate::Real;
+use nalgebra::{SMatrix, SVector};
+
+/// The commands in force from one sample to the next.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Command<T> {
+    /// Main thruster, rpm.
+    pub n_t: T,
+    /// Vertical thruster, rpm (positive pushes down).
+    pub n_v: T,
+    /// Rudder, rad.
+    pub rudder: T,
+    /// Elevator, rad.
+    pub elevator: T,
+}
+
+/// One row of sensor data. Missing channels are NaN; `dvl` is `None` between its readings.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sample<T> {
+    /// Specific force, body axes, m/s².
+    pub acc: [T; 3],
+    /// Rates, body axes, rad/s.
+    pub gyro: [T; 3],
+    /// Depth, m (positive down).
+    pub depth: T,
+    /// Heading, rad (any branch).
+    pub heading: T,
+    /// Bottom-track velocity over ground, body axes, m/s.
+    pub dvl: Option<[T; 3]>,
+    /// The commands issued at this sample, in force until the next.
+    pub command: Command<T>,
+}
+
+/// A health factor and its standard deviation, with the thruster's status.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Health<T> {
+    /// Health factor (1 healthy, 0 dead).
+    pub k: T,
+    /// Its standard deviation.
+    pub sd: T,
+    /// What is declared.
+    pub status: Status,
+    /// CUSUM alarms so far.
+    pub alarms: u32,
+}
+
+/// The estimate after one sample.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Estimate<T> {
+    /// Dead-reckoned north and east position from the start, m (not a filter state).
+    pub position: [T; 2],
+    /// Depth, m.
+    pub z: T,
+    /// Roll, pitch, heading (wrapped to (−π, π]), rad.
+    pub attitude: [T; 3],
+    /// `[u v w p q r]`.
+    pub nu: [T; 6],
+    /// Main thruster, if the filter carries its health.
+    pub main: Option<Health<T>>,
+    /// Vertical thruster, likewise.
+    pub vertical: Option<Health<T>>,
+    /// Current north, east, m/s, if carried.
+    pub current: Option<[T; 2]>,
+    /// Accelerometer biases, m/s², if carried.
+    pub acc_bias: Option<[T; 3]>,
+    /// Gyro biases, rad/s, if carried.
+    pub gyro_bias: Option<[T; 3]>,
+    /// NIS of this sample's IMU update (6 degrees of freedom), if it was applied.
+    pub imu_nis: Option<T>,
+}
+
+/// Why an estimator cannot be built.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum EstimatorError {
+    /// The layout has a different number of states than the filter's `N`.
+    StateCount {
+        /// States the layout asks for.
+        layout: usize,
+        /// The filter's size.
+        filter: usize,
+    },
+    /// The vehicle's constants fail [`Vehicle::check`] or its mass matrix is singular.
+    Vehicle,
+    /// A setting is not finite or not positive where it must be.
+    Settings,
+    /// The filter refused its start (sigma-point parameters, first covariance).
+    Filter(UkfError),
+}
+
+/// The step's model: reduced dynamics, layout and the commands of the interval.
+struct StepModel<'a, T: Real> {
+    dynamics: &'a ReducedDynamics<T>,
+    layout: Layout,
+    dt: T,
+    command: Command<T>,
+}
+
+impl<T: Real> StepModel<'_, T> {
+    fn drive<const N: usize>(&self, x: &SVector<T, N>) -> Drive<T> {
+        let clamp = |k: T| k.max(T::zero()).min(T::of_f64(1.5));
+        let one = T::one();
+        Drive {
+            n_t: self.command.n_t,
+            n_v: self.command.n_v,
+            rudder: self.command.rudder,
+            elevator: self.command.elevator,
+            k_t: self.layout.k_t().map_or(one, |i| clamp(x[i])),
+            k_v: self.layout.k_v().map_or(one, |i| clamp(x[i])),
+            current: self.layout.current().map_or([T::zero(); 2], |i| [x[i], x[i + 1]]),
+        }
+    }
+
+    fn nu<const N: usize>(x: &SVector<T, N>) -> Nu<T> {
+        x.fixed_rows::<6>(VELOCITY).into_owned()
+    }
+
+    /// Rates of the ten vehicle states.
+    fn rates<const N: usize>(&self, x: &SVector<T, N>) -> [T; 10] {
+        let att = Attitude::new(x[1], x[2], x[3]);
+        let nu = Self::nu(x);
+        let a = self.dynamics.accelerations(&att, &nu, &self.drive(x));
+        let down = att.to_earth().fixed_rows::<1>(2) * nu.fixed_rows::<3>(0);
+        let e = att.angle_rates(nu[3], nu[4], nu[5]);
+        [down[0], e[0], e[1], e[2], a[0], a[1], a[2], a[3], a[4], a[5]]
+    }
+}
+
+impl<T: Real, const N: usize> UkfModel<T, N, 6> for StepModel<'_, T> {
+    /// Midpoint step of the vehicle states; the rest are random walks.
+    fn f(&self, x: &SVector<T, N>) -> SVector<T, N> {
+        let half = self.dt * T::of_f64(0.5);
+        let k1 = self.rates(x);
+        let mut mid = *x;
+        for (i, d) in k1.iter().enumerate() {
+            mid[i] += half * *d;
+        }
+        let k2 = self.rates(&mid);
+        let mut next = *x;
+        for (i, d) in k2.iter().enumerate() {
+            next[i] += self.dt * *d;
+        }
+        next
+    }
+
+    /// Specific force and rates, with the biases if carried.
+    fn h(&self, x: &SVector<T, N>) -> SVector<T, 6> {
+        let att = Attitude::new(x[1], x[2], x[3]);
+        let nu = Self::nu(x);
+        let a = self.dynamics.accelerations(&att, &nu, &self.drive(x));
+        let f = self.dynamics.specific_force(&att, &nu, &a);
+        let mut y = SVector::<T, 6>::from([f[0], f[1], f[2], nu[3], nu[4], nu[5]]);
+        if let Some(b) = self.layout.acc_bias() {
+            for i in 0..6 {
+                y[i] += x[b + i];
+            }
+        }
+        y
+    }
+}
+
+/// Depth and heading.
+struct DepthHeading;
+
+impl<T: Real, const N: usize> UkfMeasurement<T, N, 2> for DepthHeading {
+    fn h(&self, x: &SVector<T, N>) -> SVector<T, 2> {
+        SVector::<T, 2>::new(x[0], x[3])
+    }
+}
+
+/// DVL bottom track: the body velocity over ground.
+struct Dvl;
+
+impl<T: Real, const N: usize> UkfMeasurement<T, N, 3> for Dvl {
+    fn h(&self, x: &SVector<T, N>) -> SVector<T, 3> {
+        x.fixed_rows::<3>(VELOCITY).into_owned()
+    }
+}
+
+/// The estimator with `N` states (`N` must equal the layout's [`Layout::len`]).
+///
+/// ```
+/// use edgekf::systems::uuv::{Command, EstimatorSettings, Layout, Sample, UuvEstimator, Vehicle};
+/// let layout = Layout { main: true, vertical: false, biases: false, current: false };
+/// let settings = EstimatorSettings::new(layout, 50.0);
+/// let mut est = UuvEstimator::<f32, 11>::new(&Vehicle::default(), &settings).unwrap();
+/// let row = Sample {
+///     acc: [0.0, -0.9, -9.77], gyro: [0.0; 3], depth: 10.0, heading: 0.785, dvl: Some([1.54, 0.0, 0.0]),
+///     command: Command { n_t: 1500.0, ..Default::default() },
+/// };
+/// let e = est.step(&row);
+/// assert!((e.main.unwrap().k - 1.0).abs() < 0.2);
+/// ```
+pub struct UuvEstimator<T: Real, const N: usize> {
+    dynamics: ReducedDynamics<T>,
+    settings: EstimatorSettings,
+    points: MerweSigmaPoints<T>,
+    q: SMatrix<T, N, N>,
+    r_imu: SMatrix<T, 6, 6>,
+    r_depth_heading: SMatrix<T, 2, 2>,
+    r_dvl: SMatrix<T, 3, 3>,
+    ukf: Option<UnscentedKalmanFilter<T, N, 6>>,
+    command: Command<T>,
+    monitors: [ThrusterMonitor<T>; 2],
+    position: [T; 2],
+    dt: T,
+}
+
+impl<T: Real, const N: usize> UuvEstimator<T, N> {
+    /// An estimator that starts at its first sample.
+    pub fn new(vehicle: &Vehicle, settings: &EstimatorSettings) -> Result<Self, EstimatorError> {
+        let layout = settings.layout;
+        if layout.len() != N {
+            return Err(EstimatorError::StateCount { layout: layout.len(), filter: N });
+        }
+        let dynamics = ReducedDynamics::new(vehicle).ok_or(EstimatorError::Vehicle)?;
+        let p = &settings.process;
+        let n = &settings.noise;
+        let values = [
+            settings.dt,
+            p.velocity,
+            p.rate,
+            p.attitude,
+            p.depth,
+            p.health,
+            p.acc_bias,
+            p.gyro_bias,
+            p.current,
+            n.acc,
+            n.gyro,
+            n.depth,
+            n.heading,
+            n.dvl,
+        ];
+        if values.iter().any(|v| !(v.is_finite() && *v > 0.0)) {
+            return Err(EstimatorError::Settings);
+        }
+        let dt = settings.dt;
+        let mut qd = [0.0f64; N];
+        qd[0] = p.depth;
+        qd[1..4].fill(p.attitude);
+        qd[4..7].fill(p.velocity);
+        qd[7..10].fill(p.rate);
+        for i in [layout.k_t(), layout.k_v()].into_iter().flatten() {
+            qd[i] = p.health;
+        }
+        if let (Some(a), Some(g)) = (layout.acc_bias(), layout.gyro_bias()) {
+            qd[a..a + 3].fill(p.acc_bias);
+            qd[g..g + 3].fill(p.gyro_bias);
+        }
+        if let Some(c) = layout.current() {
+            qd[c..c + 2].fill(p.current);
+        }
+        let q = SMatrix::<T, N, N>::from_diagonal(&SVector::<T, N>::from(qd.map(|s| T::of_f64(s * s * dt))));
+        let diag = |s: &[f64]| s.iter().map(|v| T::of_f64(v * v)).collect::<heapless::Vec<T, 6>>();
+        let imu = diag(&[n.acc, n.acc, n.acc, n.gyro, n.gyro, n.gyro]);
+        Ok(Self {
+            dynamics,
+            settings: *settings,
+            points: MerweSigmaPoints { alpha: T::of_f64(0.5), beta: T::of_f64(2.0), kappa: T::zero() },
+            q,
+            r_imu: SMatrix::<T, 6, 6>::from_diagonal(&SVector::<T, 6>::from_iterator(imu)),
+            r_depth_heading: SMatrix::<T, 2, 2>::from_diagonal(&SVector::<T, 2>::new(
+                T::of_f64(n.depth * n.depth),
+                T::of_f64(n.heading * n.heading),
+            )),
+            r_dvl: SMatrix::<T, 3, 3>::identity() * T::of_f64(n.dvl * n.dvl),
+            ukf: None,
+            command: Command { n_t: T::zero(), n_v: T::zero(), rudder: T::zero(), elevator: T::zero() },
+            monitors: [ThrusterMonitor::new(&settings.detector); 2],
+            position: [T::zero(); 2],
+            dt: T::of_f64(dt),
+        })
+    }
+
+    /// The filter's repair counters (zero before the first sample).
+    pub fn health(&self) -> FilterHealth {
+        self.ukf.as_ref().map(|u| u.health()).unwrap_or_default()
+    }
+
+    /// The filter's state and covariance, once started.
+    pub fn filter(&self) -> Option<(&SVector<T, N>, &SMatrix<T, N, N>)> {
+        self.ukf.as_ref().map(|u| (u.state(), u.covariance()))
+    }
+
+    /// Takes one sample: the first starts the filter from the sensors; every later one
+    /// predicts with the previous sample's commands and updates with what is present.
+    pub fn step(&mut self, s: &Sample<T>) -> Estimate<T> {
+        let mut imu_nis = None;
+        if self.ukf.is_none() {
+            self.start(s);
+        } else if let Some(nis) = self.advance(s) {
+            imu_nis = Some(nis);
+        }
+        self.command = s.command;
+        self.estimate(imu_nis)
+    }
+
+    /// Builds the filter at the first sample. A first sample without depth or heading starts at
+    /// 0 with a wide spread; the guard's reset target is this start.
+    fn start(&mut self, s: &Sample<T>) {
+        let layout = self.settings.layout;
+        let init = &self.settings.initial;
+        let mut x = SVector::<T, N>::zeros();
+        let mut sd = [0.0f64; N];
+        let known = |v: T, fallback: f64, spread: f64, wide: f64| {
+            if v.is_finite() {
+                (v, spread)
+            } else {
+                (T::of_f64(fallback), wide)
+            }
+        };
+        let noise = &self.settings.noise;
+        (x[0], sd[0]) = known(s.depth, 0.0, noise.depth, 100.0);
+        (x[3], sd[3]) = known(s.heading, 0.0, noise.heading, 3.0);
+        // Roll and pitch from the specific force, as if steady.
+        let f = s.acc.map(|v| v.as_f64());
+        if f.iter().all(|v| v.is_finite()) && f[2] < 0.0 {
+            x[1] = T::of_f64(libm::atan2(-f[1], -f[2]));
+            x[2] = T::of_f64(libm::atan2(f[0], libm::sqrt(f[1] * f[1] + f[2] * f[2])));
+        }
+        sd[1] = init.attitude;
+        sd[2] = init.attitude;
+        // Velocity from the DVL, else the cruise speed of the main thruster's command.
+        match s.dvl.filter(|d| d.iter().all(|v| v.is_finite())) {
+            Some(d) => {
+                for i in 0..3 {
+                    x[VELOCITY + i] = d[i];
+                    sd[VELOCITY + i] = noise.dvl.max(0.05);
+                }
+            }
+            None => {
+                x[VELOCITY] = T::of_f64(self.dynamics.cruise_speed(s.command.n_t.as_f64()));
+                sd[VELOCITY..VELOCITY + 3].fill(init.velocity);
+            }
+        }
+        for i in 0..3 {
+            let g = s.gyro[i];
+            (x[7 + i], sd[7 + i]) = known(g, 0.0, init.rate, 0.5);
+        }
+        for i in [layout.k_t(), layout.k_v()].into_iter().flatten() {
+            x[i] = T::one();
+            sd[i] = init.health;
+        }
+        if let (Some(a), Some(g)) = (layout.acc_bias(), layout.gyro_bias()) {
+            sd[a..a + 3].fill(init.acc_bias);
+            sd[g..g + 3].fill(init.gyro_bias);
+        }
+        if let Some(c) = layout.current() {
+            sd[c..c + 2].fill(init.current);
+        }
+        let p0 = SMatrix::<T, N, N>::from_diagonal(&SVector::<T, N>::from(sd.map(|v| T::of_f64(v * v))));
+        // Settings were checked and the spreads are positive: the start cannot be refused; if it
+        // were, the estimator stays unstarted and tries again at the next sample.
+        self.ukf = UnscentedKalmanFilter::new(self.points, self.q, self.r_imu, x, p0).ok();
+    }
+
+    /// Predict and update; the IMU update's NIS if it was applied.
+    fn advance(&mut self, s: &Sample<T>) -> Option<T> {
+        let layout = self.settings.layout;
+        let model = StepModel { dynamics: &self.dynamics, layout, dt: self.dt, command: self.command };
+        let ukf = self.ukf.as_mut()?;
+        ukf.predict(&model);
+        let y = SVector::<T, 6>::from([s.acc[0], s.acc[1], s.acc[2], s.gyro[0], s.gyro[1], s.gyro[2]]);
+        // How a change of each factor would move the IMU's reading, at the prior.
+        let prior = *ukf.state();
+        let base = UkfModel::<T, N, 6>::h(&model, &prior);
+        let step = T::of_f64(0.1);
+        let signatures = [layout.k_t(), layout.k_v()].map(|i| {
+            i.map(|i| {
+                let mut moved = prior;
+                moved[i] += step;
+                (UkfModel::<T, N, 6>::h(&model, &moved) - base) / step
+            })
+        });
+        let mut nis = None;
+        if let Ok(inn) = ukf.update(&model, &y) {
+            nis = Some(inn.nis);
+            if let Some(chol) = inn.s.cholesky() {
+                for (j, sig) in signatures.iter().enumerate() {
+                    let (Some(g), Some(i)) = (sig, [layout.k_t(), layout.k_v()][j]) else { continue };
+                    let w = chol.solve(g);
+                    let norm = g.dot(&w);
+                    if norm > T::zero() && self.monitors[j].score(w.dot(&inn.residual) / norm.sqrt()) {
+                        let mut p = *ukf.covariance();
+                        p.row_mut(i).fill(T::zero());
+                        p.column_mut(i).fill(T::zero());
+                        let reopen = T::of_f64(self.settings.detector.reopen);
+                        p[(i, i)] = reopen * reopen;
+                        ukf.set_covariance(p);
+                    }
+                }
+            }
+        }
+        if s.depth.is_finite() && s.heading.is_finite() {
+            // The heading on the branch of the estimate, so the innovation is the short way round.
+            let psi = ukf.state()[3];
+            let y = SVector::<T, 2>::new(s.depth, psi + wrap(s.heading - psi));
+            // A refused update is counted in the filter's health; nothing else to do here.
+            let _ = ukf.update_with(&DepthHeading, &y, &self.r_depth_heading);
+        }
+        if let Some(d) = s.dvl {
+            let _ = ukf.update_with(&Dvl, &SVector::<T, 3>::from(d), &self.r_dvl);
+        }
+        // Dead reckoning on the updated velocity over ground.
+        let x = ukf.state();
+        let earth = Attitude::new(x[1], x[2], x[3]).to_earth() * x.fixed_rows::<3>(VELOCITY);
+        self.position[0] += self.dt * earth[0];
+        self.position[1] += self.dt * earth[1];
+        nis
+    }
+
+    fn estimate(&mut self, imu_nis: Option<T>) -> Estimate<T> {
+        let layout = self.settings.layout;
+        let (x, p) = match &self.ukf {
+            Some(u) => (*u.state(), *u.covariance()),
+            None => (SVector::<T, N>::repeat(T::of_f64(f64::NAN)), SMatrix::<T, N, N>::repeat(T::of_f64(f64::NAN))),
+        };
+        let monitors = &mut self.monitors;
+        let mut health = |j: usize, i: Option<usize>| {
+            i.map(|i| {
+                let sd = p[(i, i)].max(T::zero()).sqrt();
+                let status = monitors[j].status(x[i], sd);
+                Health { k: x[i], sd, status, alarms: monitors[j].alarms() }
+            })
+        };
+        let main = health(0, layout.k_t());
+        let vertical = health(1, layout.k_v());
+        let three = |i: usize| [x[i], x[i + 1], x[i + 2]];
+        Estimate {
+            position: self.position,
+            z: x[0],
+            attitude: [x[1], x[2], wrap(x[3])],
+            nu: [x[4], x[5], x[6], x[7], x[8], x[9]],
+            main,
+            vertical,
+            current: layout.current().map(|c| [x[c], x[c + 1]]),
+            acc_bias: layout.acc_bias().map(three),
+            gyro_bias: layout.gyro_bias().map(three),
+            imu_nis,
+        }
+    }
+}
+
+/// An angle wrapped to (−π, π].
+fn wrap<T: Real>(a: T) -> T {
+    let two_pi = T::two_pi();
+    let turns = libm::round((a / two_pi).as_f64());
+    let mut w = a - two_pi * T::of_f64(turns);
+    if w <= -T::pi() {
+        w += two_pi;
+    }
+    w
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn wrap_takes_the_short_way() {
+        assert!((wrap(3.0 * core::f64::consts::PI / 2.0) + core::f64::consts::FRAC_PI_2).abs() < 1e-12);
+        assert_eq!(wrap(core::f64::consts::PI), core::f64::consts::PI);
+        assert_eq!(wrap(-core::f64::consts::PI), core::f64::consts::PI);
+        assert!((wrap(0.3f32) - 0.3).abs() < 1e-7);
+    }
+
+    #[test]
+    fn a_layout_of_another_size_is_refused() {
+        let s = EstimatorSettings::new(Layout { main: true, vertical: true, biases: true, current: true }, 50.0);
+        let e = UuvEstimator::<f64, 12>::new(&Vehicle::default(), &s).err();
+        assert_eq!(e, Some(EstimatorError::StateCount { layout: 20, filter: 12 }));
+    }
+}

@@ -1,0 +1,27 @@
+//! Thruster health of an underwater vehicle (the third paper: a joint UKF of the vehicle's
+//! state and its thrusters' health factors), on the chip.
+//!
+//! * [`Vehicle`]: the constants (REMUS 100 by default, Prestero's notation);
+//! * [`ReducedDynamics`]: the estimator's 6-DOF model (Euler angles, one midpoint step);
+//! * [`Layout`] and [`EstimatorSettings`]: which states the filter carries, its noises and the
+//!   detector's thresholds;
+//! * [`UuvEstimator`]: the filter, one sample at a time, with a [`ThrusterMonitor`] per
+//!   thruster that declares it healthy, degraded or failed.
+//!
+//! The host's reference simulator (`edgekf_sim::systems::uuv`) is written independently
+//! (quaternions, the rigid body in vector form, RK4 at a quarter of the sample interval).
+
+mod detector;
+mod dynamics;
+mod estimator;
+mod settings;
+mod vehicle;
+
+pub use detector::{Status, ThrusterMonitor};
+pub use dynamics::{Attitude, Drive, Nu, ReducedDynamics};
+pub use estimator::{Command, Estimate, EstimatorError, Health, Sample, UuvEstimator};
+pub use settings::{
+    DetectorSettings, EstimatorSettings, InitialSpread, Layout, MeasurementNoise, ProcessNoise, VEHICLE_STATES,
+    VELOCITY,
+};
+pub use vehicle::{Actuators, Hydro, Vehicle};
