@@ -6,11 +6,14 @@
 //! * [`rotor`]: a flexible rotor on bearings (FE reference, phasor AKF virtual sensing, the
 //!   residual loop);
 //! * [`crank`]: a slider-crank with revolute clearance joints (multibody reference, the paper's
-//!   UKF and the fast estimator the node runs).
+//!   UKF and the fast estimator the node runs);
+//! * [`uuv`]: an underwater vehicle's thruster health (6-DOF reference, joint UKF of state and
+//!   health factors with a change detector).
 
 pub mod crank;
 pub mod oscillator;
 pub mod rotor;
+pub mod uuv;
 
 use crate::cli::registry::{dispatch, subcommands, DemoPart, LoopEntry, SystemEntry};
 
@@ -55,5 +58,13 @@ pub const REGISTRY: &[SystemEntry] = &[
         run: |m| dispatch(m, crank::cli::run),
         close_loop: None,
         demo: Some(DemoPart { closes_loop: false, run: crank::cli::demo }),
+    },
+    SystemEntry {
+        name: "uuv",
+        about: "Underwater vehicle (REMUS 100, 6-DOF): simulate a thruster fault, estimate the thrusters' health",
+        command: subcommands::<uuv::cli::UuvCommand>,
+        run: |m| dispatch(m, uuv::cli::run),
+        close_loop: None,
+        demo: None,
     },
 ];

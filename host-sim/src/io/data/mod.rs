@@ -351,6 +351,22 @@ fn push_value(out: &mut String, v: f64) {
 /// in the errors: a column's length differs from `t`'s, or a name holds a comma, double quote
 /// or line break (it would not read back).
 pub fn to_csv_string(path: &Path, names: &[&str], t: &[f64], columns: &[&[f64]]) -> Result<String, DataError> {
+    csv_text(path, names, t, columns, false)
+}
+
+/// The same text with missing values (NaN) as empty cells: for channels slower than the file's
+/// rate, which have no value between their readings (a 5 Hz DVL in a 50 Hz file).
+///
+/// ```
+/// use edgekf_sim::io::data::to_csv_string_sparse;
+/// let text = to_csv_string_sparse("x.csv".as_ref(), &["dvl_u"], &[0.0, 0.02], &[&[1.5, f64::NAN]]).unwrap();
+/// assert_eq!(text, "t,dvl_u\n0,1.5\n0.02,\n");
+/// ```
+pub fn to_csv_string_sparse(path: &Path, names: &[&str], t: &[f64], columns: &[&[f64]]) -> Result<String, DataError> {
+    csv_text(path, names, t, columns, true)
+}
+
+fn csv_text(path: &Path, names: &[&str], t: &[f64], columns: &[&[f64]], empty: bool) -> Result<String, DataError> {
     if names.len() != columns.len() {
         return Err(DataError::LengthMismatch {
             path: path.to_owned(),
@@ -383,7 +399,9 @@ pub fn to_csv_string(path: &Path, names: &[&str], t: &[f64], columns: &[&[f64]])
         push_value(&mut out, tk);
         for col in columns {
             out.push(',');
-            push_value(&mut out, col[k]);
+            if !(empty && col[k].is_nan()) {
+                push_value(&mut out, col[k]);
+            }
         }
         out.push('\n');
     }

@@ -112,7 +112,11 @@ struct StepModel<'a, T: Real> {
 
 impl<T: Real> StepModel<'_, T> {
     fn drive<const N: usize>(&self, x: &SVector<T, N>) -> Drive<T> {
-        let clamp = |k: T| k.max(T::zero()).min(T::of_f64(1.5));
+        // Thrust stays linear in the factor, also below 0 and above 1: a clamp at the physical
+        // range would flatten the sigma points beyond it, bias the mean and blind the detector
+        // (whose signature is the derivative in k). The wide bounds only keep a wild sigma
+        // point's thrust finite.
+        let clamp = |k: T| k.max(T::of_f64(-2.0)).min(T::of_f64(3.0));
         let one = T::one();
         Drive {
             n_t: self.command.n_t,

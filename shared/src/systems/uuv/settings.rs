@@ -117,11 +117,11 @@ pub struct ProcessNoise {
 impl Default for ProcessNoise {
     fn default() -> Self {
         Self {
-            velocity: 0.005,
+            velocity: 0.02,
             rate: 0.005,
             attitude: 2e-4,
             depth: 1e-3,
-            health: 0.002,
+            health: 0.0005,
             acc_bias: 1e-4,
             gyro_bias: 2e-5,
             current: 0.01,

@@ -1,0 +1,162 @@
+//! `edgekf uuv …`: the underwater vehicle's commands.
+//!
+//! ```text
+//! edgekf uuv simulate [--config C] --scenario paper|vertical|healthy [--duration 300] [--seed 1]
+//!                     [--rate 50] --out data.csv
+//! edgekf uuv estimate [--config C] --data data.csv --out est.csv
+//! ```
+
+use super::config::UuvConfig;
+use super::estimate::{estimate, EstimateTable, REQUIRED};
+use super::scenario::Scenario;
+use super::simulate::{simulate, SimOptions, TRUTH};
+use crate::io::output::{check, write_atomic};
+use crate::io::timeline::{bridge, TimelineOptions};
+use anyhow::Context as _;
+use clap::{Args, Subcommand};
+use std::path::{Path, PathBuf};
+
+/// Underwater vehicle thruster health (REMUS 100 with a vertical tunnel thruster).
+#[derive(Debug, Subcommand)]
+pub enum UuvCommand {
+    /// Fly a scenario closed loop with the 6-DOF reference model into a data CSV.
+    ///
+    /// Columns: t, acc_x, acc_y, acc_z (m/s², specific force, body), gyro_x, gyro_y, gyro_z
+    /// (rad/s), depth (m), heading (rad), dvl_u, dvl_v, dvl_w (m/s, body, over ground; empty
+    /// between DVL updates), cmd_n_t, cmd_n_v (rpm), cmd_rudder, cmd_elevator (rad; in force
+    /// until the next row), and truth_ columns (health factors, position, attitude, velocity,
+    /// current, sensor biases).
+    Simulate(SimulateArgs),
+    /// Estimate the thrusters' health and the vehicle's state from a data CSV into an
+    /// estimate CSV: t, k_t, k_v, k_t_std, k_v_std, status_t, status_v (healthy, degraded,
+    /// failed), x, y, z, phi, theta, psi, u, v, w, p, q, r, then the nuisance states. A
+    /// thruster without a health state has empty k and status columns.
+    Estimate(EstimateArgs),
+}
+
+/// Arguments of `edgekf uuv simulate`.
+#[derive(Debug, Args)]
+pub struct SimulateArgs {
+    /// Configuration (default: host-sim/configs/uuv_remus100.toml's values).
+    #[arg(long, value_name = "TOML")]
+    pub config: Option<PathBuf>,
+    /// Health timeline.
+    #[arg(long, value_enum)]
+    pub scenario: Scenario,
+    /// Length, s.
+    #[arg(long, value_name = "S", default_value_t = 300.0)]
+    pub duration: f64,
+    /// Seed of the current and of the sensors' noise and biases.
+    #[arg(long, value_name = "N", default_value_t = 1)]
+    pub seed: u64,
+    /// Sample rate, Hz (default: the configuration's `sensors.rate`).
+    #[arg(long, value_name = "HZ")]
+    pub rate: Option<f64>,
+    /// Data file to write.
+    #[arg(long, value_name = "CSV")]
+    pub out: PathBuf,
+}
+
+/// Arguments of `edgekf uuv estimate`.
+#[derive(Debug, Args)]
+pub struct EstimateArgs {
+    /// Configuration (default: host-sim/configs/uuv_remus100.toml's values).
+    #[arg(long, value_name = "TOML")]
+    pub config: Option<PathBuf>,
+    /// Data file to read.
+    #[arg(long, value_name = "CSV")]
+    pub data: PathBuf,
+    /// Estimate file to write.
+    #[arg(long, value_name = "CSV")]
+    pub out: PathBuf,
+}
+
+/// Runs one `edgekf uuv` command.
+pub fn run(command: UuvCommand) -> anyhow::Result<()> {
+    match command {
+        UuvCommand::Simulate(a) => simulate_command(a),
+        UuvCommand::Estimate(a) => estimate_command(a),
+    }
+}
+
+fn load(path: Option<&Path>) -> anyhow::Result<UuvConfig> {
+    Ok(match path {
+        Some(p) => UuvConfig::load(p)?,
+        None => UuvConfig::default(),
+    })
+}
+
+fn simulate_command(args: SimulateArgs) -> anyhow::Result<()> {
+    check(&[Some(&args.out)], &[args.config.as_deref()])?;
+    let mut config = load(args.config.as_deref())?;
+    if let Some(rate) = args.rate {
+        config.sensors.rate = rate;
+        config.validate()?;
+    }
+    let options = SimOptions { scenario: args.scenario, duration: args.duration, seed: args.seed };
+    let rec = simulate(&config, &options, &mut |t| eprintln!("simulated {t:.0} s of {:.0} s", args.duration))?;
+    let text = rec.to_csv(&args.out)?;
+    write_atomic(&args.out, text).with_context(|| format!("cannot write {}", args.out.display()))?;
+    let u = rec.column("truth_u").unwrap_or_default();
+    let mean_u = u.iter().sum::<f64>() / u.len().max(1) as f64;
+    println!(
+        "{}: {} rows at {} Hz, scenario {}, seed {}; mean speed {mean_u:.3} m/s",
+        args.out.display(),
+        rec.t.len(),
+        config.sensors.rate,
+        args.scenario.name(),
+        args.seed
+    );
+    Ok(())
+}
+
+fn estimate_command(args: EstimateArgs) -> anyhow::Result<()> {
+    check(&[Some(&args.out)], &[Some(&args.data), args.config.as_deref()])?;
+    let config = load(args.config.as_deref())?;
+    let known: Vec<&str> = REQUIRED.iter().chain(TRUTH.iter()).copied().collect();
+    let (file, notes) = crate::io::data::read_required(&args.data, &REQUIRED, &known)?;
+    eprintln!("{}: {notes}", args.data.display());
+    let rate = config.sensors.rate;
+    if (notes.timing.sample_rate - rate).abs() > 0.01 * rate {
+        anyhow::bail!("{}: sampled at {:.3} Hz, the configuration says {rate} Hz", args.data.display(), notes.timing.sample_rate);
+    }
+    let (file, timeline) = bridge(&file, &notes.timing, &TimelineOptions::default());
+    for n in timeline.notices() {
+        eprintln!("notice: {n}");
+    }
+    let restarts: Vec<usize> = timeline.restarts.iter().map(|r| r.row).collect();
+    let table = estimate(&config, &file, &restarts)?;
+    write_atomic(&args.out, table.to_csv()).with_context(|| format!("cannot write {}", args.out.display()))?;
+    println!("{}: {} rows", args.out.display(), table.t.len());
+    summarise(&table, &file);
+    Ok(())
+}
+
+/// Per thruster: alarms, time declared and, with truth, the RMS error of its factor.
+fn summarise(table: &EstimateTable, data: &crate::io::data::DataFile) {
+    for (j, (name, k, truth)) in [("main", "k_t", "truth_k_t"), ("vertical", "k_v", "truth_k_v")].into_iter().enumerate() {
+        let Some(est) = table.column(k) else { continue };
+        if est.iter().all(|v| v.is_nan()) {
+            println!("{name} thruster: no health state");
+            continue;
+        }
+        let declared = table.status[j].iter().filter(|s| s.is_some_and(|s| s.declared())).count();
+        let dt = if table.t.len() > 1 { table.t[1] - table.t[0] } else { 0.0 };
+        let mut line = format!(
+            "{name} thruster: {} CUSUM alarm(s), declared for {:.2} s, final {k} = {:.3}",
+            table.alarms[j],
+            declared as f64 * dt,
+            est.last().copied().unwrap_or(f64::NAN)
+        );
+        if let Some(tr) = data.column(truth) {
+            let sq: Vec<f64> = est.iter().zip(tr).filter(|(e, t)| e.is_finite() && t.is_finite()).map(|(e, t)| (e - t).powi(2)).collect();
+            if !sq.is_empty() {
+                line += &format!(", RMS error {:.4}", (sq.iter().sum::<f64>() / sq.len() as f64).sqrt());
+            }
+        }
+        println!("{line}");
+    }
+    if table.repairs != (0, 0) {
+        println!("filter repairs: {} covariance reset(s), {} refused update(s)", table.repairs.0, table.repairs.1);
+    }
+}
