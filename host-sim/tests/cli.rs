@@ -198,3 +198,69 @@ fn help_explains_the_commands() {
     // A usage error is clap's: exit 2.
     assert_eq!(edgekf(&["oscillator", "estimate"]).status.code(), Some(2));
 }
+
+#[test]
+fn uuv_simulate_then_estimate_writes_the_issues_columns() {
+    let dir = scratch("uuv");
+    let data = dir.join("paper.csv");
+    let est = dir.join("est.csv");
+    let out =
+        edgekf(&["uuv", "simulate", "--scenario", "paper", "--duration", "225", "--seed", "4", "--out", path(&data)]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let csv = std::fs::read_to_string(&data).unwrap();
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    assert_eq!(
+        header[..16],
+        [
+            "t",
+            "acc_x",
+            "acc_y",
+            "acc_z",
+            "gyro_x",
+            "gyro_y",
+            "gyro_z",
+            "depth",
+            "heading",
+            "dvl_u",
+            "dvl_v",
+            "dvl_w",
+            "cmd_n_t",
+            "cmd_n_v",
+            "cmd_rudder",
+            "cmd_elevator"
+        ]
+    );
+    // The DVL is a 5 Hz channel in 50 Hz rows: empty between its readings.
+    let second: Vec<&str> = csv.lines().nth(2).unwrap().split(',').collect();
+    assert_eq!((second[9], second[10], second[11]), ("", "", ""));
+    // Health states switched off for the vertical thruster: its columns stay empty.
+    let config = dir.join("main_only.toml");
+    std::fs::write(&config, "[estimator]\nhealth = [\"main\"]\n").unwrap();
+    let out = edgekf(&["uuv", "estimate", "--config", path(&config), "--data", path(&data), "--out", path(&est)]);
+    let stdout = text(&out.stdout);
+    assert!(out.status.success(), "{stdout}\n{}", text(&out.stderr));
+    assert!(text(&out.stderr).contains("`dvl_u` is updated every 10 rows"), "{}", text(&out.stderr));
+    assert!(stdout.contains("vertical thruster: no health state"), "{stdout}");
+    let table = std::fs::read_to_string(&est).unwrap();
+    let mut lines = table.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    assert_eq!(
+        header[..19],
+        [
+            "t", "k_t", "k_v", "k_t_std", "k_v_std", "status_t", "status_v", "x", "y", "z", "phi", "theta", "psi", "u",
+            "v", "w", "p", "q", "r"
+        ]
+    );
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 225 * 50);
+    // Healthy before the fault at 220 s, failed a second after it; k_v and status_v empty.
+    let at = |t: f64| &rows[(t * 50.0) as usize];
+    assert_eq!((at(219.0)[5], at(221.0)[5]), ("healthy", "failed"));
+    assert_eq!((at(221.0)[2], at(221.0)[6]), ("", ""));
+    let k_t: f64 = at(224.0)[1].parse().unwrap();
+    assert!((k_t - 0.1).abs() < 0.1, "k_t = {k_t} at 224 s");
+    // The recording is never an output.
+    let out = edgekf(&["uuv", "estimate", "--data", path(&data), "--out", path(&data)]);
+    assert!(!out.status.success());
+    assert_eq!(std::fs::read_to_string(&data).unwrap(), csv);
+}

@@ -54,7 +54,9 @@ pub trait UkfMeasurement<T: Real, const N: usize, const K: usize> {
 /// A model's own measurement as a [`UkfMeasurement`].
 struct ModelMeasurement<'a, F>(&'a F);
 
-impl<T: Real, const N: usize, const M: usize, F: UkfModel<T, N, M>> UkfMeasurement<T, N, M> for ModelMeasurement<'_, F> {
+impl<T: Real, const N: usize, const M: usize, F: UkfModel<T, N, M>> UkfMeasurement<T, N, M>
+    for ModelMeasurement<'_, F>
+{
     fn h(&self, x: &SVector<T, N>) -> SVector<T, M> {
         self.0.h(x)
     }

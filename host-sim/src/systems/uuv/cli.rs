@@ -118,7 +118,11 @@ fn estimate_command(args: EstimateArgs) -> anyhow::Result<()> {
     eprintln!("{}: {notes}", args.data.display());
     let rate = config.sensors.rate;
     if (notes.timing.sample_rate - rate).abs() > 0.01 * rate {
-        anyhow::bail!("{}: sampled at {:.3} Hz, the configuration says {rate} Hz", args.data.display(), notes.timing.sample_rate);
+        anyhow::bail!(
+            "{}: sampled at {:.3} Hz, the configuration says {rate} Hz",
+            args.data.display(),
+            notes.timing.sample_rate
+        );
     }
     let (file, timeline) = bridge(&file, &notes.timing, &TimelineOptions::default());
     for n in timeline.notices() {
@@ -134,7 +138,9 @@ fn estimate_command(args: EstimateArgs) -> anyhow::Result<()> {
 
 /// Per thruster: alarms, time declared and, with truth, the RMS error of its factor.
 fn summarise(table: &EstimateTable, data: &crate::io::data::DataFile) {
-    for (j, (name, k, truth)) in [("main", "k_t", "truth_k_t"), ("vertical", "k_v", "truth_k_v")].into_iter().enumerate() {
+    for (j, (name, k, truth)) in
+        [("main", "k_t", "truth_k_t"), ("vertical", "k_v", "truth_k_v")].into_iter().enumerate()
+    {
         let Some(est) = table.column(k) else { continue };
         if est.iter().all(|v| v.is_nan()) {
             println!("{name} thruster: no health state");
@@ -149,7 +155,12 @@ fn summarise(table: &EstimateTable, data: &crate::io::data::DataFile) {
             est.last().copied().unwrap_or(f64::NAN)
         );
         if let Some(tr) = data.column(truth) {
-            let sq: Vec<f64> = est.iter().zip(tr).filter(|(e, t)| e.is_finite() && t.is_finite()).map(|(e, t)| (e - t).powi(2)).collect();
+            let sq: Vec<f64> = est
+                .iter()
+                .zip(tr)
+                .filter(|(e, t)| e.is_finite() && t.is_finite())
+                .map(|(e, t)| (e - t).powi(2))
+                .collect();
             if !sq.is_empty() {
                 line += &format!(", RMS error {:.4}", (sq.iter().sum::<f64>() / sq.len() as f64).sqrt());
             }

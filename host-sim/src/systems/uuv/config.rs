@@ -14,7 +14,9 @@
 //! ```
 
 use super::error::UuvError;
-use edgekf::systems::uuv::{DetectorSettings, EstimatorSettings, InitialSpread, Layout, MeasurementNoise, ProcessNoise, Vehicle};
+use edgekf::systems::uuv::{
+    DetectorSettings, EstimatorSettings, InitialSpread, Layout, MeasurementNoise, ProcessNoise, Vehicle,
+};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -240,7 +242,8 @@ impl UuvConfig {
         let bad = |m: String| Err(UuvError::Config(m));
         self.vehicle.check().map_err(|m| UuvError::Config(format!("[vehicle]: {m}")))?;
         let s = &self.sensors;
-        for (k, v) in [("sensors.rate", s.rate), ("sensors.dvl_rate", s.dvl_rate), ("sensors.gyro_bias_time", s.gyro_bias_time)]
+        for (k, v) in
+            [("sensors.rate", s.rate), ("sensors.dvl_rate", s.dvl_rate), ("sensors.gyro_bias_time", s.gyro_bias_time)]
         {
             if !(v.is_finite() && v > 0.0) {
                 return bad(format!("{k} = {v} must be positive"));
@@ -255,10 +258,10 @@ impl UuvConfig {
             return bad("[sensors]: noises and biases must be finite and not negative".into());
         }
         let c = &self.current;
-        if !(c.speed[0] >= 0.0 && c.speed[1] >= c.speed[0] && c.speed[1].is_finite())
-            || !(c.variation >= 0.0 && c.variation.is_finite())
-            || !(c.periods[0] > 0.0 && c.periods[1] >= c.periods[0] && c.periods[1].is_finite())
-        {
+        let speed_ok = c.speed[0] >= 0.0 && c.speed[1] >= c.speed[0] && c.speed[1].is_finite();
+        let variation_ok = c.variation >= 0.0 && c.variation.is_finite();
+        let periods_ok = c.periods[0] > 0.0 && c.periods[1] >= c.periods[0] && c.periods[1].is_finite();
+        if !(speed_ok && variation_ok && periods_ok) {
             return bad("[current]: speed and periods must be ranges [low, high] with 0 ≤ low ≤ high".into());
         }
         let a = &self.autopilot;

@@ -153,7 +153,12 @@ fn run<const N: usize>(config: &UuvConfig, data: &DataFile, restarts: &[usize]) 
         }
         let mut s = *s;
         let c = &mut s.command;
-        for (v, held) in [(&mut c.n_t, last.n_t), (&mut c.n_v, last.n_v), (&mut c.rudder, last.rudder), (&mut c.elevator, last.elevator)] {
+        for (v, held) in [
+            (&mut c.n_t, last.n_t),
+            (&mut c.n_v, last.n_v),
+            (&mut c.rudder, last.rudder),
+            (&mut c.elevator, last.elevator),
+        ] {
             if !v.is_finite() {
                 *v = held;
             }

@@ -202,7 +202,8 @@ impl ReferenceVehicle {
         // The current in body axes and its rate as seen from the turning body.
         let c = Vector3::new(f.current[0], f.current[1], 0.0);
         let c_body = rot.inverse() * c;
-        let c_dot_body = -omega.cross(&c_body) + rot.inverse() * Vector3::new(f.current_rate[0], f.current_rate[1], 0.0);
+        let c_dot_body =
+            -omega.cross(&c_body) + rot.inverse() * Vector3::new(f.current_rate[0], f.current_rate[1], 0.0);
         let mut rel = nu;
         rel.fixed_rows_mut::<3>(0).copy_from(&(lin - c_body));
         // Hydrodynamic derivatives.
@@ -364,7 +365,8 @@ mod tests {
         let mut config = UuvConfig::default();
         config.current.speed = [0.0, 0.0];
         config.current.variation = 0.0;
-        let rec = simulate(&config, &SimOptions { scenario: Scenario::Healthy, duration: 20.0, seed: 3 }, &mut |_| {}).unwrap();
+        let rec = simulate(&config, &SimOptions { scenario: Scenario::Healthy, duration: 20.0, seed: 3 }, &mut |_| {})
+            .unwrap();
         let mean = |name: &str| {
             let c = rec.column(name).unwrap();
             c.iter().sum::<f64>() / c.len() as f64

@@ -49,7 +49,13 @@ impl Sensors {
         let mut normal = || rng.sample::<f64, _>(StandardNormal);
         let acc_bias = [0, 1, 2].map(|i| config.acc_bias * normal() + config.acc_offset[i]);
         let gyro_bias = [(); 3].map(|_| config.gyro_bias * normal());
-        Self { config: config.clone(), acc_bias, gyro_bias, samples: 0, dvl_every: (config.rate / config.dvl_rate).round() as u64 }
+        Self {
+            config: config.clone(),
+            acc_bias,
+            gyro_bias,
+            samples: 0,
+            dvl_every: (config.rate / config.dvl_rate).round() as u64,
+        }
     }
 
     /// The accelerometer's bias (constant) and the gyro's (now), for the truth columns.

@@ -231,7 +231,12 @@ impl<T: Real> ReducedDynamics<T> {
         let (dr, ds) = (drive.rudder, drive.elevator);
         let main = drive.k_t * drive.n_t * drive.n_t.abs();
         let vert = drive.k_v * c.kv * drive.n_v * drive.n_v.abs();
-        let x = -wb * st + h[X_UU] * ur * ur.abs() + h[X_WQ] * wr * q + h[X_QQ] * q * q + h[X_VR] * vr * r + h[X_RR] * r * r
+        let x = -wb * st
+            + h[X_UU] * ur * ur.abs()
+            + h[X_WQ] * wr * q
+            + h[X_QQ] * q * q
+            + h[X_VR] * vr * r
+            + h[X_RR] * r * r
             + c.kt * main
             - c.m * (w * q - v * r + c.zg * p * r);
         let y = wb * ct * sf
@@ -253,8 +258,7 @@ impl<T: Real> ReducedDynamics<T> {
             + h[Z_UUDS] * ur * ur * ds
             + vert
             - c.m * (v * p - u * q - c.zg * (p * p + q * q));
-        let k = -c.zg * c.w * ct * sf + h[K_PP] * p * p.abs() + h[K_P] * p + c.kq * main
-            - (c.izz - c.iyy) * q * r
+        let k = -c.zg * c.w * ct * sf + h[K_PP] * p * p.abs() + h[K_P] * p + c.kq * main - (c.izz - c.iyy) * q * r
             + c.m * c.zg * (u * r - w * p);
         let mm = -c.zg * c.w * st
             + h[M_WW] * wr * wr.abs()

@@ -37,7 +37,11 @@ pub const VEHICLE_STATES: usize = 10;
 impl Layout {
     /// Number of states.
     pub const fn len(&self) -> usize {
-        VEHICLE_STATES + self.main as usize + self.vertical as usize + 6 * self.biases as usize + 2 * self.current as usize
+        VEHICLE_STATES
+            + self.main as usize
+            + self.vertical as usize
+            + 6 * self.biases as usize
+            + 2 * self.current as usize
     }
 
     /// Never: the vehicle states are always there (for clippy's `len` rule).
