@@ -144,3 +144,49 @@ fn f32_estimator_follows_the_f64_one() {
     assert!(worst < 0.02, "k_t differs by {worst}");
     println!("f32 vs f64: largest k_t difference {worst:.2e}, {disagree} rows of differing status");
 }
+
+/// Behind `EDGEKF_LONG=1`: 100 hours of healthy flight (100 seeds of an hour each, two
+/// threads) for the mean time between false alarms. A false alarm is a change from healthy to
+/// declared on either thruster; at most 4 in 100 h states a mean time between them of at least
+/// 25 h (the issue asks for 24 h).
+///
+/// `EDGEKF_LONG=1 cargo test --release -p edgekf-sim --test uuv -- --nocapture hundred_hours`
+#[test]
+fn hundred_hours_of_healthy_flight_give_the_stated_false_alarm_rate() {
+    if std::env::var_os("EDGEKF_LONG").is_none() {
+        eprintln!("skipped: set EDGEKF_LONG=1 for 100 h of healthy flight");
+        return;
+    }
+    const HOURS: u64 = 100;
+    let episodes = |seed: u64| -> (usize, u32, f64) {
+        let config = UuvConfig::default();
+        let opts = SimOptions { scenario: Scenario::Healthy, duration: 3600.0, seed: 10_000 + seed };
+        let rec = simulate(&config, &opts, &mut |_| {}).unwrap();
+        let table = estimate(&config, &rec.to_data_file(), &[]).unwrap();
+        let mut count = 0;
+        for s in &table.status {
+            count += s
+                .windows(2)
+                .filter(|w| !w[0].is_some_and(Status::declared) && w[1].is_some_and(Status::declared))
+                .count();
+        }
+        let k_t = table.column("k_t").unwrap();
+        let sd = table.column("k_t_std").unwrap();
+        let margin = k_t.iter().zip(sd).map(|(k, s)| k - 3.0 * s).fold(f64::INFINITY, f64::min);
+        (count, table.alarms[0] + table.alarms[1], margin)
+    };
+    let results: Vec<(usize, u32, f64)> = std::thread::scope(|scope| {
+        let workers: Vec<_> = (0..2u64)
+            .map(|w| scope.spawn(move || (0..HOURS).filter(|s| s % 2 == w).map(episodes).collect::<Vec<_>>()))
+            .collect();
+        workers.into_iter().flat_map(|h| h.join().unwrap()).collect()
+    });
+    let false_alarms: usize = results.iter().map(|r| r.0).sum();
+    let cusum: u32 = results.iter().map(|r| r.1).sum();
+    let margin = results.iter().map(|r| r.2).fold(f64::INFINITY, f64::min);
+    println!(
+        "{HOURS} h healthy: {false_alarms} false alarm(s) (mean time between them {}), {cusum} CUSUM reopenings, lowest k_t − 3σ {margin:.3}",
+        if false_alarms == 0 { format!("> {HOURS} h") } else { format!("{:.1} h", HOURS as f64 / false_alarms as f64) }
+    );
+    assert!(false_alarms <= 4, "{false_alarms} false alarms in {HOURS} h");
+}

@@ -3,7 +3,7 @@
 //! ```text
 //! edgekf uuv simulate [--config C] --scenario paper|vertical|healthy [--duration 300] [--seed 1]
 //!                     [--rate 50] --out data.csv
-//! edgekf uuv estimate [--config C] --data data.csv --out est.csv
+//! edgekf uuv estimate [--config C] --data data.csv --out est.csv [--plot health.svg]
 //! ```
 
 use super::config::UuvConfig;
@@ -69,6 +69,9 @@ pub struct EstimateArgs {
     /// Estimate file to write.
     #[arg(long, value_name = "CSV")]
     pub out: PathBuf,
+    /// Also draw the health factors (against truth where the data has it) into this SVG.
+    #[arg(long, value_name = "SVG")]
+    pub plot: Option<PathBuf>,
 }
 
 /// Runs one `edgekf uuv` command.
@@ -111,7 +114,7 @@ fn simulate_command(args: SimulateArgs) -> anyhow::Result<()> {
 }
 
 fn estimate_command(args: EstimateArgs) -> anyhow::Result<()> {
-    check(&[Some(&args.out)], &[Some(&args.data), args.config.as_deref()])?;
+    check(&[Some(&args.out), args.plot.as_deref()], &[Some(&args.data), args.config.as_deref()])?;
     let config = load(args.config.as_deref())?;
     let known: Vec<&str> = REQUIRED.iter().chain(TRUTH.iter()).copied().collect();
     let (file, notes) = crate::io::data::read_required(&args.data, &REQUIRED, &known)?;
@@ -130,8 +133,21 @@ fn estimate_command(args: EstimateArgs) -> anyhow::Result<()> {
     }
     let restarts: Vec<usize> = timeline.restarts.iter().map(|r| r.row).collect();
     let table = estimate(&config, &file, &restarts)?;
+    let figure = match &args.plot {
+        Some(_) => super::plot::health_figure(&table, [file.column("truth_k_t"), file.column("truth_k_v")])?,
+        None => None,
+    };
     write_atomic(&args.out, table.to_csv()).with_context(|| format!("cannot write {}", args.out.display()))?;
     println!("{}: {} rows", args.out.display(), table.t.len());
+    if let Some(path) = &args.plot {
+        match figure {
+            Some(svg) => {
+                write_atomic(path, svg).with_context(|| format!("cannot write {}", path.display()))?;
+                println!("{}: health factors against truth", path.display());
+            }
+            None => eprintln!("notice: no health state in the configuration: {} not drawn", path.display()),
+        }
+    }
     summarise(&table, &file);
     Ok(())
 }

@@ -8,6 +8,7 @@
 //! * [`simulate`](mod@simulate): a scenario flown into a data file;
 //! * [`estimate`](mod@estimate): the shared estimator (`edgekf::systems::uuv`) over a data
 //!   file;
+//! * [`plot`]: the health factors against truth (`edgekf uuv estimate --plot`);
 //! * [`cli`]: `edgekf uuv simulate | estimate`.
 
 pub mod autopilot;
@@ -15,6 +16,7 @@ pub mod cli;
 pub mod config;
 mod error;
 pub mod estimate;
+pub mod plot;
 pub mod reference;
 pub mod scenario;
 pub mod sea;
