@@ -206,6 +206,7 @@ pub struct ChannelReader<S: ByteSource, const M: usize> {
     width: usize,
     ignored: usize,
     bad_lines: u32,
+    empty_cells: bool,
 }
 
 impl<S: ByteSource, const M: usize> ChannelReader<S, M> {
@@ -224,7 +225,25 @@ impl<S: ByteSource, const M: usize> ChannelReader<S, M> {
                 (index, header.width())
             }
         };
-        Ok(Self { reader, index, width, ignored: width.saturating_sub(M), bad_lines: 0 })
+        Ok(Self { reader, index, width, ignored: width.saturating_sub(M), bad_lines: 0, empty_cells: false })
+    }
+
+    /// Reads an empty or `NaN` cell as a missing value (NaN) instead of a bad line: for files
+    /// whose channels have their own rates (a 5 Hz DVL in 50 Hz rows, empty between its
+    /// readings) and estimators that update with each channel group on its own. Garbage and
+    /// infinities are still bad lines.
+    ///
+    /// ```
+    /// use edgekf_firmware::line_feed::ChannelReader;
+    /// let text = b"t,a,b\n0,1.5,\n0.02,x,2\n0.04,NaN,2\n";
+    /// let mut r = ChannelReader::new(&text[..], ["a", "b"]).unwrap().with_empty_cells();
+    /// let first = r.next_values().unwrap().unwrap();
+    /// assert!(first[0] == 1.5 && first[1].is_nan());
+    /// assert!(r.next_values().unwrap().is_err());
+    /// assert!(r.next_values().unwrap().unwrap()[0].is_nan());
+    /// ```
+    pub fn with_empty_cells(self) -> Self {
+        Self { empty_cells: true, ..self }
     }
 
     /// The next line's values; `Err` for a line that does not parse (counted), `None` at the end.
@@ -272,6 +291,10 @@ impl<S: ByteSource, const M: usize> ChannelReader<S, M> {
                     continue;
                 }
                 if let Some(k) = self.index.iter().position(|&c| usize::from(c) == i) {
+                    let cell = field.trim();
+                    if self.empty_cells && (cell.is_empty() || cell.eq_ignore_ascii_case("nan")) {
+                        continue; // stays NaN: no reading in this row
+                    }
                     match (field.trim().parse::<f32>(), values.get_mut(k)) {
                         (Ok(v), Some(slot)) if v.is_finite() => *slot = v,
                         _ => bad = true,

@@ -52,6 +52,11 @@ pub fn crank_elf() -> Result<PathBuf> {
     elf_from("EDGEKF_CRANK_ELF")
 }
 
+/// The underwater-vehicle thruster-health image: `$EDGEKF_UUV_ELF` (set by `cargo xtask test`).
+pub fn uuv_elf() -> Result<PathBuf> {
+    elf_from("EDGEKF_UUV_ELF")
+}
+
 fn elf_from(var: &str) -> Result<PathBuf> {
     let path = std::env::var_os(var).with_context(|| {
         format!("{var} is not set: run the HIL tests through `cargo xtask test` (it builds the image)")

@@ -79,7 +79,7 @@ pub struct Image {
 }
 
 /// Every image, in the order `cargo xtask test` builds them.
-pub const IMAGES: [Image; 5] = [
+pub const IMAGES: [Image; 6] = [
     Image {
         bin: "edgekf-board",
         flag: Some("--board"),
@@ -124,6 +124,15 @@ pub const IMAGES: [Image; 5] = [
             ("crank_window", 2500, 1, 750_000),
             ("crank_release_sample", 2500, 1, 600),
         ],
+    },
+    Image {
+        bin: "edgekf-uuv-qemu",
+        flag: Some("--uuv"),
+        features: "qemu",
+        what: "the underwater-vehicle thruster-health QEMU image",
+        role: Role::Hil { env: "EDGEKF_UUV_ELF", tests: &["uuv_node"] },
+        proof: PanicProof::Except(CORE_CSV_PARSING),
+        budgets: &[],
     },
     Image {
         bin: "edgekf-bench",

@@ -4,8 +4,10 @@
 //!
 //! * [`oscillator`]: the harmonic force driving a structural mode, from one ADXL355 axis;
 //! * [`rotor`]: rotor virtual sensing (disk motion and unbalance forces from four probes);
-//! * [`crank`]: slider-crank joint clearance from the crank angular acceleration.
+//! * [`crank`]: slider-crank joint clearance from the crank angular acceleration;
+//! * [`uuv`]: an underwater vehicle's thruster health from its IMU, depth, compass and DVL.
 
 pub mod crank;
 pub mod oscillator;
 pub mod rotor;
+pub mod uuv;

@@ -117,7 +117,6 @@ pub fn samples(data: &DataFile) -> Result<Vec<Sample<f64>>, UuvError> {
                 depth: v(6),
                 heading: v(7),
                 dvl: dvl.iter().all(|d| d.is_finite()).then_some(dvl),
-                // A missing command holds the last one: the thrusters keep what they were told.
                 command: Command { n_t: v(11), n_v: v(12), rudder: v(13), elevator: v(14) },
             }
         })
@@ -140,7 +139,6 @@ fn run<const N: usize>(config: &UuvConfig, data: &DataFile, restarts: &[usize]) 
         alarms: [0; 2],
         repairs: (0, 0),
     };
-    let mut last = Command::default();
     let add_repairs = |est: &UuvEstimator<f64, N>, table: &mut EstimateTable| {
         let h = est.health();
         table.repairs.0 += h.covariance_resets;
@@ -151,20 +149,7 @@ fn run<const N: usize>(config: &UuvConfig, data: &DataFile, restarts: &[usize]) 
             add_repairs(&est, &mut table);
             est = new()?;
         }
-        let mut s = *s;
-        let c = &mut s.command;
-        for (v, held) in [
-            (&mut c.n_t, last.n_t),
-            (&mut c.n_v, last.n_v),
-            (&mut c.rudder, last.rudder),
-            (&mut c.elevator, last.elevator),
-        ] {
-            if !v.is_finite() {
-                *v = held;
-            }
-        }
-        last = s.command;
-        let e = est.step(&s);
+        let e = est.step(s);
         push_row(&mut table, &e);
     }
     add_repairs(&est, &mut table);

@@ -296,13 +296,20 @@ impl<T: Real, const N: usize> UuvEstimator<T, N> {
         self.ukf.as_ref().map(|u| u.health()).unwrap_or_default()
     }
 
+    /// CUSUM alarms of the main and vertical thrusters so far.
+    pub fn alarms(&self) -> [u32; 2] {
+        self.monitors.map(|m| m.alarms())
+    }
+
     /// The filter's state and covariance, once started.
     pub fn filter(&self) -> Option<(&SVector<T, N>, &SMatrix<T, N, N>)> {
         self.ukf.as_ref().map(|u| (u.state(), u.covariance()))
     }
 
     /// Takes one sample: the first starts the filter from the sensors; every later one
-    /// predicts with the previous sample's commands and updates with what is present.
+    /// predicts with the previous sample's commands and updates with what is present. A
+    /// missing (NaN) command holds the last one; a sample with nothing present is a prediction
+    /// (a lost row bridged).
     pub fn step(&mut self, s: &Sample<T>) -> Estimate<T> {
         let mut imu_nis = None;
         if self.ukf.is_none() {
@@ -310,7 +317,15 @@ impl<T: Real, const N: usize> UuvEstimator<T, N> {
         } else if let Some(nis) = self.advance(s) {
             imu_nis = Some(nis);
         }
-        self.command = s.command;
+        // A missing command holds the last one: the thrusters keep what they were told.
+        let c = &s.command;
+        let held = |new: T, old: T| if new.is_finite() { new } else { old };
+        self.command = Command {
+            n_t: held(c.n_t, self.command.n_t),
+            n_v: held(c.n_v, self.command.n_v),
+            rudder: held(c.rudder, self.command.rudder),
+            elevator: held(c.elevator, self.command.elevator),
+        };
         self.estimate(imu_nis)
     }
 

@@ -1,0 +1,275 @@
+//! Underwater vehicle thruster health on the node: the shared joint UKF of the vehicle's state
+//! and its thrusters' health factors ([`edgekf::systems::uuv::UuvEstimator`], 20 states: both
+//! health factors, the six IMU biases and the current) with its CUSUM per thruster, in `f32`,
+//! on the defaults of `host-sim/configs/uuv_remus100.toml` (REMUS 100, 50 Hz).
+//!
+//! Input: the vehicle data file's 15 channels ([`CHANNELS`]); the DVL's cells are empty between
+//! its readings and are read as missing, not as bad lines. Output: a [`UuvFrame`] per sample,
+//! and a [`UuvEnd`] at the end of the run. Memory: the estimator (about 14 KB of matrices) lives
+//! in the caller's [`Storage`], not on the stack of every call.
+
+use crate::frame::FrameSink;
+use crate::hil::{HilError, HilImage, HilNode};
+use crate::line_feed::{ByteSource, ChannelReader};
+use crate::node::{Innovation, Node, NodeEstimator, Poll};
+use crate::source::ChannelSource;
+use edgekf::systems::uuv::{
+    Command, Estimate, EstimatorError, EstimatorSettings, Layout, Sample, Status, UuvEstimator, Vehicle,
+};
+
+/// Sample rate, Hz (`sensors.rate`).
+pub const SAMPLE_RATE_HZ: u32 = 50;
+
+/// The filter's states: both health factors, the biases and the current.
+pub const LAYOUT: Layout = Layout { main: true, vertical: true, biases: true, current: true };
+
+/// Its size.
+pub const STATES: usize = LAYOUT.len();
+
+/// The input channels, in the data file's names and order.
+pub const CHANNELS: [&str; 15] = [
+    "acc_x",
+    "acc_y",
+    "acc_z",
+    "gyro_x",
+    "gyro_y",
+    "gyro_z",
+    "depth",
+    "heading",
+    "dvl_u",
+    "dvl_v",
+    "dvl_w",
+    "cmd_n_t",
+    "cmd_n_v",
+    "cmd_rudder",
+    "cmd_elevator",
+];
+
+/// The estimator, kept by the caller.
+pub type Storage = Option<UuvEstimator<f32, STATES>>;
+
+/// A status as one byte: 0 healthy, 1 degraded, 2 failed.
+///
+/// ```
+/// use edgekf::systems::uuv::Status;
+/// use edgekf_firmware::systems::uuv::status_code;
+/// assert_eq!([Status::Healthy, Status::Degraded, Status::Failed].map(status_code), [0, 1, 2]);
+/// ```
+pub const fn status_code(s: Status) -> u8 {
+    match s {
+        Status::Healthy => 0,
+        Status::Degraded => 1,
+        Status::Failed => 2,
+    }
+}
+
+/// One input row as the estimator's sample; a missing row (`None`) is a sample with nothing
+/// present, which the estimator predicts through with the last commands.
+///
+/// ```
+/// use edgekf_firmware::systems::uuv::sample;
+/// let s = sample(None);
+/// assert!(s.depth.is_nan() && s.dvl.is_none() && s.command.n_t.is_nan());
+/// let mut row = [0.0f32; 15];
+/// row[8..11].copy_from_slice(&[1.5, 0.0, 0.01]);
+/// assert_eq!(sample(Some(row)).dvl, Some([1.5, 0.0, 0.01]));
+/// ```
+pub fn sample(row: Option<[f32; 15]>) -> Sample<f32> {
+    let v = row.unwrap_or([f32::NAN; 15]);
+    let dvl = [v[8], v[9], v[10]];
+    Sample {
+        acc: [v[0], v[1], v[2]],
+        gyro: [v[3], v[4], v[5]],
+        depth: v[6],
+        heading: v[7],
+        dvl: dvl.iter().all(|d| d.is_finite()).then_some(dvl),
+        command: Command { n_t: v[11], n_v: v[12], rudder: v[13], elevator: v[14] },
+    }
+}
+
+/// The built-in estimator: REMUS 100 and the default settings at [`SAMPLE_RATE_HZ`].
+pub fn estimator() -> Result<UuvEstimator<f32, STATES>, EstimatorError> {
+    UuvEstimator::new(&Vehicle::default(), &EstimatorSettings::new(LAYOUT, f64::from(SAMPLE_RATE_HZ)))
+}
+
+/// The node: the estimator, the samples stepped, and the last estimate until it is reported.
+pub struct UuvNode<'s> {
+    est: &'s mut UuvEstimator<f32, STATES>,
+    samples: u32,
+    pending: Option<Estimate<f32>>,
+}
+
+impl<'s> UuvNode<'s> {
+    /// The node on an estimator.
+    pub fn new(est: &'s mut UuvEstimator<f32, STATES>) -> Self {
+        Self { est, samples: 0, pending: None }
+    }
+
+    /// One row (`None`: missing or unparsable); the estimate after it.
+    ///
+    /// ```
+    /// use edgekf_firmware::systems::uuv::{estimator, UuvNode};
+    /// let mut est = estimator().unwrap();
+    /// let mut node = UuvNode::new(&mut est);
+    /// let mut row = [0.0f32; 15];
+    /// row[2] = -9.77;
+    /// row[6] = 10.0;
+    /// row[11] = 1500.0;
+    /// let e = node.step(Some(row));
+    /// assert_eq!(e.main.unwrap().k, 1.0);
+    /// let e = node.step(None); // predicted through
+    /// assert!(e.z.is_finite());
+    /// assert_eq!(node.samples(), 2);
+    /// ```
+    pub fn step(&mut self, row: Option<[f32; 15]>) -> Estimate<f32> {
+        self.samples = self.samples.saturating_add(1);
+        self.est.step(&sample(row))
+    }
+
+    /// Samples stepped (rows, and missing rows bridged).
+    pub fn samples(&self) -> u32 {
+        self.samples
+    }
+
+    /// The estimator.
+    pub fn estimator(&self) -> &UuvEstimator<f32, STATES> {
+        self.est
+    }
+}
+
+crate::frame! {
+    /// One sample's estimate.
+    pub struct UuvFrame = "uuv {=u32} {=f32} {=f32} {=f32} {=f32} {=u8} {=u8} {=f32} {=f32} {=f32} {=f32} {=f32}" {
+        /// Samples stepped so far.
+        pub sample: u32,
+        /// Main thruster's health factor.
+        pub k_t: f32,
+        /// Its standard deviation.
+        pub k_t_std: f32,
+        /// Vertical thruster's health factor.
+        pub k_v: f32,
+        /// Its standard deviation.
+        pub k_v_std: f32,
+        /// Main thruster's status ([`status_code`]).
+        pub status_t: u8,
+        /// Vertical thruster's status.
+        pub status_v: u8,
+        /// Depth, m.
+        pub z: f32,
+        /// Heading, rad.
+        pub psi: f32,
+        /// Surge over ground, m/s.
+        pub u: f32,
+        /// Roll, rad.
+        pub phi: f32,
+        /// NIS of the IMU update (NaN when none was applied).
+        pub imu_nis: f32,
+    }
+}
+
+impl UuvFrame {
+    /// The frame of estimate `e` after `sample` samples.
+    pub fn of(sample: u32, e: &Estimate<f32>) -> Self {
+        let nan = f32::NAN;
+        let (main, vertical) = (e.main, e.vertical);
+        Self {
+            sample,
+            k_t: main.map_or(nan, |h| h.k),
+            k_t_std: main.map_or(nan, |h| h.sd),
+            k_v: vertical.map_or(nan, |h| h.k),
+            k_v_std: vertical.map_or(nan, |h| h.sd),
+            status_t: main.map_or(u8::MAX, |h| status_code(h.status)),
+            status_v: vertical.map_or(u8::MAX, |h| status_code(h.status)),
+            z: e.z,
+            psi: e.attitude[2],
+            u: e.nu[0],
+            phi: e.attitude[0],
+            imu_nis: e.imu_nis.unwrap_or(nan),
+        }
+    }
+}
+
+crate::frame! {
+    /// The end of a run: counts.
+    pub struct UuvEnd = "uuvend {=u32} {=u32} {=u32} {=u32} {=u32} {=u32} {=u32} {=u32} {=u32}" {
+        /// Samples stepped (rows, and missing rows bridged).
+        pub samples: u32,
+        /// Rows that did not parse (stepped as missing).
+        pub bad_lines: u32,
+        /// Rows missing from the file (by their `t`), stepped as missing.
+        pub missing_lines: u32,
+        /// Rows without a usable `t` (not stepped).
+        pub untimed_lines: u32,
+        /// Rows off the sample grid (not bridged).
+        pub time_jumps: u32,
+        /// CUSUM alarms of the main thruster.
+        pub alarms_t: u32,
+        /// Of the vertical thruster.
+        pub alarms_v: u32,
+        /// The filter's covariance resets.
+        pub covariance_resets: u32,
+        /// Its refused updates.
+        pub refused_updates: u32,
+    }
+}
+
+impl NodeEstimator for UuvNode<'_> {
+    type Input = [f32; 15];
+    type Frame = UuvFrame;
+
+    fn step(&mut self, input: Option<[f32; 15]>) -> Innovation {
+        let e = UuvNode::step(self, input);
+        self.pending = Some(e);
+        Innovation::default()
+    }
+
+    fn report(&mut self, _: &Poll) -> Option<UuvFrame> {
+        self.pending.take().map(|e| UuvFrame::of(self.samples, &e))
+    }
+}
+
+/// The QEMU image `edgekf-uuv-qemu`: the vehicle's channels from the HIL file (other columns
+/// ignored; empty cells are missing values, lines that do not parse are stepped as missing
+/// samples and counted, lines missing by their `t` are bridged for up to
+/// [`crate::source::MAX_GAP_S`]); a `uuv` frame per sample, then `uuvend`.
+pub struct UuvImage;
+
+impl HilImage for UuvImage {
+    const NAME: &'static str = "edgekf-uuv-qemu";
+    const COLUMNS: &'static [&'static str] = &CHANNELS;
+    type Input = [f32; 15];
+    type Storage = Storage;
+    type Source<B: ByteSource> = ChannelSource<B, 15>;
+    type Estimator<'s> = UuvNode<'s>;
+    type StartError = EstimatorError;
+
+    fn storage() -> Storage {
+        None
+    }
+
+    #[inline(never)] // start-up temporaries stay out of the caller's frame
+    fn start<B: ByteSource>(input: B, storage: &mut Storage) -> Result<HilNode<'_, Self, B>, HilError<EstimatorError>> {
+        let reader = ChannelReader::new(input, CHANNELS).map_err(HilError::Header)?.with_empty_cells();
+        let est = storage.insert(estimator().map_err(HilError::Start)?);
+        let max_gap = crate::source::MAX_GAP_S * f64::from(SAMPLE_RATE_HZ);
+        let source = ChannelSource::new(reader).with_clock(1.0 / f64::from(SAMPLE_RATE_HZ), max_gap as u32);
+        Ok(Node::new(source, UuvNode::new(est), Default::default()))
+    }
+
+    fn finish<B: ByteSource>(node: &HilNode<'_, Self, B>, sink: &mut impl FrameSink) {
+        let n = node.estimator();
+        let est = n.estimator();
+        let h = est.health();
+        sink.frame(&UuvEnd {
+            samples: n.samples(),
+            bad_lines: node.source().reader().bad_lines(),
+            missing_lines: node.source().missing_lines(),
+            untimed_lines: node.source().untimed_lines(),
+            time_jumps: node.source().time_jumps(),
+            alarms_t: est.alarms()[0],
+            alarms_v: est.alarms()[1],
+            covariance_resets: h.covariance_resets,
+            refused_updates: h.refused_updates,
+        });
+    }
+}

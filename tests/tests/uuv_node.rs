@@ -1,0 +1,132 @@
+//! Underwater-vehicle thruster health on the node (`edgekf-uuv-qemu`,
+//! `edgekf_firmware::systems::uuv`): the image's code on the host, fed the CSV text the QEMU
+//! image reads, declares the paper scenario's fault and recovery as the host's `f64` estimator
+//! does; empty DVL cells are missing values, garbage and lost rows are counted and bridged; and,
+//! with `--features hil` (run by `cargo xtask test`, which sets `EDGEKF_UUV_ELF`), the image in
+//! QEMU reports bit for bit what its code reports on the host.
+
+use edgekf_firmware::frame::Frame;
+use edgekf_firmware::systems::uuv::{UuvEnd, UuvFrame, UuvImage};
+use edgekf_sim::systems::uuv::{simulate, Scenario, SimOptions, UuvConfig, UuvRecording};
+use edgekf_tests::host::lines;
+use edgekf_tests::report::frames;
+
+/// The paper scenario from 200 s to 232 s (the fault at 220 s, the first recovery at 228 s
+/// and the relapse at 230 s), as the CSV the image reads.
+fn paper_tail(seed: u64) -> (UuvRecording, String) {
+    let rec =
+        simulate(&UuvConfig::default(), &SimOptions { scenario: Scenario::Paper, duration: 232.0, seed }, &mut |_| {})
+            .unwrap();
+    let keep: Vec<usize> = (0..rec.t.len()).filter(|&i| rec.t[i] >= 200.0).collect();
+    let tail = UuvRecording {
+        t: keep.iter().map(|&i| rec.t[i]).collect(),
+        columns: rec.columns.iter().map(|c| keep.iter().map(|&i| c[i]).collect()).collect(),
+    };
+    let text = tail.to_csv(std::path::Path::new("paper_tail.csv")).unwrap();
+    (tail, text)
+}
+
+fn run(text: &str) -> (Vec<UuvFrame>, UuvEnd) {
+    let out = lines::<UuvImage>(text.as_bytes()).unwrap();
+    let per_sample = frames::<UuvFrame>(&out).unwrap();
+    let end = frames::<UuvEnd>(&out).unwrap().pop().expect("uuvend frame");
+    (per_sample, end)
+}
+
+/// Seconds from `at` to the first frame at or after it whose main-thruster status is
+/// `declared` (or healthy when not).
+fn latency(rec: &UuvRecording, frames: &[UuvFrame], at: f64, declared: bool) -> f64 {
+    let start = rec.t.iter().position(|&t| t >= at - 1e-9).unwrap();
+    match (start..frames.len()).find(|&k| (frames[k].status_t != 0) == declared) {
+        Some(k) => (k - start) as f64 / 50.0,
+        None => f64::INFINITY,
+    }
+}
+
+#[test]
+fn node_declares_the_fault_and_the_recovery_within_a_second() {
+    let (rec, text) = paper_tail(3);
+    let (frames, end) = run(&text);
+    assert_eq!(frames.len(), rec.t.len());
+    assert_eq!((end.samples as usize, end.bad_lines, end.missing_lines), (rec.t.len(), 0, 0));
+    assert_eq!((end.covariance_resets, end.refused_updates), (0, 0));
+    let [fault, recovery, relapse] =
+        [(220.0, true), (228.0, false), (230.0, true)].map(|(t, d)| latency(&rec, &frames, t, d));
+    eprintln!("node (host run): fault declared after {fault:.2} s, recovery after {recovery:.2} s, relapse after {relapse:.2} s");
+    assert!(fault <= 1.0 && recovery <= 1.0 && relapse <= 1.0, "{fault} {recovery} {relapse}");
+    // Before the fault: healthy throughout, and k_t near 1.
+    let before = rec.t.iter().position(|&t| t >= 220.0).unwrap();
+    assert!(frames[..before].iter().all(|f| f.status_t == 0 && f.status_v == 0));
+    assert!((frames[before - 1].k_t - 1.0).abs() < 0.1, "k_t = {}", frames[before - 1].k_t);
+    let truth_k = rec.column("truth_k_t").unwrap();
+    let late = frames.len() - 1;
+    assert!((frames[late].k_t as f64 - truth_k[late]).abs() < 0.1);
+}
+
+#[test]
+fn garbage_and_lost_rows_are_counted_and_bridged() {
+    let (rec, text) = paper_tail(3);
+    let mut rows: Vec<String> = text.lines().map(str::to_owned).collect();
+    // Row 101 lost, row 201 with garbage for acc_x, row 301 with a NaN depth.
+    let set = |row: &str, field: usize, value: &str| {
+        let mut cells: Vec<&str> = row.split(',').collect();
+        cells[field] = value;
+        cells.join(",")
+    };
+    rows[202] = set(&rows[202], 1, "x");
+    rows[302] = set(&rows[302], 7, "NaN");
+    rows.remove(102);
+    let faulty = rows.join("\n") + "\n";
+    let (frames, end) = run(&faulty);
+    assert_eq!(end.samples as usize, rec.t.len(), "every sample stepped, the lost row bridged");
+    assert_eq!((end.missing_lines, end.time_jumps), (1, 0));
+    assert_eq!(end.bad_lines, 1, "the garbage row; a NaN cell is a missing value");
+    let (clean, _) = run(&text);
+    let last = frames.len() - 1;
+    assert!((frames[last].k_t - clean[last].k_t).abs() < 0.05);
+    assert_eq!(frames[last].status_t, clean[last].status_t);
+}
+
+#[test]
+fn frames_read_back() {
+    let f = UuvFrame { sample: 3, k_t: 0.5, status_t: 1, ..UuvFrame::default() };
+    let mut line = String::new();
+    f.write_line(&mut line).unwrap();
+    assert_eq!(UuvFrame::parse(&line).unwrap().unwrap(), f);
+}
+
+#[cfg(feature = "hil")]
+mod hil {
+    use super::*;
+    use edgekf_tests::qemu;
+    use std::time::Duration;
+
+    /// The image in QEMU on 32 s of the paper scenario: every frame bit-identical to the
+    /// image's code on the host.
+    #[test]
+    fn uuv_in_qemu_matches_the_host() {
+        let elf = qemu::uuv_elf().unwrap_or_else(|e| panic!("{e:#}"));
+        let (_, text) = paper_tail(3);
+        let run = qemu::run(&elf, text.as_bytes(), Duration::from_secs(600)).unwrap_or_else(|e| panic!("{e:#}"));
+        if let Some(msg) = run.failure() {
+            panic!("{msg}");
+        }
+        let chip = frames::<UuvFrame>(&run.lines).unwrap();
+        let (host, end) = run(&text);
+        let bits =
+            |f: &UuvFrame| [f.k_t, f.k_t_std, f.k_v, f.k_v_std, f.z, f.psi, f.u, f.phi, f.imu_nis].map(f32::to_bits);
+        assert_eq!(chip.len(), host.len());
+        for (c, h) in chip.iter().zip(&host) {
+            assert_eq!(
+                (c.sample, c.status_t, c.status_v, bits(c)),
+                (h.sample, h.status_t, h.status_v, bits(h)),
+                "sample {}",
+                h.sample
+            );
+        }
+        let chip_end = frames::<UuvEnd>(&run.lines).unwrap().pop().expect("uuvend");
+        assert_eq!(chip_end, end);
+        let stack = frames::<edgekf_firmware::frame::StackFrame>(&run.lines).unwrap().pop().expect("stack line");
+        eprintln!("HIL uuv: {} frames bit-identical to the host run; {stack:?}", chip.len());
+    }
+}
