@@ -43,5 +43,6 @@ pub mod models;
 mod real;
 pub mod residual;
 pub mod systems;
+pub mod trig;
 
 pub use real::Real;

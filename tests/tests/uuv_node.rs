@@ -26,7 +26,7 @@ fn paper_tail(seed: u64) -> (UuvRecording, String) {
     (tail, text)
 }
 
-fn run(text: &str) -> (Vec<UuvFrame>, UuvEnd) {
+fn run_host(text: &str) -> (Vec<UuvFrame>, UuvEnd) {
     let out = lines::<UuvImage>(text.as_bytes()).unwrap();
     let per_sample = frames::<UuvFrame>(&out).unwrap();
     let end = frames::<UuvEnd>(&out).unwrap().pop().expect("uuvend frame");
@@ -46,7 +46,7 @@ fn latency(rec: &UuvRecording, frames: &[UuvFrame], at: f64, declared: bool) -> 
 #[test]
 fn node_declares_the_fault_and_the_recovery_within_a_second() {
     let (rec, text) = paper_tail(3);
-    let (frames, end) = run(&text);
+    let (frames, end) = run_host(&text);
     assert_eq!(frames.len(), rec.t.len());
     assert_eq!((end.samples as usize, end.bad_lines, end.missing_lines), (rec.t.len(), 0, 0));
     assert_eq!((end.covariance_resets, end.refused_updates), (0, 0));
@@ -77,11 +77,11 @@ fn garbage_and_lost_rows_are_counted_and_bridged() {
     rows[302] = set(&rows[302], 7, "NaN");
     rows.remove(102);
     let faulty = rows.join("\n") + "\n";
-    let (frames, end) = run(&faulty);
+    let (frames, end) = run_host(&faulty);
     assert_eq!(end.samples as usize, rec.t.len(), "every sample stepped, the lost row bridged");
     assert_eq!((end.missing_lines, end.time_jumps), (1, 0));
     assert_eq!(end.bad_lines, 1, "the garbage row; a NaN cell is a missing value");
-    let (clean, _) = run(&text);
+    let (clean, _) = run_host(&text);
     let last = frames.len() - 1;
     assert!((frames[last].k_t - clean[last].k_t).abs() < 0.05);
     assert_eq!(frames[last].status_t, clean[last].status_t);
@@ -112,7 +112,7 @@ mod hil {
             panic!("{msg}");
         }
         let chip = frames::<UuvFrame>(&run.lines).unwrap();
-        let (host, end) = run(&text);
+        let (host, end) = run_host(&text);
         let bits =
             |f: &UuvFrame| [f.k_t, f.k_t_std, f.k_v, f.k_v_std, f.z, f.psi, f.u, f.phi, f.imu_nis].map(f32::to_bits);
         assert_eq!(chip.len(), host.len());
@@ -129,4 +129,33 @@ mod hil {
         let stack = frames::<edgekf_firmware::frame::StackFrame>(&run.lines).unwrap().pop().expect("stack line");
         eprintln!("HIL uuv: {} frames bit-identical to the host run; {stack:?}", chip.len());
     }
+}
+
+/// Soak: the node's `f32` estimator over a long healthy flight (2 000 s, 10⁵ samples; 10⁶ with
+/// `EDGEKF_LONG=1`): no covariance reset, no refused update, never declared, the main
+/// thruster's factor within 0.1 of 1 and the IMU update's NIS consistent, block by block.
+#[test]
+fn node_soak_on_a_long_healthy_flight() {
+    let samples: u64 = if std::env::var_os("EDGEKF_LONG").is_some() { 1_000_000 } else { 100_000 };
+    let config = UuvConfig::default();
+    let opts = SimOptions { scenario: Scenario::Healthy, duration: samples as f64 / 50.0, seed: 77 };
+    let rec = simulate(&config, &opts, &mut |_| {}).unwrap();
+    let text = rec.to_csv(std::path::Path::new("soak.csv")).unwrap();
+    let (frames, end) = run_host(&text);
+    assert_eq!(end.samples as u64, samples);
+    assert_eq!((end.covariance_resets, end.refused_updates), (0, 0));
+    assert!(frames.iter().all(|f| f.status_t == 0 && f.status_v == 0), "declared on healthy data");
+    let worst_k = frames.iter().skip(500).map(|f| (f.k_t - 1.0).abs().max((f.k_v - 1.0).abs())).fold(0.0f32, f32::max);
+    // NIS per degree of freedom, by blocks of 10⁴ samples (8 with depth and heading).
+    let blocks: Vec<f64> = frames[1..]
+        .chunks(10_000)
+        .map(|b| b.iter().map(|f| f.imu_nis as f64 / 8.0).sum::<f64>() / b.len() as f64)
+        .collect();
+    let (lo, hi) = blocks.iter().fold((f64::INFINITY, 0.0f64), |(l, h), v| (l.min(*v), h.max(*v)));
+    eprintln!(
+        "uuv node soak: {samples} samples, worst |k − 1| {worst_k:.4}, NIS per dof by block {lo:.3}–{hi:.3}, {} CUSUM reopenings",
+        end.alarms_t + end.alarms_v
+    );
+    assert!(worst_k < 0.1, "{worst_k}");
+    assert!(lo > 0.5 && hi < 2.0, "NIS per dof {lo}–{hi}");
 }

@@ -75,6 +75,9 @@ pub struct Image {
     /// included) within 10 000 instructions, under 1 % of its 16 ms period at 84 MHz; a poll
     /// that finds the FIFO empty (the configuration read back) within 1 000, and the one that
     /// re-initialises a part that reset within 2 000: fault handling must not cost a period.
+    /// The vehicle's 20-state joint UKF at 50 Hz on an 84 MHz core has 1.68 M cycles a sample;
+    /// the issue asks for 30 % headroom at one instruction a cycle, 1.2 M: a sample with the
+    /// DVL within that, an ordinary one within 1.1 M.
     pub budgets: &'static [Budget],
 }
 
@@ -132,7 +135,7 @@ pub const IMAGES: [Image; 6] = [
         what: "the underwater-vehicle thruster-health QEMU image",
         role: Role::Hil { env: "EDGEKF_UUV_ELF", tests: &["uuv_node"] },
         proof: PanicProof::Except(CORE_CSV_PARSING),
-        budgets: &[],
+        budgets: &[("uuv_step", 20, 6, 1_100_000), ("uuv_step_dvl", 20, 6, 1_200_000)],
     },
     Image {
         bin: "edgekf-bench",

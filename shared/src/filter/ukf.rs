@@ -168,16 +168,13 @@ impl<T: Real> MerweSigmaPoints<T> {
     }
 }
 
-/// Lower Cholesky factor of `spread · P`, or `None` unless every input and output value is finite
-/// and the factor's diagonal is positive (nalgebra would divide by an infinite pivot silently).
+/// Lower Cholesky factor of `spread · P`, or `None` unless the lower triangle and the factor are
+/// finite and the factor's diagonal is positive (`P` is symmetric wherever this is called on a
+/// filter's covariance: the guard symmetrises it first).
 fn sigma_factor<T: Real, const N: usize>(p: &SMatrix<T, N, N>, spread: T) -> Option<SMatrix<T, N, N>> {
-    let scaled = p * spread;
-    if scaled.iter().any(|v| !v.is_finite()) {
-        return None;
-    }
-    let l = scaled.cholesky()?.unpack();
-    let ok = l.iter().all(|v| v.is_finite()) && l.diagonal().iter().all(|d| *d > T::zero());
-    ok.then_some(l)
+    // `cholesky` checks every pivot and entry of the factor as it forms them, which covers the
+    // (symmetric) input: no separate passes over the matrix.
+    crate::linalg::cholesky(&(p * spread))
 }
 
 /// Weighted mean and covariance of the `2N + 1` images of the sigma points, given as the centre
@@ -220,13 +217,25 @@ fn moments<T: Real, const K: usize, const N: usize>(
         m += e * w.side;
     }
     let mut cov = (m * m.transpose()) * w.cov_shift;
-    for e in columns() {
-        cov += (e * e.transpose()) * w.side;
+    // `cov += (e eᵀ) · W` for every deviation, fused into one pass over the columns' storage:
+    // the same products in the same order as the matrix expression (so the same bits, exactly
+    // symmetric), without its two temporaries per point (the chip's hot loop).
+    for e in e_plus.data.0.iter().chain(e_minus.data.0.iter()) {
+        add_outer(&mut cov, e, e, w.side);
     }
     for mut col in e_plus.column_iter_mut().chain(e_minus.column_iter_mut()) {
         col -= m;
     }
     (center + m, cov, e_plus, e_minus)
+}
+
+/// `acc += (a bᵀ) · w`, element by element as nalgebra forms `(a * b.transpose()) * w`.
+fn add_outer<T: Real, const R: usize, const C: usize>(acc: &mut SMatrix<T, R, C>, a: &[T; R], b: &[T; C], w: T) {
+    for (col, bj) in acc.data.0.iter_mut().zip(b.iter()) {
+        for (x, ai) in col.iter_mut().zip(a.iter()) {
+            *x += (*ai * *bj) * w;
+        }
+    }
 }
 
 /// Unscented Kalman filter with `N` states and `M` measurements.
@@ -446,9 +455,9 @@ impl<T: Real, const N: usize, const M: usize> UnscentedKalmanFilter<T, N, M> {
         let mut pxz = SMatrix::<T, N, K>::zeros();
         let side = self.weights.side;
         for (dx, dz) in
-            dx_plus.column_iter().zip(dz_plus.column_iter()).chain(dx_minus.column_iter().zip(dz_minus.column_iter()))
+            dx_plus.data.0.iter().zip(dz_plus.data.0.iter()).chain(dx_minus.data.0.iter().zip(dz_minus.data.0.iter()))
         {
-            pxz += (dx * dz.transpose()) * side;
+            add_outer(&mut pxz, dx, dz, side);
         }
         let residual = y - z_pred;
         let refuse = |health: &mut FilterHealth| {
@@ -458,16 +467,16 @@ impl<T: Real, const N: usize, const M: usize> UnscentedKalmanFilter<T, N, M> {
         if s.iter().any(|v| !v.is_finite()) || pxz.iter().any(|v| !v.is_finite()) {
             return refuse(&mut self.health);
         }
-        let Some(chol) = s.cholesky() else {
+        let Some(l) = crate::linalg::cholesky(&s) else {
             return refuse(&mut self.health);
         };
-        // K = Pxz S⁻¹ = (S⁻¹ Pxzᵀ)ᵀ;  K S Kᵀ = W Wᵀ with Wᵀ = L⁻¹ Pxzᵀ.
-        let gain = chol.solve(&pxz.transpose()).transpose();
-        let l = chol.l();
-        let (Some(wt), Some(white)) = (l.solve_lower_triangular(&pxz.transpose()), l.solve_lower_triangular(&residual))
-        else {
+        // K = Pxz S⁻¹ = (L⁻ᵀ L⁻¹ Pxzᵀ)ᵀ;  K S Kᵀ = W Wᵀ with Wᵀ = L⁻¹ Pxzᵀ.
+        let wt = crate::linalg::solve_lower(&l, &pxz.transpose());
+        let white = crate::linalg::solve_lower(&l, &residual);
+        let gain = crate::linalg::solve_lower_transposed(&l, &wt).transpose();
+        if wt.iter().chain(white.iter()).any(|v| !v.is_finite()) {
             return refuse(&mut self.health);
-        };
+        }
         self.x = x + gain * residual;
         self.p -= wt.transpose() * wt;
         self.guard();
@@ -486,7 +495,19 @@ impl<T: Real, const N: usize, const M: usize> UnscentedKalmanFilter<T, N, M> {
     /// type's documentation).
     fn guard(&mut self) {
         let half = T::of_f64(0.5);
-        self.p = (self.p + self.p.transpose()) * half;
+        // `P ← (P + Pᵀ)/2` in place: each pair averaged once, the same bits as the expression.
+        for j in 0..N {
+            for i in j + 1..N {
+                if let (Some(&a), Some(&b)) = (self.p.get((i, j)), self.p.get((j, i))) {
+                    let v = (a + b) * half;
+                    for e in [(i, j), (j, i)] {
+                        if let Some(x) = self.p.get_mut(e) {
+                            *x = v;
+                        }
+                    }
+                }
+            }
+        }
         let state_ok = self.x.iter().all(|v| v.is_finite());
         match sigma_factor(&self.p, self.weights.spread) {
             Some(l) if state_ok => self.sqrt = l,

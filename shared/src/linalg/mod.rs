@@ -39,7 +39,9 @@ impl core::fmt::Display for LinalgError {
     }
 }
 
+mod cholesky;
 mod solve;
+pub use cholesky::{cholesky, solve_lower, solve_lower_transposed};
 pub use solve::solve;
 
 mod dot;

@@ -48,8 +48,9 @@ pub struct Attitude<T> {
 impl<T: Real> Attitude<T> {
     /// From roll, pitch and yaw, rad.
     pub fn new(phi: T, theta: T, psi: T) -> Self {
-        let (st, ct) = theta.libm_sin_cos();
-        Self { roll: phi.libm_sin_cos(), pitch: (st, ct.max(T::of_f64(0.05))), yaw: psi.libm_sin_cos() }
+        use crate::trig::sin_cos;
+        let (st, ct) = sin_cos(theta);
+        Self { roll: sin_cos(phi), pitch: (st, ct.max(T::of_f64(0.05))), yaw: sin_cos(psi) }
     }
 
     /// Body to earth (north, east, down): `R = Rz(ψ) Ry(θ) Rx(φ)`.
@@ -155,7 +156,7 @@ impl<T: Real> ReducedDynamics<T> {
     /// matrix is singular.
     pub fn new(vehicle: &Vehicle) -> Option<Self> {
         vehicle.check().ok()?;
-        let m_inv = Self::mass_matrix(vehicle).try_inverse()?;
+        let m_inv = crate::linalg::solve(&Self::mass_matrix(vehicle), &SMatrix::<f64, 6, 6>::identity())?;
         let h = vehicle.hydro.as_array();
         let a = &vehicle.actuators;
         let t = T::of_f64;

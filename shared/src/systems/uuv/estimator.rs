@@ -11,7 +11,9 @@ use super::detector::{Status, ThrusterMonitor};
 use super::dynamics::{Attitude, Drive, Nu, ReducedDynamics};
 use super::settings::{EstimatorSettings, Layout, VELOCITY};
 use super::vehicle::Vehicle;
-use crate::filter::{FilterHealth, MerweSigmaPoints, UkfError, UkfMeasurement, UkfModel, UnscentedKalmanFilter};
+use crate::filter::{
+    FilterHealth, Innovation, MerweSigmaPoints, UkfError, UkfMeasurement, UkfModel, UnscentedKalmanFilter,
+};
 use crate::Real;
 use nalgebra::{SMatrix, SVector};
 
@@ -79,7 +81,8 @@ pub struct Estimate<T> {
     pub acc_bias: Option<[T; 3]>,
     /// Gyro biases, rad/s, if carried.
     pub gyro_bias: Option<[T; 3]>,
-    /// NIS of this sample's IMU update (6 degrees of freedom), if it was applied.
+    /// NIS of this sample's IMU update, if it was applied: 8 degrees of freedom when depth and
+    /// heading were present too (one joint update), 6 when not.
     pub imu_nis: Option<T>,
 }
 
@@ -123,9 +126,9 @@ impl<T: Real> StepModel<'_, T> {
             n_v: self.command.n_v,
             rudder: self.command.rudder,
             elevator: self.command.elevator,
-            k_t: self.layout.k_t().map_or(one, |i| clamp(x[i])),
-            k_v: self.layout.k_v().map_or(one, |i| clamp(x[i])),
-            current: self.layout.current().map_or([T::zero(); 2], |i| [x[i], x[i + 1]]),
+            k_t: self.layout.k_t().map_or(one, |i| clamp(get(x, i))),
+            k_v: self.layout.k_v().map_or(one, |i| clamp(get(x, i))),
+            current: self.layout.current().map_or([T::zero(); 2], |i| [get(x, i), get(x, i + 1)]),
         }
     }
 
@@ -170,10 +173,19 @@ impl<T: Real, const N: usize> UkfModel<T, N, 6> for StepModel<'_, T> {
         let mut y = SVector::<T, 6>::from([f[0], f[1], f[2], nu[3], nu[4], nu[5]]);
         if let Some(b) = self.layout.acc_bias() {
             for i in 0..6 {
-                y[i] += x[b + i];
+                y[i] += get(x, b + i);
             }
         }
         y
+    }
+}
+
+/// The IMU, depth and heading in one update (when all are present: one sigma-point pass and
+/// one covariance factor fewer than two updates).
+impl<T: Real, const N: usize> UkfMeasurement<T, N, 8> for StepModel<'_, T> {
+    fn h(&self, x: &SVector<T, N>) -> SVector<T, 8> {
+        let imu = UkfModel::<T, N, 6>::h(self, x);
+        SVector::<T, 8>::from([imu[0], imu[1], imu[2], imu[3], imu[4], imu[5], x[0], x[3]])
     }
 }
 
@@ -216,6 +228,7 @@ pub struct UuvEstimator<T: Real, const N: usize> {
     q: SMatrix<T, N, N>,
     r_imu: SMatrix<T, 6, 6>,
     r_depth_heading: SMatrix<T, 2, 2>,
+    r_imu_depth_heading: SMatrix<T, 8, 8>,
     r_dvl: SMatrix<T, 3, 3>,
     ukf: Option<UnscentedKalmanFilter<T, N, 6>>,
     command: Command<T>,
@@ -255,33 +268,45 @@ impl<T: Real, const N: usize> UuvEstimator<T, N> {
         }
         let dt = settings.dt;
         let mut qd = [0.0f64; N];
-        qd[0] = p.depth;
-        qd[1..4].fill(p.attitude);
-        qd[4..7].fill(p.velocity);
-        qd[7..10].fill(p.rate);
-        for i in [layout.k_t(), layout.k_v()].into_iter().flatten() {
-            qd[i] = p.health;
-        }
-        if let (Some(a), Some(g)) = (layout.acc_bias(), layout.gyro_bias()) {
-            qd[a..a + 3].fill(p.acc_bias);
-            qd[g..g + 3].fill(p.gyro_bias);
-        }
-        if let Some(c) = layout.current() {
-            qd[c..c + 2].fill(p.current);
-        }
+        let mut set = |from: Option<usize>, count: usize, v: f64| {
+            for i in from.into_iter().flat_map(|f| f..f + count) {
+                if let Some(q) = qd.get_mut(i) {
+                    *q = v;
+                }
+            }
+        };
+        set(Some(0), 1, p.depth);
+        set(Some(1), 3, p.attitude);
+        set(Some(VELOCITY), 3, p.velocity);
+        set(Some(VELOCITY + 3), 3, p.rate);
+        set(layout.k_t(), 1, p.health);
+        set(layout.k_v(), 1, p.health);
+        set(layout.acc_bias(), 3, p.acc_bias);
+        set(layout.gyro_bias(), 3, p.gyro_bias);
+        set(layout.current(), 2, p.current);
         let q = SMatrix::<T, N, N>::from_diagonal(&SVector::<T, N>::from(qd.map(|s| T::of_f64(s * s * dt))));
-        let diag = |s: &[f64]| s.iter().map(|v| T::of_f64(v * v)).collect::<heapless::Vec<T, 6>>();
-        let imu = diag(&[n.acc, n.acc, n.acc, n.gyro, n.gyro, n.gyro]);
+        let var = |s: f64| T::of_f64(s * s);
+        let imu = [n.acc, n.acc, n.acc, n.gyro, n.gyro, n.gyro].map(var);
         Ok(Self {
             dynamics,
             settings: *settings,
             points: MerweSigmaPoints { alpha: T::of_f64(0.5), beta: T::of_f64(2.0), kappa: T::zero() },
             q,
-            r_imu: SMatrix::<T, 6, 6>::from_diagonal(&SVector::<T, 6>::from_iterator(imu)),
+            r_imu: SMatrix::<T, 6, 6>::from_diagonal(&SVector::<T, 6>::from(imu)),
             r_depth_heading: SMatrix::<T, 2, 2>::from_diagonal(&SVector::<T, 2>::new(
                 T::of_f64(n.depth * n.depth),
                 T::of_f64(n.heading * n.heading),
             )),
+            r_imu_depth_heading: SMatrix::<T, 8, 8>::from_diagonal(&SVector::<T, 8>::from([
+                imu[0],
+                imu[1],
+                imu[2],
+                imu[3],
+                imu[4],
+                imu[5],
+                var(n.depth),
+                var(n.heading),
+            ])),
             r_dvl: SMatrix::<T, 3, 3>::identity() * T::of_f64(n.dvl * n.dvl),
             ukf: None,
             command: Command { n_t: T::zero(), n_v: T::zero(), rudder: T::zero(), elevator: T::zero() },
@@ -372,16 +397,21 @@ impl<T: Real, const N: usize> UuvEstimator<T, N> {
             (x[7 + i], sd[7 + i]) = known(g, 0.0, init.rate, 0.5);
         }
         for i in [layout.k_t(), layout.k_v()].into_iter().flatten() {
-            x[i] = T::one();
-            sd[i] = init.health;
+            if let (Some(xi), Some(si)) = (x.get_mut(i), sd.get_mut(i)) {
+                *xi = T::one();
+                *si = init.health;
+            }
         }
-        if let (Some(a), Some(g)) = (layout.acc_bias(), layout.gyro_bias()) {
-            sd[a..a + 3].fill(init.acc_bias);
-            sd[g..g + 3].fill(init.gyro_bias);
-        }
-        if let Some(c) = layout.current() {
-            sd[c..c + 2].fill(init.current);
-        }
+        let mut spread = |from: Option<usize>, count: usize, v: f64| {
+            for i in from.into_iter().flat_map(|f| f..f + count) {
+                if let Some(s) = sd.get_mut(i) {
+                    *s = v;
+                }
+            }
+        };
+        spread(layout.acc_bias(), 3, init.acc_bias);
+        spread(layout.gyro_bias(), 3, init.gyro_bias);
+        spread(layout.current(), 2, init.current);
         let p0 = SMatrix::<T, N, N>::from_diagonal(&SVector::<T, N>::from(sd.map(|v| T::of_f64(v * v))));
         // Settings were checked and the spreads are positive: the start cannot be refused; if it
         // were, the estimator stays unstarted and tries again at the next sample.
@@ -394,43 +424,35 @@ impl<T: Real, const N: usize> UuvEstimator<T, N> {
         let model = StepModel { dynamics: &self.dynamics, layout, dt: self.dt, command: self.command };
         let ukf = self.ukf.as_mut()?;
         ukf.predict(&model);
-        let y = SVector::<T, 6>::from([s.acc[0], s.acc[1], s.acc[2], s.gyro[0], s.gyro[1], s.gyro[2]]);
-        // How a change of each factor would move the IMU's reading, at the prior.
-        let prior = *ukf.state();
-        let base = UkfModel::<T, N, 6>::h(&model, &prior);
-        let step = T::of_f64(0.1);
-        let signatures = [layout.k_t(), layout.k_v()].map(|i| {
-            i.map(|i| {
-                let mut moved = prior;
-                moved[i] += step;
-                (UkfModel::<T, N, 6>::h(&model, &moved) - base) / step
-            })
-        });
+        let imu = [s.acc[0], s.acc[1], s.acc[2], s.gyro[0], s.gyro[1], s.gyro[2]];
+        let imu_ok = imu.iter().all(|v| v.is_finite());
+        let dh_ok = s.depth.is_finite() && s.heading.is_finite();
+        // The heading on the branch of the estimate, so the innovation is the short way round.
+        let psi = ukf.state()[3];
+        let heading = psi + wrap(s.heading - psi);
+        let factors = [layout.k_t(), layout.k_v()];
+        let reopen = T::of_f64(self.settings.detector.reopen);
         let mut nis = None;
-        if let Ok(inn) = ukf.update(&model, &y) {
-            nis = Some(inn.nis);
-            if let Some(chol) = inn.s.cholesky() {
-                for (j, sig) in signatures.iter().enumerate() {
-                    let (Some(g), Some(i)) = (sig, [layout.k_t(), layout.k_v()][j]) else { continue };
-                    let w = chol.solve(g);
-                    let norm = g.dot(&w);
-                    if norm > T::zero() && self.monitors[j].score(w.dot(&inn.residual) / norm.sqrt()) {
-                        let mut p = *ukf.covariance();
-                        p.row_mut(i).fill(T::zero());
-                        p.column_mut(i).fill(T::zero());
-                        let reopen = T::of_f64(self.settings.detector.reopen);
-                        p[(i, i)] = reopen * reopen;
-                        ukf.set_covariance(p);
-                    }
+        if imu_ok && dh_ok {
+            let y = SVector::<T, 8>::from([imu[0], imu[1], imu[2], imu[3], imu[4], imu[5], s.depth, heading]);
+            let r = &self.r_imu_depth_heading;
+            let signatures = signatures(|x| UkfMeasurement::<T, N, 8>::h(&model, x), ukf.state(), factors);
+            if let Ok(inn) = ukf.update_with(&model, &y, r) {
+                nis = Some(inn.nis);
+                watch(ukf, &mut self.monitors, &inn, &signatures, factors, reopen);
+            }
+        } else {
+            if imu_ok {
+                let signatures = signatures(|x| UkfModel::<T, N, 6>::h(&model, x), ukf.state(), factors);
+                if let Ok(inn) = ukf.update(&model, &SVector::<T, 6>::from(imu)) {
+                    nis = Some(inn.nis);
+                    watch(ukf, &mut self.monitors, &inn, &signatures, factors, reopen);
                 }
             }
-        }
-        if s.depth.is_finite() && s.heading.is_finite() {
-            // The heading on the branch of the estimate, so the innovation is the short way round.
-            let psi = ukf.state()[3];
-            let y = SVector::<T, 2>::new(s.depth, psi + wrap(s.heading - psi));
-            // A refused update is counted in the filter's health; nothing else to do here.
-            let _ = ukf.update_with(&DepthHeading, &y, &self.r_depth_heading);
+            if dh_ok {
+                // A refused update is counted in the filter's health; nothing else to do here.
+                let _ = ukf.update_with(&DepthHeading, &SVector::<T, 2>::new(s.depth, heading), &self.r_depth_heading);
+            }
         }
         if let Some(d) = s.dvl {
             let _ = ukf.update_with(&Dvl, &SVector::<T, 3>::from(d), &self.r_dvl);
@@ -452,14 +474,15 @@ impl<T: Real, const N: usize> UuvEstimator<T, N> {
         let monitors = &mut self.monitors;
         let mut health = |j: usize, i: Option<usize>| {
             i.map(|i| {
-                let sd = p[(i, i)].max(T::zero()).sqrt();
-                let status = monitors[j].status(x[i], sd);
-                Health { k: x[i], sd, status, alarms: monitors[j].alarms() }
+                let sd = p.get((i, i)).copied().unwrap_or_else(T::zero).max(T::zero()).sqrt();
+                let k = get(&x, i);
+                let status = monitors[j].status(k, sd);
+                Health { k, sd, status, alarms: monitors[j].alarms() }
             })
         };
         let main = health(0, layout.k_t());
         let vertical = health(1, layout.k_v());
-        let three = |i: usize| [x[i], x[i + 1], x[i + 2]];
+        let three = |i: usize| [get(&x, i), get(&x, i + 1), get(&x, i + 2)];
         Estimate {
             position: self.position,
             z: x[0],
@@ -467,12 +490,72 @@ impl<T: Real, const N: usize> UuvEstimator<T, N> {
             nu: [x[4], x[5], x[6], x[7], x[8], x[9]],
             main,
             vertical,
-            current: layout.current().map(|c| [x[c], x[c + 1]]),
+            current: layout.current().map(|c| [get(&x, c), get(&x, c + 1)]),
             acc_bias: layout.acc_bias().map(three),
             gyro_bias: layout.gyro_bias().map(three),
             imu_nis,
         }
     }
+}
+
+/// How a change of each health factor would move measurement `h`, at `prior` (`h` is linear in
+/// the factors, so a finite difference of 0.1 is exact but for rounding).
+fn signatures<T: Real, const N: usize, const K: usize>(
+    h: impl Fn(&SVector<T, N>) -> SVector<T, K>,
+    prior: &SVector<T, N>,
+    factors: [Option<usize>; 2],
+) -> [Option<SVector<T, K>>; 2] {
+    let base = h(prior);
+    let step = T::of_f64(0.1);
+    factors.map(|i| {
+        i.map(|i| {
+            let mut moved = *prior;
+            if let Some(k) = moved.get_mut(i) {
+                *k += step;
+            }
+            (h(&moved) - base) / step
+        })
+    })
+}
+
+/// Feeds each thruster's CUSUM the innovation projected on its signature, whitened (the score
+/// is N(0, 1) while the model holds), and reopens a factor whose CUSUM alarms: its variance set
+/// to `reopen²`, its covariances with the rest cleared.
+fn watch<T: Real, const N: usize, const K: usize>(
+    ukf: &mut UnscentedKalmanFilter<T, N, 6>,
+    monitors: &mut [ThrusterMonitor<T>; 2],
+    inn: &Innovation<T, K>,
+    signatures: &[Option<SVector<T, K>>; 2],
+    factors: [Option<usize>; 2],
+    reopen: T,
+) {
+    let Some(l) = crate::linalg::cholesky(&inn.s) else { return };
+    let white = crate::linalg::solve_lower(&l, &inn.residual);
+    for ((sig, factor), monitor) in signatures.iter().zip(factors).zip(monitors.iter_mut()) {
+        let (Some(g), Some(i)) = (sig, factor) else { continue };
+        let wg = crate::linalg::solve_lower(&l, g);
+        let norm = wg.norm_squared();
+        if norm > T::zero() && monitor.score(wg.dot(&white) / norm.sqrt()) {
+            let mut p = *ukf.covariance();
+            for k in 0..N {
+                if let Some(e) = p.get_mut((i, k)) {
+                    *e = T::zero();
+                }
+                if let Some(e) = p.get_mut((k, i)) {
+                    *e = T::zero();
+                }
+            }
+            if let Some(e) = p.get_mut((i, i)) {
+                *e = reopen * reopen;
+            }
+            ukf.set_covariance(p);
+        }
+    }
+}
+
+/// `x[i]`, or 0 for an index the layout cannot give (no panic path on the chip).
+fn get<T: Real, const N: usize>(x: &SVector<T, N>, i: usize) -> T {
+    x.get(i).copied().unwrap_or_else(T::zero)
 }
 
 /// An angle wrapped to (−π, π].
