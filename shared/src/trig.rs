@@ -25,7 +25,7 @@ pub fn sin_cos<T: Real>(x: T) -> (T, T) {
     let t = T::of_f64;
     let k = (x * t(core::f64::consts::FRAC_2_PI)).round();
     // π/2 = HI + LO, HI with few significant bits so that k·HI is exact for |k| < 2¹⁷.
-    const HI: f64 = 1.570_796_251_296_997_07;
+    const HI: f64 = 1.570_796_251_296_997;
     const LO: f64 = 7.549_789_954_891_882e-8;
     let r = (x - k * t(HI)) - k * t(LO);
     let r2 = r * r;
