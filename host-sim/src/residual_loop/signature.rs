@@ -282,16 +282,24 @@ pub fn summarise(run: &Run, ctx: &SummaryContext<'_>, o: &SignatureOptions) -> R
         }
         let lb = white.ljung_box(20);
         let mut peaks = Vec::new();
+        // A slow channel (a 5 Hz log in 50 Hz rows) is its own sequence at its own rate.
+        let rate =
+            if 2 * zs.len() < keep.len() { sample_rate * zs.len() as f64 / keep.len() as f64 } else { sample_rate };
         let spectrum = if fine {
-            welch_spectrum::<FINE_SEGMENT>(&zs, sample_rate, o.peak_db)
+            welch_spectrum::<FINE_SEGMENT>(&zs, rate, o.peak_db)
         } else {
-            welch_spectrum::<SEGMENT>(&zs, sample_rate, o.peak_db)
+            welch_spectrum::<SEGMENT>(&zs, rate, o.peak_db)
         };
         match spectrum {
             Some((width, psd, found)) => {
-                bin_width_hz = width;
-                spectra.push(psd);
-                let tol = PeakTolerance::new(1.2 * bin_width_hz);
+                // The plots share one frequency axis: a slow channel's spectrum is not drawn.
+                if rate == sample_rate {
+                    bin_width_hz = width;
+                    spectra.push(psd);
+                } else {
+                    spectra.push(Vec::new());
+                }
+                let tol = PeakTolerance::new(1.2 * width);
                 for (f, prominence_db) in found {
                     let located = locate_peak(f, speed, naturals, &tol).class;
                     let line = named_line(f, &lines.named, tol.abs_hz, !matches!(located, PeakClass::Unexplained));
@@ -340,11 +348,26 @@ pub fn summarise(run: &Run, ctx: &SummaryContext<'_>, o: &SignatureOptions) -> R
         });
     }
     let mut nis_total = RunningStats::<f64>::new();
+    // Degrees of freedom of the samples' NIS: the channels each had (a slow sensor's channels
+    // are in one sample of ten).
+    let (mut dof, mut nis_sum) = (0usize, 0.0);
     for &k in &keep {
         nis_total.push(run.nis[k]);
+        if run.nis[k].is_finite() {
+            dof += (0..channels.len()).filter(|&i| run.innovation[i][k].is_finite()).count();
+            nis_sum += run.nis[k];
+        }
     }
     let m = channels.len().max(1);
-    let bounds = NisBounds::new(m, nis_total.count().max(1) as usize, o.alpha);
+    let samples = nis_total.count().max(1) as usize;
+    // Every channel in every sample: `mean(NIS)` against χ²(n m)/n; otherwise NIS per degree of
+    // freedom against χ²(dof)/dof (the same test when the channels are all there).
+    let uniform = dof == m * samples;
+    let (bounds, per_channel) = if uniform || dof == 0 {
+        (NisBounds::new(m, samples, o.alpha), nis_total.mean() / m as f64)
+    } else {
+        (NisBounds::new(1, dof, o.alpha), nis_sum / dof as f64)
+    };
     let mut error_rms = BTreeMap::new();
     for (j, name) in rows.iter().map(|r| &r.name).enumerate() {
         if let Some(Some(truth)) = truth.get(j) {
@@ -360,12 +383,12 @@ pub fn summarise(run: &Run, ctx: &SummaryContext<'_>, o: &SignatureOptions) -> R
             }
         }
     }
-    let nis_consistent = bounds.contains(nis_total.mean());
+    let nis_consistent = bounds.contains(if uniform || dof == 0 { nis_total.mean() } else { per_channel });
     let whiteness_p = out.iter().map(|c| c.whiteness_p).fold(1.0, f64::min);
     let consistent = nis_consistent && whiteness_p >= o.alpha / m as f64 && out.iter().all(|c| c.z.abs() < o.bias_z);
     RunSummary {
         innovation_rms: out.iter().map(|c| (c.name.clone(), c.rms)).collect(),
-        nis_mean: nis_total.mean() / m as f64,
+        nis_mean: per_channel,
         nis_consistent,
         whiteness_p,
         consistent,

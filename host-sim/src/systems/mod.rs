@@ -64,7 +64,16 @@ pub const REGISTRY: &[SystemEntry] = &[
         about: "Underwater vehicle (REMUS 100, 6-DOF): simulate a thruster fault, estimate the thrusters' health",
         command: subcommands::<uuv::cli::UuvCommand>,
         run: |m| dispatch(m, uuv::cli::run),
-        close_loop: None,
+        close_loop: Some(LoopEntry {
+            about: "Underwater vehicle: run the thruster-health filter the configuration declares on a data file, \
+                    read its innovations, add the effects the data asks for (a thruster's health from an onset, a \
+                    sensor bias on an IMU or DVL axis, an undeclared current, a wrong mass or surge drag) and that \
+                    pay for their parameters (BIC) in both halves, and report before/after (report.json, \
+                    report.html)",
+            args: |c| c,
+            run: uuv::cli::close_loop,
+            baseline: None,
+        }),
         demo: None,
     },
 ];

@@ -12,6 +12,7 @@ use super::scenario::Scenario;
 use super::simulate::{simulate, SimOptions, TRUTH};
 use crate::io::output::{check, write_atomic};
 use crate::io::timeline::{bridge, TimelineOptions};
+use crate::residual_loop::LoopReport;
 use anyhow::Context as _;
 use clap::{Args, Subcommand};
 use std::path::{Path, PathBuf};
@@ -186,4 +187,13 @@ fn summarise(table: &EstimateTable, data: &crate::io::data::DataFile) {
     if table.repairs != (0, 0) {
         println!("filter repairs: {} covariance reset(s), {} refused update(s)", table.repairs.0, table.repairs.1);
     }
+}
+
+/// `edgekf loop uuv`: the vehicle's configuration and data, the loop closed on them.
+pub fn close_loop(request: &crate::cli::looping::LoopRequest, _: &clap::ArgMatches) -> anyhow::Result<LoopReport> {
+    let config = UuvConfig::load(&request.config)?;
+    let known: Vec<&str> = REQUIRED.iter().chain(TRUTH.iter()).copied().collect();
+    let file =
+        crate::cli::registry::read_data(&request.data, &known, config.sensors.rate, &TimelineOptions::default())?;
+    super::loop_system::close_loop(&config, &file, &request.options)
 }

@@ -8,14 +8,16 @@
 //! * [`simulate`](mod@simulate): a scenario flown into a data file;
 //! * [`estimate`](mod@estimate): the shared estimator (`edgekf::systems::uuv`) over a data
 //!   file;
+//! * [`loop_system`]: the vehicle as a system of the residual loop (`edgekf loop uuv`);
 //! * [`plot`]: the health factors against truth (`edgekf uuv estimate --plot`);
-//! * [`cli`]: `edgekf uuv simulate | estimate`.
+//! * [`cli`]: `edgekf uuv simulate | estimate`, `edgekf loop uuv`.
 
 pub mod autopilot;
 pub mod cli;
 pub mod config;
 mod error;
 pub mod estimate;
+pub mod loop_system;
 pub mod plot;
 pub mod reference;
 pub mod scenario;

@@ -1,7 +1,9 @@
 //! Per-thruster change detection (CUSUM) and the declared status (see [`DetectorSettings`]).
 
 use super::settings::DetectorSettings;
+use crate::filter::{Innovation, UnscentedKalmanFilter};
 use crate::Real;
+use nalgebra::SVector;
 
 /// What the node declares about a thruster.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -110,4 +112,69 @@ impl<T: Real> ThrusterMonitor<T> {
     pub fn alarms(&self) -> u32 {
         self.alarms
     }
+}
+
+/// How a change of each health factor (state `factors[j]`, if carried) would move measurement
+/// `h`, at `prior` (`h` is linear in the factors, so a finite difference of 0.1 is exact but for
+/// rounding): what [`watch`] projects the innovation on.
+pub fn signatures<T: Real, const N: usize, const K: usize>(
+    h: impl Fn(&SVector<T, N>) -> SVector<T, K>,
+    prior: &SVector<T, N>,
+    factors: [Option<usize>; 2],
+) -> [Option<SVector<T, K>>; 2] {
+    let base = h(prior);
+    let step = T::of_f64(0.1);
+    factors.map(|i| {
+        i.map(|i| {
+            let mut moved = *prior;
+            if let Some(k) = moved.get_mut(i) {
+                *k += step;
+            }
+            (h(&moved) - base) / step
+        })
+    })
+}
+
+/// Feeds each thruster's CUSUM the innovation projected on its signature, whitened (the score
+/// is N(0, 1) while the model holds), and reopens a factor whose CUSUM alarms: its variance set
+/// to `reopen²`, its covariances with the rest cleared.
+pub fn watch<T: Real, const N: usize, const K: usize>(
+    ukf: &mut UnscentedKalmanFilter<T, N, 6>,
+    monitors: &mut [ThrusterMonitor<T>; 2],
+    inn: &Innovation<T, K>,
+    signatures: &[Option<SVector<T, K>>; 2],
+    factors: [Option<usize>; 2],
+    reopen: T,
+) {
+    let Some(l) = crate::linalg::cholesky(&inn.s) else { return };
+    let white = crate::linalg::solve_lower(&l, &inn.residual);
+    for ((sig, factor), monitor) in signatures.iter().zip(factors).zip(monitors.iter_mut()) {
+        let (Some(g), Some(i)) = (sig, factor) else { continue };
+        let wg = crate::linalg::solve_lower(&l, g);
+        let norm = wg.norm_squared();
+        if norm > T::zero() && monitor.score(wg.dot(&white) / norm.sqrt()) {
+            open(ukf, i, reopen);
+        }
+    }
+}
+
+/// Sets state `i`'s standard deviation to `sd` and clears its covariances with the rest: a
+/// parameter the filter had settled (or held fixed), opened to follow a change. An index
+/// outside the state does nothing.
+pub fn open<T: Real, const N: usize, const M: usize>(ukf: &mut UnscentedKalmanFilter<T, N, M>, i: usize, sd: T) {
+    if i >= N {
+        return;
+    }
+    let mut p = *ukf.covariance();
+    for k in 0..N {
+        for at in [(i, k), (k, i)] {
+            if let Some(e) = p.get_mut(at) {
+                *e = T::zero();
+            }
+        }
+    }
+    if let Some(e) = p.get_mut((i, i)) {
+        *e = sd * sd;
+    }
+    ukf.set_covariance(p);
 }

@@ -8,6 +8,7 @@
 //! current's apparent acceleration in a turning frame (`M_A (ω × v_c)`, a few mm/s² in a turn
 //! across a 0.2 m/s current, nothing in straight flight).
 
+use super::settings::VELOCITY;
 use super::vehicle::Vehicle;
 use crate::Real;
 use nalgebra::{SMatrix, SVector};
@@ -293,6 +294,53 @@ impl<T: Real> ReducedDynamics<T> {
             nu_dot[1] + r * u - p * w - g * ct * sf,
             nu_dot[2] + p * v - q * u - g * ct * cf,
         ]
+    }
+}
+
+/// The filters' view of the model: the ten vehicle states `[z φ θ ψ u v w p q r]` first in a
+/// state vector of `N`, the rest (health factors, biases, current) random walks that act
+/// through the [`Drive`] the caller reads from the state.
+impl<T: Real> ReducedDynamics<T> {
+    /// Rates of the ten vehicle states of `x` under `drive`.
+    pub fn state_rates<const N: usize>(&self, x: &SVector<T, N>, drive: &Drive<T>) -> [T; 10] {
+        let att = Attitude::new(x[1], x[2], x[3]);
+        let nu: Nu<T> = x.fixed_rows::<6>(VELOCITY).into_owned();
+        let a = self.accelerations(&att, &nu, drive);
+        let down = att.to_earth().fixed_rows::<1>(2) * nu.fixed_rows::<3>(0);
+        let e = att.angle_rates(nu[3], nu[4], nu[5]);
+        [down[0], e[0], e[1], e[2], a[0], a[1], a[2], a[3], a[4], a[5]]
+    }
+
+    /// One midpoint step of `x`'s vehicle states over `dt`, the drive read from the state at
+    /// each stage; the other states are left as they are.
+    pub fn midpoint_step<const N: usize>(
+        &self,
+        x: &SVector<T, N>,
+        dt: T,
+        drive: impl Fn(&SVector<T, N>) -> Drive<T>,
+    ) -> SVector<T, N> {
+        let half = dt * T::of_f64(0.5);
+        let k1 = self.state_rates(x, &drive(x));
+        let mut mid = *x;
+        for (i, d) in k1.iter().enumerate() {
+            mid[i] += half * *d;
+        }
+        let k2 = self.state_rates(&mid, &drive(&mid));
+        let mut next = *x;
+        for (i, d) in k2.iter().enumerate() {
+            next[i] += dt * *d;
+        }
+        next
+    }
+
+    /// What a bias-free IMU at the origin reads in state `x` under `drive`: specific force
+    /// (m/s²) and rates (rad/s), body axes.
+    pub fn imu<const N: usize>(&self, x: &SVector<T, N>, drive: &Drive<T>) -> SVector<T, 6> {
+        let att = Attitude::new(x[1], x[2], x[3]);
+        let nu: Nu<T> = x.fixed_rows::<6>(VELOCITY).into_owned();
+        let a = self.accelerations(&att, &nu, drive);
+        let f = self.specific_force(&att, &nu, &a);
+        SVector::<T, 6>::from([f[0], f[1], f[2], nu[3], nu[4], nu[5]])
     }
 }
 

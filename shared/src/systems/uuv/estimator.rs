@@ -7,13 +7,11 @@
 //! DVL when it has a new reading. The IMU innovation feeds each thruster's CUSUM
 //! ([`ThrusterMonitor`]).
 
-use super::detector::{Status, ThrusterMonitor};
-use super::dynamics::{Attitude, Drive, Nu, ReducedDynamics};
+use super::detector::{signatures, watch, Status, ThrusterMonitor};
+use super::dynamics::{Attitude, Drive, ReducedDynamics};
 use super::settings::{EstimatorSettings, Layout, VELOCITY};
 use super::vehicle::Vehicle;
-use crate::filter::{
-    FilterHealth, Innovation, MerweSigmaPoints, UkfError, UkfMeasurement, UkfModel, UnscentedKalmanFilter,
-};
+use crate::filter::{FilterHealth, MerweSigmaPoints, UkfError, UkfMeasurement, UkfModel, UnscentedKalmanFilter};
 use crate::Real;
 use nalgebra::{SMatrix, SVector};
 
@@ -131,46 +129,17 @@ impl<T: Real> StepModel<'_, T> {
             current: self.layout.current().map_or([T::zero(); 2], |i| [get(x, i), get(x, i + 1)]),
         }
     }
-
-    fn nu<const N: usize>(x: &SVector<T, N>) -> Nu<T> {
-        x.fixed_rows::<6>(VELOCITY).into_owned()
-    }
-
-    /// Rates of the ten vehicle states.
-    fn rates<const N: usize>(&self, x: &SVector<T, N>) -> [T; 10] {
-        let att = Attitude::new(x[1], x[2], x[3]);
-        let nu = Self::nu(x);
-        let a = self.dynamics.accelerations(&att, &nu, &self.drive(x));
-        let down = att.to_earth().fixed_rows::<1>(2) * nu.fixed_rows::<3>(0);
-        let e = att.angle_rates(nu[3], nu[4], nu[5]);
-        [down[0], e[0], e[1], e[2], a[0], a[1], a[2], a[3], a[4], a[5]]
-    }
 }
 
 impl<T: Real, const N: usize> UkfModel<T, N, 6> for StepModel<'_, T> {
     /// Midpoint step of the vehicle states; the rest are random walks.
     fn f(&self, x: &SVector<T, N>) -> SVector<T, N> {
-        let half = self.dt * T::of_f64(0.5);
-        let k1 = self.rates(x);
-        let mut mid = *x;
-        for (i, d) in k1.iter().enumerate() {
-            mid[i] += half * *d;
-        }
-        let k2 = self.rates(&mid);
-        let mut next = *x;
-        for (i, d) in k2.iter().enumerate() {
-            next[i] += self.dt * *d;
-        }
-        next
+        self.dynamics.midpoint_step(x, self.dt, |x| self.drive(x))
     }
 
     /// Specific force and rates, with the biases if carried.
     fn h(&self, x: &SVector<T, N>) -> SVector<T, 6> {
-        let att = Attitude::new(x[1], x[2], x[3]);
-        let nu = Self::nu(x);
-        let a = self.dynamics.accelerations(&att, &nu, &self.drive(x));
-        let f = self.dynamics.specific_force(&att, &nu, &a);
-        let mut y = SVector::<T, 6>::from([f[0], f[1], f[2], nu[3], nu[4], nu[5]]);
+        let mut y = self.dynamics.imu(x, &self.drive(x));
         if let Some(b) = self.layout.acc_bias() {
             for i in 0..6 {
                 y[i] += get(x, b + i);
@@ -494,61 +463,6 @@ impl<T: Real, const N: usize> UuvEstimator<T, N> {
             acc_bias: layout.acc_bias().map(three),
             gyro_bias: layout.gyro_bias().map(three),
             imu_nis,
-        }
-    }
-}
-
-/// How a change of each health factor would move measurement `h`, at `prior` (`h` is linear in
-/// the factors, so a finite difference of 0.1 is exact but for rounding).
-fn signatures<T: Real, const N: usize, const K: usize>(
-    h: impl Fn(&SVector<T, N>) -> SVector<T, K>,
-    prior: &SVector<T, N>,
-    factors: [Option<usize>; 2],
-) -> [Option<SVector<T, K>>; 2] {
-    let base = h(prior);
-    let step = T::of_f64(0.1);
-    factors.map(|i| {
-        i.map(|i| {
-            let mut moved = *prior;
-            if let Some(k) = moved.get_mut(i) {
-                *k += step;
-            }
-            (h(&moved) - base) / step
-        })
-    })
-}
-
-/// Feeds each thruster's CUSUM the innovation projected on its signature, whitened (the score
-/// is N(0, 1) while the model holds), and reopens a factor whose CUSUM alarms: its variance set
-/// to `reopen²`, its covariances with the rest cleared.
-fn watch<T: Real, const N: usize, const K: usize>(
-    ukf: &mut UnscentedKalmanFilter<T, N, 6>,
-    monitors: &mut [ThrusterMonitor<T>; 2],
-    inn: &Innovation<T, K>,
-    signatures: &[Option<SVector<T, K>>; 2],
-    factors: [Option<usize>; 2],
-    reopen: T,
-) {
-    let Some(l) = crate::linalg::cholesky(&inn.s) else { return };
-    let white = crate::linalg::solve_lower(&l, &inn.residual);
-    for ((sig, factor), monitor) in signatures.iter().zip(factors).zip(monitors.iter_mut()) {
-        let (Some(g), Some(i)) = (sig, factor) else { continue };
-        let wg = crate::linalg::solve_lower(&l, g);
-        let norm = wg.norm_squared();
-        if norm > T::zero() && monitor.score(wg.dot(&white) / norm.sqrt()) {
-            let mut p = *ukf.covariance();
-            for k in 0..N {
-                if let Some(e) = p.get_mut((i, k)) {
-                    *e = T::zero();
-                }
-                if let Some(e) = p.get_mut((k, i)) {
-                    *e = T::zero();
-                }
-            }
-            if let Some(e) = p.get_mut((i, i)) {
-                *e = reopen * reopen;
-            }
-            ukf.set_covariance(p);
         }
     }
 }

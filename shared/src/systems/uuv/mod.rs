@@ -17,7 +17,7 @@ mod estimator;
 mod settings;
 mod vehicle;
 
-pub use detector::{Status, ThrusterMonitor};
+pub use detector::{open, signatures, watch, Status, ThrusterMonitor};
 pub use dynamics::{Attitude, Drive, Nu, ReducedDynamics};
 pub use estimator::{Command, Estimate, EstimatorError, Health, Sample, UuvEstimator};
 pub use settings::{
