@@ -264,3 +264,48 @@ fn uuv_simulate_then_estimate_writes_the_issues_columns() {
     assert!(!out.status.success());
     assert_eq!(std::fs::read_to_string(&data).unwrap(), csv);
 }
+
+#[test]
+fn loop_uuv_names_an_undeclared_offset_and_reports_the_declared_model() {
+    let dir = scratch("loop-uuv");
+    let (config, data, report) = (dir.join("no_biases.toml"), dir.join("healthy.csv"), dir.join("report"));
+    // An accelerometer offset on z that the estimator does not carry (it pulls k_v off).
+    std::fs::write(
+        &config,
+        "[sensors]\nacc_bias = 0.0\ngyro_bias = 0.0\nacc_offset = [0.0, 0.0, 0.05]\n\n[estimator]\nsensor_biases = false\n",
+    )
+    .unwrap();
+    let c = path(&config);
+    let out = edgekf(&["uuv", "simulate", "--config", c, "--scenario", "healthy", "--duration", "60", "--seed", "5"]);
+    assert!(!out.status.success(), "--out is required");
+    let out = edgekf(&[
+        "uuv",
+        "simulate",
+        "--config",
+        c,
+        "--scenario",
+        "healthy",
+        "--duration",
+        "60",
+        "--seed",
+        "5",
+        "--out",
+        path(&data),
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let out = edgekf(&["loop", "uuv", "--config", c, "--data", path(&data), "--report", path(&report), "--quiet"]);
+    let stdout = text(&out.stdout);
+    assert!(out.status.success(), "{stdout}\n{}", text(&out.stderr));
+    assert!(stdout.contains("+ sensor_bias at acc_z"), "{stdout}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(report.join("report.json")).unwrap()).unwrap();
+    assert_eq!(json["system"], "uuv");
+    assert_eq!(json["declared"][0], "actuator_health at thruster main");
+    assert_eq!(json["effects_added"].as_array().map(Vec::len), Some(1), "{}", json["effects_added"]);
+    let value = json["effects_added"][0]["value"].as_f64().unwrap();
+    assert!((value - 0.05).abs() < 0.01, "{value}");
+    // The vertical thruster's factor had taken up the offset.
+    let k_v = |run: &str| json[run]["error_rms"]["k_v"].as_f64().unwrap();
+    assert!(k_v("before") > 0.2 && k_v("after") < 0.05, "k_v RMS error {} → {}", k_v("before"), k_v("after"));
+    assert!(report.join("report.html").exists());
+}
