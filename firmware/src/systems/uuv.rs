@@ -27,23 +27,7 @@ pub const LAYOUT: Layout = Layout { main: true, vertical: true, biases: true, cu
 pub const STATES: usize = LAYOUT.len();
 
 /// The input channels, in the data file's names and order.
-pub const CHANNELS: [&str; 15] = [
-    "acc_x",
-    "acc_y",
-    "acc_z",
-    "gyro_x",
-    "gyro_y",
-    "gyro_z",
-    "depth",
-    "heading",
-    "dvl_u",
-    "dvl_v",
-    "dvl_w",
-    "cmd_n_t",
-    "cmd_n_v",
-    "cmd_rudder",
-    "cmd_elevator",
-];
+pub use edgekf::systems::uuv::CHANNELS;
 
 /// The estimator, kept by the caller.
 pub type Storage = Option<UuvEstimator<f32, STATES>>;

@@ -16,23 +16,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
 /// The measured channels, in file order.
-pub const MEASURED: [&str; 15] = [
-    "acc_x",
-    "acc_y",
-    "acc_z",
-    "gyro_x",
-    "gyro_y",
-    "gyro_z",
-    "depth",
-    "heading",
-    "dvl_u",
-    "dvl_v",
-    "dvl_w",
-    "cmd_n_t",
-    "cmd_n_v",
-    "cmd_rudder",
-    "cmd_elevator",
-];
+pub const MEASURED: [&str; 15] = edgekf::systems::uuv::CHANNELS;
 
 /// The truth channels, in file order.
 pub const TRUTH: [&str; 22] = [

@@ -28,6 +28,48 @@ pub struct Command<T> {
     pub elevator: T,
 }
 
+/// The vehicle data file's input channels, in its order: specific force (m/s²), rates
+/// (rad/s), depth (m), heading (rad), DVL (m/s, empty between readings), then the commands
+/// (rpm, rad) in force until the next row.
+pub const CHANNELS: [&str; 15] = [
+    "acc_x",
+    "acc_y",
+    "acc_z",
+    "gyro_x",
+    "gyro_y",
+    "gyro_z",
+    "depth",
+    "heading",
+    "dvl_u",
+    "dvl_v",
+    "dvl_w",
+    "cmd_n_t",
+    "cmd_n_v",
+    "cmd_rudder",
+    "cmd_elevator",
+];
+
+impl<T: Real> Command<T> {
+    /// `new` where it is finite, `self` where not: a missing command holds the last one (the
+    /// thrusters keep what they were told).
+    ///
+    /// ```
+    /// use edgekf::systems::uuv::Command;
+    /// let last = Command { n_t: 1500.0, n_v: 200.0, rudder: 0.01, elevator: 0.0 };
+    /// let now = Command { n_t: f64::NAN, n_v: 300.0, ..last };
+    /// assert_eq!(last.held(&now), Command { n_v: 300.0, ..last });
+    /// ```
+    pub fn held(&self, new: &Command<T>) -> Command<T> {
+        let pick = |new: T, old: T| if new.is_finite() { new } else { old };
+        Command {
+            n_t: pick(new.n_t, self.n_t),
+            n_v: pick(new.n_v, self.n_v),
+            rudder: pick(new.rudder, self.rudder),
+            elevator: pick(new.elevator, self.elevator),
+        }
+    }
+}
+
 /// One row of sensor data. Missing channels are NaN; `dvl` is `None` between its readings.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Sample<T> {
@@ -311,15 +353,7 @@ impl<T: Real, const N: usize> UuvEstimator<T, N> {
         } else if let Some(nis) = self.advance(s) {
             imu_nis = Some(nis);
         }
-        // A missing command holds the last one: the thrusters keep what they were told.
-        let c = &s.command;
-        let held = |new: T, old: T| if new.is_finite() { new } else { old };
-        self.command = Command {
-            n_t: held(c.n_t, self.command.n_t),
-            n_v: held(c.n_v, self.command.n_v),
-            rudder: held(c.rudder, self.command.rudder),
-            elevator: held(c.elevator, self.command.elevator),
-        };
+        self.command = self.command.held(&s.command);
         self.estimate(imu_nis)
     }
 

@@ -252,14 +252,7 @@ pub fn run(plan: &Plan<'_>, samples: &[Sample<f64>]) -> Result<Run> {
             }
         }
         record_outputs(&mut run, k, ukf.state(), &on);
-        let held = |new: f64, old: f64| if new.is_finite() { new } else { old };
-        let c = &s.command;
-        command = Command {
-            n_t: held(c.n_t, command.n_t),
-            n_v: held(c.n_v, command.n_v),
-            rudder: held(c.rudder, command.rudder),
-            elevator: held(c.elevator, command.elevator),
-        };
+        command = command.held(&s.command);
     }
     let health = ukf.health();
     if health.covariance_resets > 0 {
