@@ -8,8 +8,10 @@
 //! * [`crank`]: a slider-crank with revolute clearance joints (multibody reference, the paper's
 //!   UKF and the fast estimator the node runs);
 //! * [`uuv`]: an underwater vehicle's thruster health (6-DOF reference, joint UKF of state and
-//!   health factors with a change detector).
+//!   health factors with a change detector);
+//! * [`boom`]: a long telescoping boom's tip vibration (FE reference with sliding sections).
 
+pub mod boom;
 pub mod crank;
 pub mod oscillator;
 pub mod rotor;
@@ -58,6 +60,14 @@ pub const REGISTRY: &[SystemEntry] = &[
         run: |m| dispatch(m, crank::cli::run),
         close_loop: None,
         demo: Some(DemoPart { closes_loop: false, run: crank::cli::demo }),
+    },
+    SystemEntry {
+        name: "boom",
+        about: "Long telescoping boom (fire-ladder truck): simulate its tip vibration from the FE model",
+        command: subcommands::<boom::cli::BoomCommand>,
+        run: |m| dispatch(m, boom::cli::run),
+        close_loop: None,
+        demo: None,
     },
     SystemEntry {
         name: "uuv",

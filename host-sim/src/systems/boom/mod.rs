@@ -1,0 +1,24 @@
+//! Tip vibration of a long telescoping boom (the fourth paper: a fire-ladder truck's boom
+//! measured by a tip gyro and a root inclinometer).
+//!
+//! * [`config`]: [`BoomConfig`], the TOML configuration (`host-sim/configs/boom_ladder30.toml`);
+//! * [`beam`]: the finite-element boom at one length (sections that overlap, the platform,
+//!   gravity's geometric stiffness);
+//! * [`modal`]: its natural frequencies and the Rayleigh damping fitted to ζ₁, ζ₂;
+//! * [`runs`]: the test runs (luffing stops; telescoping while luffing) and the luffing drive;
+//! * [`sensors`]: the true gyro (AR(2) noise, bias and drift, scale, quantum) and inclinometer
+//!   (lag, offset, noise, quantum);
+//! * [`simulate`](mod@simulate): a run integrated into a data file;
+//! * [`cli`]: `edgekf boom simulate`.
+
+pub mod beam;
+pub mod cli;
+pub mod config;
+pub mod modal;
+pub mod runs;
+pub mod sensors;
+pub mod simulate;
+
+pub use config::BoomConfig;
+pub use runs::Scenario;
+pub use simulate::{simulate, BoomRecording, SimOptions};

@@ -1,0 +1,137 @@
+//! The reference boom against what it must reproduce: its own modes in free decay (the
+//! integrator and the damping fit checked against the eigenvalue solution), the sensors' models
+//! (the gyro's AR(2) noise and bias from the static record, its reading of the tip's rate, the
+//! inclinometer's lag), and the telescoping run.
+
+use edgekf_sim::systems::boom::beam::assemble;
+use edgekf_sim::systems::boom::modal::frequencies;
+use edgekf_sim::systems::boom::simulate::static_record;
+use edgekf_sim::systems::boom::{simulate, BoomConfig, BoomRecording, Scenario, SimOptions};
+use std::f64::consts::PI;
+
+fn run(config: &BoomConfig, scenario: Scenario, duration: f64) -> BoomRecording {
+    simulate(config, &SimOptions { scenario, duration, seed: 1 }, &mut |_| {}).unwrap()
+}
+
+/// Zero crossings (upward) of `v` between `from` and `to` s, interpolated.
+fn up_crossings(t: &[f64], v: &[f64], from: f64, to: f64) -> Vec<f64> {
+    (1..t.len())
+        .filter(|&i| t[i] > from && t[i] < to && v[i - 1] < 0.0 && v[i] >= 0.0)
+        .map(|i| t[i - 1] + (t[i] - t[i - 1]) * -v[i - 1] / (v[i] - v[i - 1]))
+        .collect()
+}
+
+/// Frequency (Hz) and damping ratio of the free decay of `v` over `[from, to]`: mean period of
+/// the upward crossings, and the slope of the log of the positive peaks.
+fn decay(t: &[f64], v: &[f64], from: f64, to: f64) -> (f64, f64) {
+    let c = up_crossings(t, v, from, to);
+    let period = (c[c.len() - 1] - c[0]) / (c.len() - 1) as f64;
+    let peaks: Vec<(f64, f64)> = c
+        .windows(2)
+        .map(|w| {
+            let (i0, i1) = (t.partition_point(|&s| s < w[0]), t.partition_point(|&s| s < w[1]));
+            let k = (i0..i1).max_by(|&a, &b| v[a].total_cmp(&v[b])).unwrap();
+            (t[k], v[k].ln())
+        })
+        .collect();
+    let n = peaks.len() as f64;
+    let (mt, ml) = (peaks.iter().map(|p| p.0).sum::<f64>() / n, peaks.iter().map(|p| p.1).sum::<f64>() / n);
+    let slope = peaks.iter().map(|p| (p.0 - mt) * (p.1 - ml)).sum::<f64>()
+        / peaks.iter().map(|p| (p.0 - mt).powi(2)).sum::<f64>();
+    let w = 2.0 * PI / period;
+    (1.0 / period, -slope / w)
+}
+
+#[test]
+fn after_a_stop_the_boom_rings_at_its_first_mode_with_its_damping() {
+    let c = BoomConfig::default();
+    let rec = run(&c, Scenario::Luffing, 19.0);
+    let (t, v) = (&rec.t, rec.column("truth_tip_vibration").unwrap());
+    // The first move ends at 6 s; the second starts at 18 s. Mode 2 (3 Hz, ζ 2 %) has died
+    // away by 9 s.
+    let (f, zeta) = decay(t, v, 9.0, 17.9);
+    let angle = rec.column("truth_root_angle").unwrap()[1200];
+    let w = frequencies(&assemble(&c, 30.0), c.boom.gravity, angle).unwrap();
+    let f1 = w[0] / (2.0 * PI);
+    assert!((f / f1 - 1.0).abs() < 0.005, "rings at {f:.4} Hz, mode 1 at {f1:.4} Hz");
+    assert!((zeta / c.damping.zeta[0] - 1.0).abs() < 0.1, "ζ {zeta:.4}");
+    let amplitude = v[900..1790].iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    assert!(amplitude > 0.05, "the stop excites the boom: {amplitude} m");
+    println!("free decay at 30 m: {f:.4} Hz (mode 1 {f1:.4} Hz), ζ {zeta:.4}, amplitude {amplitude:.3} m");
+}
+
+#[test]
+fn the_static_record_is_the_gyros_ar2_noise_about_its_bias() {
+    let c = BoomConfig::default();
+    let (t, g) = static_record(&c, 600.0, 3).unwrap();
+    assert_eq!(t.len(), 60_000);
+    let mean = g.iter().sum::<f64>() / g.len() as f64;
+    // The declared-or-sim bias 2e-3 rad/s plus 1e-6 per s of drift (3e-4 at the middle).
+    assert!((mean - 2.3e-3).abs() < 5e-5, "mean {mean}");
+    let y: Vec<f64> = g.iter().map(|v| v - mean).collect();
+    // Least squares of y_k on (y_{k−1}, y_{k−2}) after the drift is taken out.
+    let fit = |y: &[f64]| {
+        let (mut s11, mut s12, mut s22, mut b1, mut b2) = (0.0, 0.0, 0.0, 0.0, 0.0);
+        for k in 2..y.len() {
+            let (x1, x2) = (y[k - 1], y[k - 2]);
+            (s11, s12, s22) = (s11 + x1 * x1, s12 + x1 * x2, s22 + x2 * x2);
+            (b1, b2) = (b1 + x1 * y[k], b2 + x2 * y[k]);
+        }
+        let det = s11 * s22 - s12 * s12;
+        [(b1 * s22 - b2 * s12) / det, (s11 * b2 - s12 * b1) / det]
+    };
+    let slope = {
+        let mt = t.iter().sum::<f64>() / t.len() as f64;
+        t.iter().zip(&y).map(|(a, b)| (a - mt) * b).sum::<f64>() / t.iter().map(|a| (a - mt).powi(2)).sum::<f64>()
+    };
+    let detrended: Vec<f64> = t.iter().zip(&y).map(|(a, b)| b - slope * (a - 300.0)).collect();
+    let [a1, a2] = fit(&detrended);
+    assert!((a1 + 0.6538).abs() < 0.02 && (a2 - 0.06745).abs() < 0.02, "a = [{a1}, {a2}]");
+    assert!((slope - 1e-6).abs() < 3e-7, "drift {slope}");
+}
+
+#[test]
+fn the_gyro_reads_the_tips_rate_and_the_inclinometer_lags_the_root() {
+    let c = BoomConfig::default();
+    let rec = run(&c, Scenario::Luffing, 30.0);
+    let col = |n: &str| rec.column(n).unwrap();
+    let (gyro, bias, tip) = (col("gyro_rate"), col("truth_gyro_bias"), col("truth_tip_angle"));
+    let dt = 0.01;
+    // The tip's rate by central differences of its angle against the gyro without its bias.
+    let err: Vec<f64> =
+        (1..rec.t.len() - 1).map(|k| gyro[k] - bias[k] - (tip[k + 1] - tip[k - 1]) / (2.0 * dt)).collect();
+    let rms = (err.iter().map(|e| e * e).sum::<f64>() / err.len() as f64).sqrt();
+    let peak_rate = (1..rec.t.len() - 1).map(|k| ((tip[k + 1] - tip[k - 1]) / (2.0 * dt)).abs()).fold(0.0, f64::max);
+    // AR(2) noise of 3e-4 rad/s driving noise has a standard deviation of about 4e-4.
+    assert!(rms < 1e-3 && peak_rate > 0.05, "gyro error RMS {rms} against a peak rate {peak_rate}");
+    // The inclinometer: the root angle through a 0.3 s first-order lag, plus 5e-4 rad of noise.
+    let (root, incl) = (col("truth_root_angle"), col("incl_angle"));
+    let k = 1.0 - (-dt / c.inclinometer.lag).exp();
+    let mut lagged = root[0];
+    let mut sq = 0.0;
+    let mut unlagged = 0.0;
+    for i in 1..root.len() {
+        lagged += k * (root[i] - lagged);
+        sq += (incl[i] - lagged).powi(2);
+        unlagged += (incl[i] - root[i]).powi(2);
+    }
+    let n = (root.len() - 1) as f64;
+    let (rms, raw) = ((sq / n).sqrt(), (unlagged / n).sqrt());
+    assert!(rms < 7e-4 && raw > 3.0 * rms, "inclinometer against the lagged root: {rms}; against the root: {raw}");
+}
+
+#[test]
+fn the_extension_run_telescopes_from_18_to_30_m_and_stiffens_as_it_shortens() {
+    let c = BoomConfig::default();
+    let rec = run(&c, Scenario::Extension, 140.0);
+    let l = rec.column("boom_length").unwrap();
+    assert_eq!(l[0], 18.0);
+    assert!((l[l.len() - 1] - 30.0).abs() < 1e-9);
+    let v = rec.column("truth_tip_vibration").unwrap();
+    // Early rest (18–19 m): far stiffer than the last one (30 m).
+    let (f_short, _) = decay(&rec.t, v, 8.0, 17.9);
+    let (f_long, _) = decay(&rec.t, v, 136.0, 139.9);
+    let peaks = v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    assert!(f_short > 1.8 * f_long && peaks > 0.1, "{f_short:.3} Hz short, {f_long:.3} Hz long, peak {peaks:.3} m");
+    println!("extension: {f_short:.3} Hz near 19 m, {f_long:.3} Hz at 30 m");
+}
