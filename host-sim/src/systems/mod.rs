@@ -63,7 +63,7 @@ pub const REGISTRY: &[SystemEntry] = &[
     },
     SystemEntry {
         name: "boom",
-        about: "Long telescoping boom (fire-ladder truck): simulate its tip vibration from the FE model",
+        about: "Long telescoping boom (fire-ladder truck): simulate its tip vibration (FE model), estimate it from a tip gyro and a root inclinometer",
         command: subcommands::<boom::cli::BoomCommand>,
         run: |m| dispatch(m, boom::cli::run),
         close_loop: None,

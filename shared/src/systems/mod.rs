@@ -5,8 +5,10 @@
 //! * [`oscillator`]: a single mode driven by a harmonic force at a known frequency (the
 //!   unbalance pattern of rotating machines), estimated from one accelerometer axis;
 //! * [`crank`]: a slider-crank's joint clearance from its crank angular acceleration;
-//! * [`uuv`]: an underwater vehicle's thruster health from its IMU, depth, heading and DVL.
+//! * [`uuv`]: an underwater vehicle's thruster health from its IMU, depth, heading and DVL;
+//! * [`boom`]: a long telescoping boom's tip vibration from a tip gyro and a root inclinometer.
 
+pub mod boom;
 pub mod crank;
 pub mod oscillator;
 pub mod uuv;

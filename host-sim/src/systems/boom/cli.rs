@@ -3,11 +3,15 @@
 //! ```text
 //! edgekf boom simulate [--config C] --scenario luffing|extension [--duration 120] [--seed 1]
 //!                      --out data.csv [--static static.csv]
+//! edgekf boom estimate [--config C] --data data.csv --static static.csv [--method paper] --out est.csv
 //! ```
 
 use super::config::BoomConfig;
+use super::estimate::{estimate, gyro_model, Method};
+use super::peaks::peak_errors;
 use super::runs::Scenario;
 use super::simulate::{simulate, static_record, SimOptions};
+use super::simulate::{MEASURED, TRUTH};
 use crate::io::output::{check, write_atomic};
 use anyhow::Context as _;
 use clap::{Args, Subcommand};
@@ -26,6 +30,31 @@ pub enum BoomCommand {
     /// (tip_angle from the horizontal, tip_deflection with the gravity sag, tip_vibration about
     /// the static equilibrium, root_angle, root_rate, gyro_bias).
     Simulate(SimulateArgs),
+    /// Estimate the tip's vibration from a data CSV and the static record into an estimate CSV:
+    /// t, tip_angle (rad, from the horizontal), tip_vibration (m, about the static
+    /// equilibrium), tip_deflection (m, with the model's sag; empty for the paper's method,
+    /// which has no sag). With truth_tip_vibration in the data, prints the peak errors.
+    Estimate(EstimateArgs),
+}
+
+/// Arguments of `edgekf boom estimate`.
+#[derive(Debug, Args)]
+pub struct EstimateArgs {
+    /// Configuration (default: host-sim/configs/boom_ladder30.toml).
+    #[arg(long, value_name = "TOML")]
+    pub config: Option<PathBuf>,
+    /// Data file (t, gyro_rate, incl_angle, boom_length, luff_rate_cmd; truth_ columns optional).
+    #[arg(long, value_name = "CSV")]
+    pub data: PathBuf,
+    /// The gyro at rest (t, gyro_rate): its AR(2) noise and bias.
+    #[arg(long = "static", value_name = "CSV")]
+    pub static_data: PathBuf,
+    /// The estimator.
+    #[arg(long, value_enum, default_value_t = Method::Paper)]
+    pub method: Method,
+    /// Estimate file to write.
+    #[arg(long, value_name = "CSV")]
+    pub out: PathBuf,
 }
 
 /// Arguments of `edgekf boom simulate`.
@@ -55,6 +84,7 @@ pub struct SimulateArgs {
 pub fn run(command: BoomCommand) -> anyhow::Result<()> {
     match command {
         BoomCommand::Simulate(args) => simulate_command(args),
+        BoomCommand::Estimate(args) => estimate_command(args),
     }
 }
 
@@ -95,6 +125,41 @@ fn simulate_command(args: SimulateArgs) -> anyhow::Result<()> {
     if let Some((path, text)) = statics {
         write_atomic(path, text).with_context(|| format!("cannot write {}", path.display()))?;
         println!("{}: {STATIC_S:.0} s of the gyro at rest", path.display());
+    }
+    Ok(())
+}
+
+fn estimate_command(args: EstimateArgs) -> anyhow::Result<()> {
+    check(
+        &[Some(args.out.as_path())],
+        &[Some(args.data.as_path()), Some(args.static_data.as_path()), args.config.as_deref()],
+    )?;
+    let config = load(args.config.as_deref())?;
+    let known: Vec<&str> = MEASURED.iter().chain(TRUTH.iter()).copied().collect();
+    let (file, notes) = crate::io::data::read_required(&args.data, &MEASURED[..3], &known)?;
+    eprintln!("{}: {notes}", args.data.display());
+    let (statics, notes) = crate::io::data::read_required(&args.static_data, &["gyro_rate"], &["gyro_rate"])?;
+    eprintln!("{}: {notes}", args.static_data.display());
+    let ar = gyro_model(&config, statics.column("gyro_rate").unwrap_or_default())?;
+    let est = estimate(&config, &file, ar, args.method)?;
+    write_atomic(&args.out, est.to_csv(&args.out)?).with_context(|| format!("cannot write {}", args.out.display()))?;
+    println!(
+        "{}: {} rows; gyro AR(2) [{:.4}, {:.5}], noise {:.2e} rad/s, bias {:.3e} rad/s",
+        args.out.display(),
+        est.t.len(),
+        ar.a[0],
+        ar.a[1],
+        ar.sigma,
+        ar.mean
+    );
+    if let (Some(truth), Some(rate), Some(vib)) =
+        (file.column("truth_tip_vibration"), file.column("truth_root_rate"), est.column("tip_vibration"))
+    {
+        let p = peak_errors(&est.t, vib, truth, rate);
+        println!(
+            "peak error over {} peaks: mean {:.2} %, median {:.2} %; {} free-decay peaks: mean {:.2} %",
+            p.peaks, p.mean_pct, p.median_pct, p.free_decay_peaks, p.free_decay_mean_pct
+        );
     }
     Ok(())
 }

@@ -9,12 +9,16 @@
 //! * [`sensors`]: the true gyro (AR(2) noise, bias and drift, scale, quantum) and inclinometer
 //!   (lag, offset, noise, quantum);
 //! * [`simulate`](mod@simulate): a run integrated into a data file;
-//! * [`cli`]: `edgekf boom simulate`.
+//! * [`estimate`](mod@estimate): the shared estimators (`edgekf::systems::boom`) over a file;
+//! * [`peaks`]: the peak error of the paper's Table 1;
+//! * [`cli`]: `edgekf boom simulate | estimate`.
 
 pub mod beam;
 pub mod cli;
 pub mod config;
+pub mod estimate;
 pub mod modal;
+pub mod peaks;
 pub mod runs;
 pub mod sensors;
 pub mod simulate;

@@ -1,0 +1,93 @@
+//! The boom's estimators over a data file, in `f64`: the code the node runs in `f32`
+//! (`edgekf::systems::boom`). The gyro's AR(2) model and bias come from the configuration where
+//! it declares them, else from the static record.
+
+use super::config::BoomConfig;
+use super::simulate::MEASURED;
+use crate::io::data::DataFile;
+use anyhow::{anyhow, Context, Result};
+use clap::ValueEnum;
+use edgekf::systems::boom::{Ar2, PaperEstimator, PaperSettings};
+
+/// An estimator of the tip's vibration.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Method {
+    /// The paper's: AR(2) Kalman filter on the gyro, Simpson integration, fusion with the
+    /// inclinometer at the equilibrium instants, `y = α l θ`, moving average.
+    Paper,
+}
+
+/// The output columns after `t`.
+pub const COLUMNS: [&str; 3] = ["tip_angle", "tip_vibration", "tip_deflection"];
+
+/// One estimate per row of the data.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BoomEstimate {
+    /// Row times, s.
+    pub t: Vec<f64>,
+    /// [`COLUMNS`] (NaN where the method gives none: the paper's has no sag model).
+    pub columns: [Vec<f64>; 3],
+    /// Equilibrium instants fused (the paper's method).
+    pub fusions: usize,
+}
+
+impl BoomEstimate {
+    /// The column `name`.
+    pub fn column(&self, name: &str) -> Option<&[f64]> {
+        COLUMNS.iter().position(|c| *c == name).map(|i| self.columns[i].as_slice())
+    }
+
+    /// The estimate CSV (missing values empty).
+    pub fn to_csv(&self, path: &std::path::Path) -> Result<String> {
+        let cols: Vec<&[f64]> = self.columns.iter().map(Vec::as_slice).collect();
+        Ok(crate::io::data::to_csv_string_sparse(path, &COLUMNS, &self.t, &cols)?)
+    }
+}
+
+/// The gyro's AR(2) model: the configuration's `[gyro] ar`, `noise`, `bias` where given, the
+/// rest identified from `static_gyro` (the gyro at rest).
+pub fn gyro_model(config: &BoomConfig, static_gyro: &[f64]) -> Result<Ar2> {
+    let g = &config.gyro;
+    let identified = Ar2::identify(static_gyro).map_err(|e| anyhow!("the static record gives no AR(2) model: {e:?}"));
+    let fallback = || identified.as_ref().map_err(|e| anyhow!("{e}"));
+    Ok(Ar2 {
+        a: match g.ar {
+            Some(a) => a,
+            None => fallback()?.a,
+        },
+        sigma: match g.noise {
+            Some(s) => s,
+            None => fallback()?.sigma,
+        },
+        mean: match g.bias {
+            Some(b) => b,
+            None => fallback()?.mean,
+        },
+    })
+}
+
+/// Runs `method` of `config` over `data` with the gyro model `ar`.
+pub fn estimate(config: &BoomConfig, data: &DataFile, ar: Ar2, method: Method) -> Result<BoomEstimate> {
+    let col = |n: &str| data.column(n).ok_or_else(|| anyhow!("the data has no `{n}` column"));
+    let (gyro, incl, length) = (col(MEASURED[0])?, col(MEASURED[1])?, col(MEASURED[2])?);
+    let dt = 1.0 / config.gyro.sample_rate;
+    let n = data.len();
+    let mut columns = [vec![f64::NAN; n], vec![f64::NAN; n], vec![f64::NAN; n]];
+    let mut fusions = 0;
+    match method {
+        Method::Paper => {
+            let mut est = PaperEstimator::<f64>::new(&PaperSettings::new(dt, ar, config.gyro.scale));
+            let mut last_length = length.iter().copied().find(|l| l.is_finite()).context("no finite boom_length")?;
+            for k in 0..n {
+                if length[k].is_finite() {
+                    last_length = length[k];
+                }
+                let e = est.step(gyro[k], incl[k], last_length);
+                columns[0][k] = e.tip_angle;
+                columns[1][k] = e.vibration;
+                fusions += usize::from(e.fused);
+            }
+        }
+    }
+    Ok(BoomEstimate { t: data.t.clone(), columns, fusions })
+}

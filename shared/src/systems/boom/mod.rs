@@ -1,0 +1,16 @@
+//! Tip vibration of a long telescoping boom from a tip gyro and a root inclinometer (the
+//! fourth paper: a fire-ladder truck), on the chip.
+//!
+//! * [`Ar2`]: the gyro noise's AR(2) model, identified from a static record (Yule–Walker);
+//! * [`PaperEstimator`]: the paper's method, step by step: the 2-state Kalman filter on the AR
+//!   state, Simpson integration to the tip angle, fusion with the inclinometer at the
+//!   equilibrium instants, `y = α l θ` and a moving average.
+//!
+//! The host's reference boom (`edgekf_sim::systems::boom`) is a finite-element model written
+//! apart from anything here.
+
+mod ar;
+mod paper;
+
+pub use ar::{Ar2, ArError};
+pub use paper::{PaperEstimate, PaperEstimator, PaperSettings, SMOOTHING_MAX};
