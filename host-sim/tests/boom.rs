@@ -136,9 +136,7 @@ fn the_extension_run_telescopes_from_18_to_30_m_and_stiffens_as_it_shortens() {
     println!("extension: {f_short:.3} Hz near 19 m, {f_long:.3} Hz at 30 m");
 }
 
-/// The paper's method on both runs, with the figures printed beside the paper's 1.31 %: it
-/// follows the free decays (the straight-boom fusion holds there) and loses the vibration while
-/// the boom luffs (the lagged inclinometer is read as the root's angle).
+/// The paper's method on both runs, with the figures printed beside the paper's 1.31 %.
 #[test]
 fn the_papers_method_on_both_runs() {
     use edgekf_sim::systems::boom::estimate::{estimate, gyro_model, Method};
@@ -152,8 +150,8 @@ fn the_papers_method_on_both_runs() {
         let (truth, rate) = (rec.column("truth_tip_vibration").unwrap(), rec.column("truth_root_rate").unwrap());
         let p = peak_errors(&rec.t, est.column("tip_vibration").unwrap(), truth, rate);
         assert!(p.peaks >= 27 && p.free_decay_peaks >= 27, "{p:?}");
-        // Within a fifth of the free decays' peaks, off by more during the moves.
-        assert!(p.free_decay_mean_pct < 20.0 && p.mean_pct > p.free_decay_mean_pct, "{p:?}");
+        // Far from the paper's 1.31 %, and worse during the moves than in free decay.
+        assert!(p.free_decay_mean_pct > 5.0 && p.mean_pct > p.free_decay_mean_pct, "{p:?}");
         assert!(est.fusions > 50, "{} equilibrium instants fused", est.fusions);
         println!(
             "paper's method, {} run: {} peaks, mean {:.1} %, median {:.1} %; {} free-decay peaks, mean {:.1} % (paper: 1.31 %)",
@@ -164,5 +162,33 @@ fn the_papers_method_on_both_runs() {
             p.free_decay_peaks,
             p.free_decay_mean_pct
         );
+    }
+}
+
+/// Which of the paper's steps costs how much: each replaced by what it stands for.
+#[test]
+fn the_papers_method_taken_apart() {
+    use edgekf_sim::systems::boom::ablation::ablation;
+    use edgekf_sim::systems::boom::estimate::gyro_model;
+    let c = BoomConfig::default();
+    let (_, statics) = static_record(&c, 60.0, 1).unwrap();
+    let ar = gyro_model(&c, &statics).unwrap();
+    for (scenario, duration) in [(Scenario::Luffing, 120.0), (Scenario::Extension, 140.0)] {
+        let rec = run(&c, scenario, duration);
+        let rows = ablation(&c, &rec, ar).unwrap();
+        for (name, p) in &rows {
+            println!(
+                "{} run, {name}: mean {:.1} %, median {:.1} %, free decay {:.1} %",
+                scenario.name(),
+                p.mean_pct,
+                p.median_pct,
+                p.free_decay_mean_pct
+            );
+        }
+        let mean = |i: usize| rows[i].1.mean_pct;
+        // No one step alone brings it close; with all four replaced what is left is the
+        // equilibrium instants themselves (the second mode moves the peak of the relative rate
+        // off the first mode's crossing): about a fifth.
+        assert!(mean(5) < 0.5 * mean(0) && mean(5) < 30.0, "all four {} against {}", mean(5), mean(0));
     }
 }

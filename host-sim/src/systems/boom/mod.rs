@@ -11,8 +11,10 @@
 //! * [`simulate`](mod@simulate): a run integrated into a data file;
 //! * [`estimate`](mod@estimate): the shared estimators (`edgekf::systems::boom`) over a file;
 //! * [`peaks`]: the peak error of the paper's Table 1;
+//! * [`ablation`]: the paper's method with each step replaced by what it stands for;
 //! * [`cli`]: `edgekf boom simulate | estimate`.
 
+pub mod ablation;
 pub mod beam;
 pub mod cli;
 pub mod config;

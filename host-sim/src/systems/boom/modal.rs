@@ -3,7 +3,7 @@
 
 use super::beam::BeamMatrices;
 use anyhow::{anyhow, Result};
-use nalgebra::{DMatrix, SymmetricEigen};
+use nalgebra::{DMatrix, DVector, SymmetricEigen};
 
 /// The stiffness at luffing angle `phi`: elastic plus gravity's geometric part.
 pub fn stiffness(b: &BeamMatrices, gravity: f64, phi: f64) -> DMatrix<f64> {
@@ -22,6 +22,24 @@ pub fn frequencies(b: &BeamMatrices, gravity: f64, phi: f64) -> Result<Vec<f64>>
         return Err(anyhow!("the boom buckles under its own weight at {:.2} m (ω² = {:.3e})", b.length, w2[0]));
     }
     Ok(w2.into_iter().map(f64::sqrt).collect())
+}
+
+/// The first mode's shape (mass-normalised, its tip deflection positive) and frequency, rad/s.
+pub fn first_mode(b: &BeamMatrices, gravity: f64, phi: f64) -> Result<(f64, DVector<f64>)> {
+    let l = b.m.clone().cholesky().ok_or_else(|| anyhow!("the mass matrix is not positive definite"))?.l();
+    let l_inv = l.clone().try_inverse().ok_or_else(|| anyhow!("the mass matrix is singular"))?;
+    let a = &l_inv * stiffness(b, gravity, phi) * l_inv.transpose();
+    let eig = SymmetricEigen::new((&a + a.transpose()) * 0.5);
+    let i = (0..eig.eigenvalues.len()).min_by(|&x, &y| eig.eigenvalues[x].total_cmp(&eig.eigenvalues[y])).unwrap_or(0);
+    let w2 = eig.eigenvalues[i];
+    if w2 <= 0.0 {
+        return Err(anyhow!("the boom buckles under its own weight at {:.2} m", b.length));
+    }
+    let mut shape = l_inv.transpose() * eig.eigenvectors.column(i);
+    if shape[b.tip()] < 0.0 {
+        shape = -shape;
+    }
+    Ok((w2.sqrt(), shape))
 }
 
 /// Rayleigh coefficients `(a, b)` with `ζᵢ = a/(2ωᵢ) + b ωᵢ/2` for the first two modes.

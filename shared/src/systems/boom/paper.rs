@@ -5,7 +5,8 @@
 //! 2. Simpson's rule on the filtered rate to the tip angle;
 //! 3. fusion with the inclinometer at the equilibrium instants: the boom is taken to be straight
 //!    where the gyro's rate less the boom's own luffing rate (from the inclinometer) peaks, once
-//!    a half-cycle, and the integrated angle is reset to the inclinometer's there;
+//!    a half-cycle, and the integrated angle is reset to the inclinometer's there (on the chip,
+//!    once the half-cycle is over: the offset at its peak is taken out from then on);
 //! 4. the deflection `y = α l (θ_tip − θ_root)`, `α = 2/3` from a cantilever with a tip load;
 //! 5. a moving average.
 //!
@@ -40,6 +41,8 @@ pub struct PaperSettings {
     /// Relative rate a pass through equilibrium must reach, rad/s (below it the boom is at rest
     /// and nothing is fused).
     pub fusion_threshold: f64,
+    /// Whether the gyro goes through the AR filter (step 1; off for the ablation).
+    pub ar_filter: bool,
 }
 
 impl PaperSettings {
@@ -47,7 +50,16 @@ impl PaperSettings {
     /// average, fusion above 0.01 rad/s.
     pub fn new(dt: f64, ar: Ar2, scale: f64) -> Self {
         let smoothing = ((0.1 / dt).round() as usize).clamp(1, SMOOTHING_MAX);
-        Self { dt, ar, measurement_noise: ar.sigma, scale, alpha: 2.0 / 3.0, smoothing, fusion_threshold: 0.01 }
+        Self {
+            dt,
+            ar,
+            measurement_noise: ar.sigma,
+            scale,
+            alpha: 2.0 / 3.0,
+            smoothing,
+            fusion_threshold: 0.01,
+            ar_filter: true,
+        }
     }
 }
 
@@ -85,10 +97,11 @@ pub struct PaperEstimator<T: Real> {
     angle: [T; 2],
     /// The last `ROOT_WINDOW + 1` inclinometer readings (ring) and how many there are.
     incl: [T; ROOT_WINDOW + 1],
-    /// The last relative rates at k−1, k−2.
-    relative: [T; 2],
-    /// Sign of the relative rate at the last fusion (0: none yet).
-    fused_sign: i8,
+    /// Sign of the current half-cycle of the relative rate (0: none yet).
+    swing: i8,
+    /// In the current half-cycle, the largest |relative rate| so far, and the inclinometer's
+    /// and the integrated angle there.
+    best: [T; 3],
     /// Moving-average ring of the deflection and its running sum.
     ring: [T; SMOOTHING_MAX],
     sum: T,
@@ -108,8 +121,8 @@ impl<T: Real> PaperEstimator<T> {
             rate: [z; 2],
             angle: [z; 2],
             incl: [z; ROOT_WINDOW + 1],
-            relative: [z; 2],
-            fused_sign: 0,
+            swing: 0,
+            best: [z; 3],
             ring: [z; SMOOTHING_MAX],
             sum: z,
             k: 0,
@@ -141,12 +154,18 @@ impl<T: Real> PaperEstimator<T> {
     /// Takes one sample: the gyro's rate (rad/s), the inclinometer's angle (rad) and the boom's
     /// length (m). A non-finite reading holds the last value of its channel.
     pub fn step(&mut self, gyro: T, incl: T, length: T) -> PaperEstimate<T> {
+        self.step_with(gyro, incl, length, T::of_f64(self.settings.alpha))
+    }
+
+    /// [`step`](Self::step) with `alpha` for this sample in place of the settings' (the ablation
+    /// gives it the mode shape's ratio at the current length).
+    pub fn step_with(&mut self, gyro: T, incl: T, length: T, alpha: T) -> PaperEstimate<T> {
         let t = T::of_f64;
         let dt = t(self.settings.dt);
         let last_incl = self.incl[(self.k + ROOT_WINDOW) % (ROOT_WINDOW + 1)];
         let incl = if incl.is_finite() || self.k == 0 { incl } else { last_incl };
         let z = if gyro.is_finite() { gyro / t(self.settings.scale) - t(self.settings.ar.mean) } else { self.rate[0] };
-        let rate = self.filter(z);
+        let rate = if self.settings.ar_filter { self.filter(z) } else { z };
         let slot = self.k % (ROOT_WINDOW + 1);
         if self.k == 0 {
             self.incl = [incl; ROOT_WINDOW + 1];
@@ -165,24 +184,34 @@ impl<T: Real> PaperEstimator<T> {
         let span = (self.k.min(ROOT_WINDOW)) as f64;
         let root_rate = if span > 0.0 { (incl - oldest) / (dt * t(span)) } else { T::zero() };
         let relative = rate - root_rate;
-        // An equilibrium instant: |relative| peaked at k−1, above the threshold, on the other
-        // side of the swing from the last fusion.
-        let [r1, r2] = self.relative;
-        let peaked = r1.abs() >= r2.abs() && r1.abs() > relative.abs() && r1.abs() > t(self.settings.fusion_threshold);
-        let sign: i8 = if r1 > T::zero() { 1 } else { -1 };
-        let fused = self.k >= 2 && peaked && sign != self.fused_sign;
-        if fused {
-            let root_then = self.incl[(self.k + ROOT_WINDOW) % (ROOT_WINDOW + 1)];
-            let correction = root_then - self.angle[0];
-            angle += correction;
-            self.angle[0] += correction;
-            self.fused_sign = sign;
+        // The equilibrium instant of a half-cycle is where |relative| peaked in it; it is known
+        // when the next half-cycle begins (the relative rate past the threshold the other way),
+        // and the integrated angle is then shifted by the offset it had there.
+        let threshold = t(self.settings.fusion_threshold);
+        let sign: i8 = if relative > threshold {
+            1
+        } else if relative < -threshold {
+            -1
+        } else {
+            0
+        };
+        let mut fused = false;
+        if sign != 0 && sign != self.swing {
+            if self.swing != 0 {
+                let correction = self.best[1] - self.best[2];
+                angle += correction;
+                self.angle[0] += correction;
+                fused = true;
+            }
+            self.swing = sign;
+            self.best = [relative.abs(), incl, angle];
+        } else if sign == self.swing && relative.abs() > self.best[0] {
+            self.best = [relative.abs(), incl, angle];
         }
-        self.relative = [relative, r1];
         self.rate = [rate, self.rate[0]];
         self.angle = [angle, self.angle[0]];
         // y = α l (θ_tip − θ_root), smoothed.
-        let y = t(self.settings.alpha) * length * (angle - incl);
+        let y = alpha * length * (angle - incl);
         let n = self.settings.smoothing;
         let at = self.k % n;
         self.sum = self.sum - self.ring[at] + y;
