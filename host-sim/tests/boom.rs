@@ -192,3 +192,46 @@ fn the_papers_method_taken_apart() {
         assert!(mean(5) < 0.5 * mean(0) && mean(5) < 30.0, "all four {} against {}", mean(5), mean(0));
     }
 }
+
+/// The estimators' reduced boom (Rayleigh–Ritz on polynomials, `edgekf::systems::boom`) against
+/// the reference's finite elements: the same boom by another formulation.
+#[test]
+fn the_reduced_boom_agrees_with_the_finite_elements() {
+    use edgekf_sim::systems::boom::modal::first_mode;
+    let c = BoomConfig::default();
+    let constants = c.constants().unwrap();
+    for length in [18.0, 24.0, 30.0] {
+        let phi = c.runs.start_angle;
+        let reduced = constants.reduce(length, phi).unwrap();
+        let beam = assemble(&c, length);
+        let w = frequencies(&beam, c.boom.gravity, phi).unwrap();
+        let (w1, shape) = first_mode(&beam, c.boom.gravity, phi).unwrap();
+        assert!((w1 - w[0]).abs() < 1e-9 * w[0]);
+        let m = &reduced.modes;
+        let f = |i: usize| (m[i].omega / w[i] - 1.0) * 100.0;
+        assert!(f(0).abs() < 0.5 && f(1).abs() < 1.0, "{length} m: modes off by {:.3} %, {:.3} %", f(0), f(1));
+        // The first mode's ratio of tip deflection to slope (what `α l` stands for).
+        let tip = beam.tip();
+        let ratio = |d: f64, s: f64| d / (length * s);
+        let (fe, rr) = (ratio(shape[tip], shape[tip + 1]), ratio(m[0].tip_deflection, m[0].tip_slope));
+        assert!((rr / fe - 1.0).abs() < 0.005, "{length} m: α {rr:.4} against {fe:.4}");
+        // The sag at the tip.
+        let g = c.boom.gravity;
+        let k = edgekf_sim::systems::boom::modal::stiffness(&beam, g, phi);
+        let sag = k.cholesky().unwrap().solve(&(&beam.gm * (-g * phi.cos())));
+        assert!(
+            (reduced.sag.0 / sag[tip] - 1.0).abs() < 0.01,
+            "{length} m: sag {} against {}",
+            reduced.sag.0,
+            sag[tip]
+        );
+        println!(
+            "{length} m: modes {:.4} / {:.4} Hz against {:.4} / {:.4} Hz, α {rr:.4} against {fe:.4}, sag {:.4} m",
+            m[0].omega / (2.0 * PI),
+            m[1].omega / (2.0 * PI),
+            w[0] / (2.0 * PI),
+            w[1] / (2.0 * PI),
+            reduced.sag.0
+        );
+    }
+}

@@ -282,6 +282,25 @@ impl BoomConfig {
         (longest.min(max), max)
     }
 
+    /// The constants the shared estimators' reduced boom is built from.
+    pub fn constants(&self) -> Result<edgekf::systems::boom::BoomConstants> {
+        use edgekf::systems::boom::{BoomConstants, BoomSection, MAX_SECTIONS};
+        if self.section.len() > MAX_SECTIONS {
+            bail!("{} sections: the estimators take at most {MAX_SECTIONS}", self.section.len());
+        }
+        let mut sections = [BoomSection { length: 1.0, ei: 1.0, mass_per_length: 1.0 }; MAX_SECTIONS];
+        for (s, c) in sections.iter_mut().zip(&self.section) {
+            *s = BoomSection { length: c.length, ei: c.ei, mass_per_length: c.mass_per_length };
+        }
+        Ok(BoomConstants {
+            sections,
+            count: self.section.len(),
+            tip_mass: self.tip.mass,
+            tip_inertia: self.tip.rotary_inertia,
+            gravity: self.boom.gravity,
+        })
+    }
+
     /// Checks every figure; the message names the key.
     pub fn validate(&self) -> Result<()> {
         let positive =

@@ -4,13 +4,18 @@
 //! * [`Ar2`]: the gyro noise's AR(2) model, identified from a static record (Yule–Walker);
 //! * [`PaperEstimator`]: the paper's method, step by step: the 2-state Kalman filter on the AR
 //!   state, Simpson integration to the tip angle, fusion with the inclinometer at the
-//!   equilibrium instants, `y = α l θ` and a moving average.
+//!   equilibrium instants, `y = α l θ` and a moving average;
+//! * [`BoomConstants::reduce`]: the reduced boom (Rayleigh–Ritz on the boom's own static
+//!   deflection shapes) for the model-based filter: its first modes, their tip values and
+//!   participation, the gravity sag.
 //!
 //! The host's reference boom (`edgekf_sim::systems::boom`) is a finite-element model written
 //! apart from anything here.
 
 mod ar;
 mod paper;
+mod reduced;
 
 pub use ar::{Ar2, ArError};
 pub use paper::{PaperEstimate, PaperEstimator, PaperSettings, SMOOTHING_MAX};
+pub use reduced::{BoomConstants, BoomSection, Mode, ReducedBoom, ReducedError, BASIS, MAX_SECTIONS, MODES};

@@ -49,7 +49,7 @@ impl PaperSettings {
     /// The paper's choices at `dt` with `ar` from the static record: `α = 2/3`, a 0.1 s moving
     /// average, fusion above 0.01 rad/s.
     pub fn new(dt: f64, ar: Ar2, scale: f64) -> Self {
-        let smoothing = ((0.1 / dt).round() as usize).clamp(1, SMOOTHING_MAX);
+        let smoothing = (libm::round(0.1 / dt) as usize).clamp(1, SMOOTHING_MAX);
         Self {
             dt,
             ar,

@@ -1,0 +1,327 @@
+//! The boom's reduced model for the estimators: Rayleigh–Ritz on [`BASIS`] static deflection
+//! shapes of the boom itself (under a tip force, a tip moment, and loads growing as 1, ξ and ξ²
+//! along it), each integrated exactly from `M / EI` over the pieces where the sections
+//! overlap, so the shapes carry the stiffness steps a global polynomial cannot. With the
+//! platform and gravity's geometric stiffness, it gives the first [`MODES`] modes at one length
+//! and luffing angle: frequency, the tip's deflection and slope per unit modal coordinate, the
+//! luffing load's participation, and the gravity sag at the tip.
+//!
+//! This is not the host's reference (finite elements with Hermite shape functions): the two
+//! agree where they should, which the host's tests check.
+
+use crate::Real;
+use nalgebra::{SMatrix, SVector};
+
+/// Polynomials in the Ritz basis.
+pub const BASIS: usize = 5;
+/// Modes kept.
+pub const MODES: usize = 2;
+/// Most sections a boom may have.
+pub const MAX_SECTIONS: usize = 8;
+
+/// One section, from the root up (each slides out of the one below, synchronously).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BoomSection {
+    /// Length, m.
+    pub length: f64,
+    /// Bending stiffness, N·m².
+    pub ei: f64,
+    /// Mass per length, kg/m.
+    pub mass_per_length: f64,
+}
+
+/// The boom's constants.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BoomConstants {
+    /// Sections, root first (`count` of them are used).
+    pub sections: [BoomSection; MAX_SECTIONS],
+    /// Sections in use.
+    pub count: usize,
+    /// Platform mass, kg.
+    pub tip_mass: f64,
+    /// Platform rotary inertia, kg·m².
+    pub tip_inertia: f64,
+    /// Gravitational acceleration, m/s².
+    pub gravity: f64,
+}
+
+/// One mode of the reduced boom.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Mode {
+    /// Natural frequency, rad/s.
+    pub omega: f64,
+    /// Tip deflection per unit modal coordinate (mass-normalised), m.
+    pub tip_deflection: f64,
+    /// Tip slope per unit modal coordinate, rad.
+    pub tip_slope: f64,
+    /// Participation of the luffing acceleration: `η̈ + … = −participation · φ̈`.
+    pub participation: f64,
+}
+
+/// The reduced boom at one length and angle.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ReducedBoom {
+    /// Length, m.
+    pub length: f64,
+    /// The first [`MODES`] modes, ascending.
+    pub modes: [Mode; MODES],
+    /// The gravity sag's tip deflection (m) and slope (rad).
+    pub sag: (f64, f64),
+}
+
+/// Why a reduced boom cannot be built.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ReducedError {
+    /// No section, too many, or a length, stiffness or mass that is not positive.
+    Constants,
+    /// The mass matrix is not positive definite or the boom buckles under its own weight.
+    Singular,
+}
+
+/// Coefficients of a polynomial in ξ, lowest first.
+type Poly = [f64; DEGREE + 1];
+/// Highest degree the products need (a shape is of degree 6, products of two 12).
+const DEGREE: usize = 13;
+/// Most pieces: every section's two ends, and the tip.
+const MAX_PIECES: usize = 2 * MAX_SECTIONS + 1;
+
+fn eval(p: &Poly, x: f64) -> f64 {
+    p.iter().rev().fold(0.0, |acc, c| acc * x + c)
+}
+
+fn mul(a: &Poly, b: &Poly) -> Poly {
+    let mut out = [0.0; DEGREE + 1];
+    for (i, ai) in a.iter().enumerate() {
+        if *ai == 0.0 {
+            continue;
+        }
+        for (j, bj) in b.iter().enumerate() {
+            if let Some(o) = out.get_mut(i + j) {
+                *o += ai * bj;
+            }
+        }
+    }
+    out
+}
+
+fn scale(p: &Poly, s: f64) -> Poly {
+    p.map(|c| c * s)
+}
+
+fn deriv(p: &Poly) -> Poly {
+    let mut out = [0.0; DEGREE + 1];
+    for i in 1..=DEGREE {
+        out[i - 1] = p[i] * i as f64;
+    }
+    out
+}
+
+/// The antiderivative that is `at_a` at `a`.
+fn antiderivative(p: &Poly, a: f64, at_a: f64) -> Poly {
+    let mut out = [0.0; DEGREE + 1];
+    for i in 0..DEGREE {
+        out[i + 1] = p[i] / (i + 1) as f64;
+    }
+    out[0] = at_a - eval(&out, a);
+    out
+}
+
+/// `∫ p dξ` over `[a, b]`.
+fn integral(p: &Poly, a: f64, b: f64) -> f64 {
+    let q = antiderivative(p, 0.0, 0.0);
+    eval(&q, b) - eval(&q, a)
+}
+
+/// The bending moment (per unit load, lengths in units of l) of the basis's loads: a tip force,
+/// a tip moment, and distributed loads 1, ξ, ξ² (`M(ξ) = ∫_ξ^1 (s − ξ) q(s) ds`).
+fn moment_of_load(j: usize) -> Poly {
+    let mut p = [0.0; DEGREE + 1];
+    match j {
+        0 => (p[0], p[1]) = (1.0, -1.0),
+        1 => p[0] = 1.0,
+        2 => (p[0], p[1], p[2]) = (0.5, -1.0, 0.5),
+        3 => (p[0], p[1], p[3]) = (1.0 / 3.0, -0.5, 1.0 / 6.0),
+        _ => (p[0], p[1], p[4]) = (0.25, -1.0 / 3.0, 1.0 / 12.0),
+    }
+    p
+}
+
+impl BoomConstants {
+    /// Where each section starts at `length`, m (synchronous extension).
+    fn starts(&self, length: f64) -> [f64; MAX_SECTIONS] {
+        let n = self.count;
+        let top = self.sections[n - 1].length;
+        let e = if n > 1 { (length - top).max(0.0) / (n - 1) as f64 } else { 0.0 };
+        let mut s = [0.0; MAX_SECTIONS];
+        for (k, v) in s.iter_mut().enumerate().take(n) {
+            *v = k as f64 * e;
+        }
+        s
+    }
+
+    /// The reduced boom at `length` m and luffing angle `phi` rad.
+    ///
+    /// ```
+    /// use edgekf::systems::boom::{BoomConstants, BoomSection};
+    /// // One uniform 10 m section: clamped-free, ω₁ = 1.875² √(EI / m L⁴).
+    /// let s = BoomSection { length: 10.0, ei: 1e7, mass_per_length: 20.0 };
+    /// let c = BoomConstants { sections: [s; 8], count: 1, tip_mass: 0.0, tip_inertia: 0.0, gravity: 9.81 };
+    /// let b = c.reduce(10.0, 0.0).unwrap();
+    /// let exact = 1.875_104_068_7f64.powi(2) * (1e7f64 / (20.0 * 1e4)).sqrt();
+    /// assert!((b.modes[0].omega / exact - 1.0).abs() < 1e-4);
+    /// // Its sag under its own weight, q L⁴ / 8 EI, downwards.
+    /// assert!((b.sag.0 + 20.0 * 9.81 * 1e4 / 8e7).abs() < 1e-6);
+    /// ```
+    pub fn reduce(&self, length: f64, phi: f64) -> Result<ReducedBoom, ReducedError> {
+        let n = self.count;
+        if n == 0 || n > MAX_SECTIONS || !(length.is_finite() && length > 0.0) {
+            return Err(ReducedError::Constants);
+        }
+        if self.sections[..n].iter().any(|s| !(s.length > 0.0 && s.ei > 0.0 && s.mass_per_length > 0.0)) {
+            return Err(ReducedError::Constants);
+        }
+        let l = length;
+        let starts = self.starts(l);
+        // Every section's ends, in ξ.
+        let mut cuts = [0.0f64; 2 * MAX_SECTIONS + 2];
+        let mut nc = 0;
+        for (start, section) in starts.iter().zip(&self.sections[..n]) {
+            for x in [*start, (start + section.length).min(l)] {
+                cuts[nc] = x / l;
+                nc += 1;
+            }
+        }
+        cuts[nc] = 1.0;
+        nc += 1;
+        let cuts = &mut cuts[..nc];
+        cuts.sort_unstable_by(f64::total_cmp);
+        // The pieces: bounds, EI and m (sums over the sections covering them).
+        let mut pieces = [(0.0f64, 0.0f64, 0.0f64, 0.0f64); MAX_PIECES];
+        let mut np = 0;
+        for w in cuts.windows(2) {
+            let (a, b) = (w[0], w[1]);
+            if b - a <= 1e-12 || np >= MAX_PIECES {
+                continue;
+            }
+            let x = 0.5 * (a + b) * l;
+            let (mut ei, mut m) = (0.0, 0.0);
+            for (start, section) in starts.iter().zip(&self.sections[..n]) {
+                if x >= *start && x < start + section.length {
+                    ei += section.ei;
+                    m += section.mass_per_length;
+                }
+            }
+            if ei <= 0.0 {
+                return Err(ReducedError::Constants);
+            }
+            pieces[np] = (a, b, ei, m);
+            np += 1;
+        }
+        let pieces = &pieces[..np];
+        // Each basis shape per piece: w'' = M / EI integrated twice from the clamped root, then
+        // scaled to a unit tip deflection.
+        let mut shape = [[[0.0; DEGREE + 1]; MAX_PIECES]; BASIS];
+        for (j, sh) in shape.iter_mut().enumerate() {
+            let moment = moment_of_load(j);
+            let (mut slope0, mut w0) = (0.0, 0.0);
+            for (i, &(a, b, ei, _)) in pieces.iter().enumerate() {
+                let slope = antiderivative(&scale(&moment, 1.0 / ei), a, slope0);
+                let w = antiderivative(&slope, a, w0);
+                (slope0, w0) = (eval(&slope, b), eval(&w, b));
+                sh[i] = w;
+            }
+            if w0.is_nan() || w0 <= 0.0 {
+                return Err(ReducedError::Singular);
+            }
+            for p in sh.iter_mut().take(np) {
+                *p = scale(p, 1.0 / w0);
+            }
+        }
+        let (g, sp) = (self.gravity, libm::sin(phi));
+        let mut mm = SMatrix::<f64, BASIS, BASIS>::zeros();
+        let mut kk = SMatrix::<f64, BASIS, BASIS>::zeros();
+        let mut r = SVector::<f64, BASIS>::zeros();
+        let mut gm = SVector::<f64, BASIS>::zeros();
+        let mut xi = [0.0; DEGREE + 1];
+        xi[1] = 1.0;
+        // Mass beyond ξ (for the axial load), from the tip down.
+        let mut beyond = self.tip_mass;
+        for (i, &(a, b, ei, m)) in pieces.iter().enumerate().rev() {
+            // On this piece: beyond(b) + m l (b − ξ) = A − B ξ; P = −g sin φ (A − B ξ).
+            let mut axial = [0.0; DEGREE + 1];
+            (axial[0], axial[1]) = (-g * sp * (beyond + m * l * b), g * sp * m * l);
+            for j in 0..BASIS {
+                let wj = &shape[j][i];
+                let (dj, cj) = (deriv(wj), deriv(&deriv(wj)));
+                r[j] += m * l * l * integral(&mul(&xi, wj), a, b);
+                gm[j] += m * l * integral(wj, a, b);
+                for k in 0..BASIS {
+                    let wk = &shape[k][i];
+                    let (dk, ck) = (deriv(wk), deriv(&deriv(wk)));
+                    mm[(j, k)] += m * l * integral(&mul(wj, wk), a, b);
+                    kk[(j, k)] += ei / (l * l * l) * integral(&mul(&cj, &ck), a, b);
+                    kk[(j, k)] += integral(&mul(&axial, &mul(&dj, &dk)), a, b) / l;
+                }
+            }
+            beyond += m * l * (b - a);
+        }
+        // The platform at the tip: every shape is 1 there; its slope per unit ξ.
+        let last = np - 1;
+        let tip_slope: [f64; BASIS] = core::array::from_fn(|j| eval(&deriv(&shape[j][last]), 1.0) / l);
+        for j in 0..BASIS {
+            r[j] += self.tip_mass * l + self.tip_inertia * tip_slope[j];
+            gm[j] += self.tip_mass;
+            for k in 0..BASIS {
+                mm[(j, k)] += self.tip_mass + self.tip_inertia * tip_slope[j] * tip_slope[k];
+            }
+        }
+        let chol = crate::linalg::cholesky(&mm).ok_or(ReducedError::Singular)?;
+        let a = crate::linalg::solve_lower(&chol, &crate::linalg::solve_lower(&chol, &kk).transpose());
+        let a = (a + a.transpose()) * 0.5;
+        let eig = a.symmetric_eigen();
+        let mut order = [0usize; BASIS];
+        for (i, o) in order.iter_mut().enumerate() {
+            *o = i;
+        }
+        order.sort_unstable_by(|&x, &y| eig.eigenvalues[x].total_cmp(&eig.eigenvalues[y]));
+        let tip_values = |c: &SVector<f64, BASIS>| {
+            let mut d = 0.0;
+            let mut s = 0.0;
+            for j in 0..BASIS {
+                d += c[j];
+                s += c[j] * tip_slope[j];
+            }
+            (d, s)
+        };
+        let mut modes = [Mode { omega: 0.0, tip_deflection: 0.0, tip_slope: 0.0, participation: 0.0 }; MODES];
+        for (mode, &i) in modes.iter_mut().zip(&order) {
+            let w2 = eig.eigenvalues[i];
+            if w2.is_nan() || w2 <= 0.0 {
+                return Err(ReducedError::Singular);
+            }
+            // ψ = L⁻ᵀ u, mass-normalised; its tip deflection positive.
+            let u: SVector<f64, BASIS> = eig.eigenvectors.column(i).into_owned();
+            let mut psi = crate::linalg::solve_lower_transposed(&chol, &u);
+            if tip_values(&psi).0 < 0.0 {
+                psi = -psi;
+            }
+            let (d, s) = tip_values(&psi);
+            *mode = Mode { omega: libm::sqrt(w2), tip_deflection: d, tip_slope: s, participation: psi.dot(&r) };
+        }
+        // Sag: K c = −g cos φ gm.
+        let kchol = crate::linalg::cholesky(&kk).ok_or(ReducedError::Singular)?;
+        let f = gm * (-g * libm::cos(phi));
+        let c = crate::linalg::solve_lower_transposed(&kchol, &crate::linalg::solve_lower(&kchol, &f));
+        Ok(ReducedBoom { length, modes, sag: tip_values(&c) })
+    }
+}
+
+impl ReducedBoom {
+    /// The modes' values in the estimator's precision.
+    pub fn mode<T: Real>(&self, i: usize) -> Option<(T, T, T, T)> {
+        self.modes.get(i).map(|m| {
+            (T::of_f64(m.omega), T::of_f64(m.tip_deflection), T::of_f64(m.tip_slope), T::of_f64(m.participation))
+        })
+    }
+}
