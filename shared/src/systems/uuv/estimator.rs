@@ -507,7 +507,12 @@ fn get<T: Real, const N: usize>(x: &SVector<T, N>, i: usize) -> T {
 }
 
 /// An angle wrapped to (−π, π].
-fn wrap<T: Real>(a: T) -> T {
+///
+/// ```
+/// use edgekf::systems::uuv::wrap;
+/// assert_eq!(wrap(-std::f64::consts::PI), std::f64::consts::PI);
+/// ```
+pub fn wrap<T: Real>(a: T) -> T {
     let two_pi = T::two_pi();
     let turns = libm::round((a / two_pi).as_f64());
     let mut w = a - two_pi * T::of_f64(turns);

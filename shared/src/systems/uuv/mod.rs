@@ -19,7 +19,7 @@ mod vehicle;
 
 pub use detector::{open, signatures, watch, Status, ThrusterMonitor};
 pub use dynamics::{Attitude, Drive, Nu, ReducedDynamics};
-pub use estimator::{Command, Estimate, EstimatorError, Health, Sample, UuvEstimator, CHANNELS};
+pub use estimator::{wrap, Command, Estimate, EstimatorError, Health, Sample, UuvEstimator, CHANNELS};
 pub use settings::{
     DetectorSettings, EstimatorSettings, InitialSpread, Layout, MeasurementNoise, ProcessNoise, VEHICLE_STATES,
     VELOCITY,

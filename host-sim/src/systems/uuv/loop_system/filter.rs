@@ -12,8 +12,8 @@ use crate::residual_loop::filter::Run;
 use anyhow::{anyhow, Result};
 use edgekf::filter::{Innovation, MerweSigmaPoints, UkfMeasurement, UkfModel, UnscentedKalmanFilter};
 use edgekf::systems::uuv::{
-    open, signatures, watch, Command, Drive, EstimatorSettings, ReducedDynamics, Sample, ThrusterMonitor, Vehicle,
-    VEHICLE_STATES, VELOCITY,
+    open, signatures, watch, wrap, Command, Drive, EstimatorSettings, ReducedDynamics, Sample, ThrusterMonitor,
+    Vehicle, VEHICLE_STATES, VELOCITY,
 };
 use nalgebra::{SMatrix, SVector};
 use std::ops::Range;
@@ -294,14 +294,4 @@ fn start(dynamics: &ReducedDynamics<f64>, settings: &EstimatorSettings, s: &Samp
         x[i] = 1.0;
     }
     (x, sd)
-}
-
-/// An angle wrapped to (−π, π].
-fn wrap(a: f64) -> f64 {
-    let w = a - std::f64::consts::TAU * (a / std::f64::consts::TAU).round();
-    if w <= -std::f64::consts::PI {
-        w + std::f64::consts::TAU
-    } else {
-        w
-    }
 }
