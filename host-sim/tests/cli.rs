@@ -266,6 +266,71 @@ fn uuv_simulate_then_estimate_writes_the_issues_columns() {
 }
 
 #[test]
+fn boom_simulate_then_estimate_writes_the_issues_columns() {
+    let dir = scratch("boom");
+    let (data, statics, est) = (dir.join("luffing.csv"), dir.join("static.csv"), dir.join("est.csv"));
+    let out = edgekf(&[
+        "boom",
+        "simulate",
+        "--scenario",
+        "luffing",
+        "--duration",
+        "40",
+        "--out",
+        path(&data),
+        "--static",
+        path(&statics),
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let csv = std::fs::read_to_string(&data).unwrap();
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    assert_eq!(
+        header,
+        [
+            "t",
+            "gyro_rate",
+            "incl_angle",
+            "boom_length",
+            "luff_rate_cmd",
+            "truth_tip_angle",
+            "truth_tip_deflection",
+            "truth_tip_vibration",
+            "truth_root_angle",
+            "truth_root_rate",
+            "truth_gyro_bias"
+        ]
+    );
+    // The model-based filter is the default; the peak errors are printed against the truth.
+    let args = ["boom", "estimate", "--data", path(&data), "--static", path(&statics), "--out", path(&est)];
+    let out = edgekf(&args);
+    let stdout = text(&out.stdout);
+    assert!(out.status.success(), "{stdout}\n{}", text(&out.stderr));
+    let table = std::fs::read_to_string(&est).unwrap();
+    let mut lines = table.lines();
+    assert_eq!(lines.next().unwrap(), "t,tip_angle,tip_vibration,tip_deflection");
+    let rows: Vec<Vec<f64>> = lines.map(|l| l.split(',').map(|v| v.parse().unwrap()).collect()).collect();
+    assert_eq!(rows.len(), 4000);
+    // At rest at 0.5 rad before the first move: the tip below the root's line by the sag.
+    assert!((rows[150][1] - 0.5).abs() < 0.1 && rows[150][3] < -0.05 && rows[150][2].abs() < 0.005, "{:?}", rows[150]);
+    let cells = row(&stdout, "peak error over");
+    let mean: f64 = cells[cells.iter().position(|c| c == "mean").unwrap() + 1].parse().unwrap();
+    assert!(mean < 2.0, "{stdout}");
+    // Without the command column the model cannot run; the paper's method can.
+    let no_cmd = dir.join("no_cmd.csv");
+    let stripped: String = csv.lines().map(|l| l.splitn(6, ',').take(4).collect::<Vec<_>>().join(",") + "\n").collect();
+    std::fs::write(&no_cmd, stripped).unwrap();
+    let out = edgekf(&["boom", "estimate", "--data", path(&no_cmd), "--static", path(&statics), "--out", path(&est)]);
+    assert!(!out.status.success() && text(&out.stderr).contains("luff_rate_cmd"), "{}", text(&out.stderr));
+    let args = ["boom", "estimate", "--data", path(&no_cmd), "--static", path(&statics), "--method", "paper"];
+    let out = edgekf(&[&args[..], &["--out", path(&est)]].concat());
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    // The recording is never an output.
+    let out = edgekf(&["boom", "estimate", "--data", path(&data), "--static", path(&statics), "--out", path(&data)]);
+    assert!(!out.status.success());
+    assert_eq!(std::fs::read_to_string(&data).unwrap(), csv);
+}
+
+#[test]
 fn loop_uuv_names_an_undeclared_offset_and_reports_the_declared_model() {
     let dir = scratch("loop-uuv");
     let (config, data, report) = (dir.join("no_biases.toml"), dir.join("healthy.csv"), dir.join("report"));

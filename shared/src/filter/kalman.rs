@@ -378,6 +378,40 @@ where
         self.health
     }
 
+    /// Replaces the model for the steps that follow, keeping the state and covariance: a
+    /// time-varying system (a boom that telescopes, a drive that saturates) re-linearised at
+    /// each step. A model whose sizes do not fit the filter's is refused.
+    ///
+    /// ```
+    /// use edgekf::filter::{KalmanFilter, LinearModel};
+    /// use nalgebra::{Matrix1, Vector1};
+    /// let m = |a: f64| LinearModel { a: Matrix1::new(a), c: Matrix1::new(1.0), q: Matrix1::new(0.0), r: Matrix1::new(1.0) };
+    /// let mut kf = KalmanFilter::new(m(1.0), Vector1::new(1.0), Matrix1::new(1.0));
+    /// kf.set_model(m(2.0)).unwrap();
+    /// kf.predict();
+    /// assert_eq!((kf.state()[0], kf.covariance()[(0, 0)]), (2.0, 4.0));
+    /// ```
+    pub fn set_model(&mut self, model: GenericLinearModel<T, N, M>) -> Result<(), FilterError> {
+        if !model.sizes_agree() || model.states() != self.x.nrows() || model.measurements() != self.ct.ncols() {
+            return Err(FilterError::SizeMismatch);
+        }
+        self.at = model.a.transpose();
+        self.ct = model.c.transpose();
+        self.model = model;
+        Ok(())
+    }
+
+    /// Adds `dx` to the state: a known input's effect `B u`, after [`predict`](Self::predict)'s
+    /// `A x`. A non-finite `dx` (or one of the wrong length) is refused and counted.
+    pub fn shift(&mut self, dx: &OVector<T, N>) -> Result<(), FilterError> {
+        if dx.nrows() != self.x.nrows() || dx.iter().any(|v| !v.is_finite()) {
+            self.health.refused_updates = self.health.refused_updates.saturating_add(1);
+            return Err(FilterError::NonFiniteMeasurement);
+        }
+        self.x += dx;
+        Ok(())
+    }
+
     /// Time update `x = A x`, `P = A P Aᵀ + Q`.
     ///
     /// `U = P Aᵀ` then `P⁻ = A U + Q` on the upper triangle only, mirrored: `1.5 N³`

@@ -3,7 +3,7 @@
 //! ```text
 //! edgekf boom simulate [--config C] --scenario luffing|extension [--duration 120] [--seed 1]
 //!                      --out data.csv [--static static.csv]
-//! edgekf boom estimate [--config C] --data data.csv --static static.csv [--method paper] --out est.csv
+//! edgekf boom estimate [--config C] --data data.csv --static static.csv [--method model|paper] --out est.csv
 //! ```
 
 use super::config::BoomConfig;
@@ -49,8 +49,8 @@ pub struct EstimateArgs {
     /// The gyro at rest (t, gyro_rate): its AR(2) noise and bias.
     #[arg(long = "static", value_name = "CSV")]
     pub static_data: PathBuf,
-    /// The estimator.
-    #[arg(long, value_enum, default_value_t = Method::Paper)]
+    /// The estimator (`model` needs luff_rate_cmd in the data).
+    #[arg(long, value_enum, default_value_t = Method::Model)]
     pub method: Method,
     /// Estimate file to write.
     #[arg(long, value_name = "CSV")]
@@ -136,7 +136,11 @@ fn estimate_command(args: EstimateArgs) -> anyhow::Result<()> {
     )?;
     let config = load(args.config.as_deref())?;
     let known: Vec<&str> = MEASURED.iter().chain(TRUTH.iter()).copied().collect();
-    let (file, notes) = crate::io::data::read_required(&args.data, &MEASURED[..3], &known)?;
+    let required = match args.method {
+        Method::Model => &MEASURED[..],
+        Method::Paper => &MEASURED[..3],
+    };
+    let (file, notes) = crate::io::data::read_required(&args.data, required, &known)?;
     eprintln!("{}: {notes}", args.data.display());
     let (statics, notes) = crate::io::data::read_required(&args.static_data, &["gyro_rate"], &["gyro_rate"])?;
     eprintln!("{}: {notes}", args.static_data.display());

@@ -1,17 +1,21 @@
 //! The boom's estimators over a data file, in `f64`: the code the node runs in `f32`
 //! (`edgekf::systems::boom`). The gyro's AR(2) model and bias come from the configuration where
-//! it declares them, else from the static record.
+//! it declares them, else from the static record; the inclinometer's noise from `[inclinometer]
+//! noise`, else the static record's `incl_angle` if it has one, else 5e-4 rad.
 
 use super::config::BoomConfig;
 use super::simulate::MEASURED;
 use crate::io::data::DataFile;
 use anyhow::{anyhow, Context, Result};
 use clap::ValueEnum;
-use edgekf::systems::boom::{Ar2, PaperEstimator, PaperSettings};
+use edgekf::systems::boom::{Ar2, ModelEstimator, ModelSettings, PaperEstimator, PaperSettings};
 
 /// An estimator of the tip's vibration.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum Method {
+    /// One Kalman filter on the reduced boom with the luffing command as input, the gyro's bias
+    /// and AR noise and the inclinometer's lag in its state.
+    Model,
     /// The paper's: AR(2) Kalman filter on the gyro, Simpson integration, fusion with the
     /// inclinometer at the equilibrium instants, `y = α l θ`, moving average.
     Paper,
@@ -66,8 +70,38 @@ pub fn gyro_model(config: &BoomConfig, static_gyro: &[f64]) -> Result<Ar2> {
     })
 }
 
+/// The inclinometer's noise used when neither the configuration nor a static record gives it,
+/// rad.
+pub const INCLINOMETER_NOISE: f64 = 5e-4;
+
+/// The model-based filter's settings for `config` with the gyro model `ar` and the
+/// inclinometer's noise `incl_noise` (rad).
+pub fn model_settings(config: &BoomConfig, ar: Ar2, incl_noise: f64) -> Result<ModelSettings> {
+    let i = &config.inclinometer;
+    Ok(ModelSettings::new(
+        1.0 / config.gyro.sample_rate,
+        config.constants()?,
+        config.damping.zeta,
+        (config.drive.lag, config.drive.max_accel),
+        config.gyro.scale,
+        ar,
+        (i.lag, i.offset, i.noise.unwrap_or(incl_noise)),
+    ))
+}
+
 /// Runs `method` of `config` over `data` with the gyro model `ar`.
 pub fn estimate(config: &BoomConfig, data: &DataFile, ar: Ar2, method: Method) -> Result<BoomEstimate> {
+    estimate_with(config, data, ar, INCLINOMETER_NOISE, method)
+}
+
+/// [`estimate`] with the inclinometer's noise (rad) where the configuration gives none.
+pub fn estimate_with(
+    config: &BoomConfig,
+    data: &DataFile,
+    ar: Ar2,
+    incl_noise: f64,
+    method: Method,
+) -> Result<BoomEstimate> {
     let col = |n: &str| data.column(n).ok_or_else(|| anyhow!("the data has no `{n}` column"));
     let (gyro, incl, length) = (col(MEASURED[0])?, col(MEASURED[1])?, col(MEASURED[2])?);
     let dt = 1.0 / config.gyro.sample_rate;
@@ -75,6 +109,19 @@ pub fn estimate(config: &BoomConfig, data: &DataFile, ar: Ar2, method: Method) -
     let mut columns = [vec![f64::NAN; n], vec![f64::NAN; n], vec![f64::NAN; n]];
     let mut fusions = 0;
     match method {
+        Method::Model => {
+            let command = col(MEASURED[3])?;
+            let settings = model_settings(config, ar, incl_noise)?;
+            let first = length.iter().copied().find(|l| l.is_finite()).context("no finite boom_length")?;
+            let mut est = ModelEstimator::<f64>::new(&settings, first)
+                .map_err(|e| anyhow!("the model-based filter cannot start: {e:?}"))?;
+            for k in 0..n {
+                let e = est.step(gyro[k], incl[k], length[k], command[k]);
+                columns[0][k] = e.tip_angle;
+                columns[1][k] = e.vibration;
+                columns[2][k] = e.deflection;
+            }
+        }
         Method::Paper => {
             let mut est = PaperEstimator::<f64>::new(&PaperSettings::new(dt, ar, config.gyro.scale));
             let mut last_length = length.iter().copied().find(|l| l.is_finite()).context("no finite boom_length")?;

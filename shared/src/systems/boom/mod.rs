@@ -7,15 +7,20 @@
 //!   equilibrium instants, `y = α l θ` and a moving average;
 //! * [`BoomConstants::reduce`]: the reduced boom (Rayleigh–Ritz on the boom's own static
 //!   deflection shapes) for the model-based filter: its first modes, their tip values and
-//!   participation, the gravity sag.
+//!   participation, the gravity sag;
+//! * [`ModelEstimator`]: the model-based design, one Kalman filter on the reduced boom with the
+//!   luffing command as input, the gyro's bias and AR noise and the inclinometer's lag in its
+//!   state.
 //!
 //! The host's reference boom (`edgekf_sim::systems::boom`) is a finite-element model written
 //! apart from anything here.
 
 mod ar;
+mod model;
 mod paper;
 mod reduced;
 
 pub use ar::{Ar2, ArError};
+pub use model::{slot, ModelError, ModelEstimate, ModelEstimator, ModelSettings, MEASUREMENTS, STATES};
 pub use paper::{PaperEstimate, PaperEstimator, PaperSettings, SMOOTHING_MAX};
 pub use reduced::{BoomConstants, BoomSection, Mode, ReducedBoom, ReducedError, BASIS, MAX_SECTIONS, MODES};
