@@ -301,8 +301,10 @@ fn boom_simulate_then_estimate_writes_the_issues_columns() {
         ]
     );
     // The model-based filter is the default; the peak errors are printed against the truth.
+    assert_eq!(std::fs::read_to_string(&statics).unwrap().lines().next(), Some("t,gyro_rate,incl_angle"));
+    let svg = dir.join("vibration.svg");
     let args = ["boom", "estimate", "--data", path(&data), "--static", path(&statics), "--out", path(&est)];
-    let out = edgekf(&args);
+    let out = edgekf(&[&args[..], &["--plot", path(&svg)]].concat());
     let stdout = text(&out.stdout);
     assert!(out.status.success(), "{stdout}\n{}", text(&out.stderr));
     let table = std::fs::read_to_string(&est).unwrap();
@@ -315,6 +317,7 @@ fn boom_simulate_then_estimate_writes_the_issues_columns() {
     let cells = row(&stdout, "peak error over");
     let mean: f64 = cells[cells.iter().position(|c| c == "mean").unwrap() + 1].parse().unwrap();
     assert!(mean < 2.0, "{stdout}");
+    assert!(std::fs::read_to_string(&svg).unwrap().contains("Boom tip vibration against truth"));
     // Without the command column the model cannot run; the paper's method can.
     let no_cmd = dir.join("no_cmd.csv");
     let stripped: String = csv.lines().map(|l| l.splitn(6, ',').take(4).collect::<Vec<_>>().join(",") + "\n").collect();

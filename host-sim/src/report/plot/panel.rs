@@ -100,7 +100,17 @@ impl Panel {
         }
         let mut chart =
             builder.margin(6).margin_right(14).x_label_area_size(36).y_label_area_size(58).build_cartesian_2d(x, y)?;
-        let y_tick = |v: &f64| if self.mesh.signed_y && *v > 0.0 { format!("+{}", tick(*v)) } else { tick(*v) };
+        // A key point a rounding error away from zero (a symmetric range's middle) reads 0.
+        let (lo, hi) = self.y.ends();
+        let tiny = 1e-9 * (hi - lo).abs();
+        let y_tick = |v: &f64| {
+            let v = if v.abs() < tiny { 0.0 } else { *v };
+            if self.mesh.signed_y && v > 0.0 {
+                format!("+{}", tick(v))
+            } else {
+                tick(v)
+            }
+        };
         chart
             .configure_mesh()
             .x_desc(&self.x_desc)

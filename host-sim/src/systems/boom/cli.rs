@@ -4,15 +4,18 @@
 //! edgekf boom simulate [--config C] --scenario luffing|extension [--duration 120] [--seed 1]
 //!                      --out data.csv [--static static.csv]
 //! edgekf boom estimate [--config C] --data data.csv --static static.csv [--method model|paper] --out est.csv
+//!                      [--plot vibration.svg]
 //! ```
 
 use super::config::BoomConfig;
-use super::estimate::{estimate, gyro_model, Method};
+use super::estimate::{estimate_with, gyro_model, Method, INCLINOMETER_NOISE};
 use super::peaks::peak_errors;
+use super::plot::vibration_figure;
 use super::runs::Scenario;
-use super::simulate::{simulate, static_record, SimOptions};
+use super::simulate::{simulate, static_inclinometer, static_record, SimOptions};
 use super::simulate::{MEASURED, TRUTH};
 use crate::io::output::{check, write_atomic};
+use crate::io::timeline::{bridge, TimelineOptions};
 use anyhow::Context as _;
 use clap::{Args, Subcommand};
 use std::path::PathBuf;
@@ -46,7 +49,8 @@ pub struct EstimateArgs {
     /// Data file (t, gyro_rate, incl_angle, boom_length, luff_rate_cmd; truth_ columns optional).
     #[arg(long, value_name = "CSV")]
     pub data: PathBuf,
-    /// The gyro at rest (t, gyro_rate): its AR(2) noise and bias.
+    /// The sensors at rest (t, gyro_rate; incl_angle optional): the gyro's AR(2) noise and bias,
+    /// the inclinometer's noise.
     #[arg(long = "static", value_name = "CSV")]
     pub static_data: PathBuf,
     /// The estimator (`model` needs luff_rate_cmd in the data).
@@ -55,6 +59,9 @@ pub struct EstimateArgs {
     /// Estimate file to write.
     #[arg(long, value_name = "CSV")]
     pub out: PathBuf,
+    /// Also draw the tip's vibration against truth_tip_vibration (SVG; needs that column).
+    #[arg(long, value_name = "SVG")]
+    pub plot: Option<PathBuf>,
 }
 
 /// Arguments of `edgekf boom simulate`.
@@ -75,7 +82,8 @@ pub struct SimulateArgs {
     /// Data file to write.
     #[arg(long, value_name = "CSV")]
     pub out: PathBuf,
-    /// Also write 60 s of the gyro with the boom at rest (t, gyro_rate): the static record.
+    /// Also write 60 s of the sensors with the boom at rest (t, gyro_rate, incl_angle): the
+    /// static record.
     #[arg(long = "static", value_name = "CSV")]
     pub static_out: Option<PathBuf>,
 }
@@ -107,7 +115,9 @@ fn simulate_command(args: SimulateArgs) -> anyhow::Result<()> {
     let statics = match &args.static_out {
         Some(path) => {
             let (t, gyro) = static_record(&config, STATIC_S, args.seed)?;
-            Some((path, crate::io::data::to_csv_string(path, &["gyro_rate"], &t, &[&gyro])?))
+            let mut incl = static_inclinometer(&config, STATIC_S, args.seed)?;
+            incl.resize(t.len(), f64::NAN);
+            Some((path, crate::io::data::to_csv_string(path, &["gyro_rate", "incl_angle"], &t, &[&gyro, &incl])?))
         }
         None => None,
     };
@@ -124,16 +134,19 @@ fn simulate_command(args: SimulateArgs) -> anyhow::Result<()> {
     );
     if let Some((path, text)) = statics {
         write_atomic(path, text).with_context(|| format!("cannot write {}", path.display()))?;
-        println!("{}: {STATIC_S:.0} s of the gyro at rest", path.display());
+        println!("{}: {STATIC_S:.0} s of the gyro and the inclinometer at rest", path.display());
     }
     Ok(())
 }
 
 fn estimate_command(args: EstimateArgs) -> anyhow::Result<()> {
     check(
-        &[Some(args.out.as_path())],
+        &[Some(args.out.as_path()), args.plot.as_deref()],
         &[Some(args.data.as_path()), Some(args.static_data.as_path()), args.config.as_deref()],
     )?;
+    if args.plot.as_ref() == Some(&args.out) {
+        anyhow::bail!("{}: --out and --plot are the same file", args.out.display());
+    }
     let config = load(args.config.as_deref())?;
     let known: Vec<&str> = MEASURED.iter().chain(TRUTH.iter()).copied().collect();
     let required = match args.method {
@@ -142,20 +155,49 @@ fn estimate_command(args: EstimateArgs) -> anyhow::Result<()> {
     };
     let (file, notes) = crate::io::data::read_required(&args.data, required, &known)?;
     eprintln!("{}: {notes}", args.data.display());
-    let (statics, notes) = crate::io::data::read_required(&args.static_data, &["gyro_rate"], &["gyro_rate"])?;
+    let rate = config.gyro.sample_rate;
+    if (notes.timing.sample_rate - rate).abs() > 0.01 * rate {
+        anyhow::bail!(
+            "{}: sampled at {:.3} Hz, the configuration says {rate} Hz ([gyro] sample_rate)",
+            args.data.display(),
+            notes.timing.sample_rate
+        );
+    }
+    let (file, timeline) = bridge(&file, &notes.timing, &TimelineOptions::default());
+    for n in timeline.notices() {
+        eprintln!("notice: {n}");
+    }
+    let restarts: Vec<usize> = timeline.restarts.iter().map(|r| r.row).collect();
+    let (statics, notes) =
+        crate::io::data::read_required(&args.static_data, &["gyro_rate"], &["gyro_rate", "incl_angle"])?;
     eprintln!("{}: {notes}", args.static_data.display());
     let ar = gyro_model(&config, statics.column("gyro_rate").unwrap_or_default())?;
-    let est = estimate(&config, &file, ar, args.method)?;
+    let incl_noise = statics.column("incl_angle").and_then(spread).unwrap_or(INCLINOMETER_NOISE);
+    let est = estimate_with(&config, &file, ar, incl_noise, args.method, &restarts)?;
+    let figure = match (&args.plot, file.column("truth_tip_vibration")) {
+        (Some(_), Some(truth)) => Some(vibration_figure(&est, args.method.name(), truth, file.column(MEASURED[3]))?),
+        (Some(path), None) => anyhow::bail!(
+            "{}: --plot draws the estimate against truth_tip_vibration, which {} lacks",
+            path.display(),
+            args.data.display()
+        ),
+        (None, _) => None,
+    };
     write_atomic(&args.out, est.to_csv(&args.out)?).with_context(|| format!("cannot write {}", args.out.display()))?;
     println!(
-        "{}: {} rows; gyro AR(2) [{:.4}, {:.5}], noise {:.2e} rad/s, bias {:.3e} rad/s",
+        "{}: {} rows by the {} method; gyro AR(2) [{:.4}, {:.5}], noise {:.2e} rad/s, bias {:.3e} rad/s",
         args.out.display(),
         est.t.len(),
+        args.method.name(),
         ar.a[0],
         ar.a[1],
         ar.sigma,
         ar.mean
     );
+    if let (Some(path), Some(svg)) = (&args.plot, figure) {
+        write_atomic(path, svg).with_context(|| format!("cannot write {}", path.display()))?;
+        println!("{}: the tip's vibration against truth", path.display());
+    }
     if let (Some(truth), Some(rate), Some(vib)) =
         (file.column("truth_tip_vibration"), file.column("truth_root_rate"), est.column("tip_vibration"))
     {
@@ -166,4 +208,16 @@ fn estimate_command(args: EstimateArgs) -> anyhow::Result<()> {
         );
     }
     Ok(())
+}
+
+/// Standard deviation of the finite values of `v` (at least 16 of them, not all equal).
+fn spread(v: &[f64]) -> Option<f64> {
+    let x: Vec<f64> = v.iter().copied().filter(|v| v.is_finite()).collect();
+    let n = x.len() as f64;
+    if x.len() < 16 {
+        return None;
+    }
+    let mean = x.iter().sum::<f64>() / n;
+    let sd = (x.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+    (sd > 0.0).then_some(sd)
 }

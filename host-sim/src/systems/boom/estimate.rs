@@ -21,6 +21,16 @@ pub enum Method {
     Paper,
 }
 
+impl Method {
+    /// Its name on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Model => "model",
+            Method::Paper => "paper",
+        }
+    }
+}
+
 /// The output columns after `t`.
 pub const COLUMNS: [&str; 3] = ["tip_angle", "tip_vibration", "tip_deflection"];
 
@@ -91,16 +101,19 @@ pub fn model_settings(config: &BoomConfig, ar: Ar2, incl_noise: f64) -> Result<M
 
 /// Runs `method` of `config` over `data` with the gyro model `ar`.
 pub fn estimate(config: &BoomConfig, data: &DataFile, ar: Ar2, method: Method) -> Result<BoomEstimate> {
-    estimate_with(config, data, ar, INCLINOMETER_NOISE, method)
+    estimate_with(config, data, ar, INCLINOMETER_NOISE, method, &[])
 }
 
-/// [`estimate`] with the inclinometer's noise (rad) where the configuration gives none.
+/// [`estimate`] with the inclinometer's noise (rad) where the configuration gives none, and
+/// the rows where the timeline restarts (a gap too long to bridge): the estimator starts
+/// afresh there, as the node does after a reset.
 pub fn estimate_with(
     config: &BoomConfig,
     data: &DataFile,
     ar: Ar2,
     incl_noise: f64,
     method: Method,
+    restarts: &[usize],
 ) -> Result<BoomEstimate> {
     let col = |n: &str| data.column(n).ok_or_else(|| anyhow!("the data has no `{n}` column"));
     let (gyro, incl, length) = (col(MEASURED[0])?, col(MEASURED[1])?, col(MEASURED[2])?);
@@ -108,14 +121,22 @@ pub fn estimate_with(
     let n = data.len();
     let mut columns = [vec![f64::NAN; n], vec![f64::NAN; n], vec![f64::NAN; n]];
     let mut fusions = 0;
+    // The length to start from at row k: the first finite one from there.
+    let length_from = |k: usize| length[k..].iter().copied().find(|l| l.is_finite() && *l > 0.0);
+    let mut last_length = length_from(0).context("no finite, positive boom_length")?;
     match method {
         Method::Model => {
             let command = col(MEASURED[3])?;
             let settings = model_settings(config, ar, incl_noise)?;
-            let first = length.iter().copied().find(|l| l.is_finite()).context("no finite boom_length")?;
-            let mut est = ModelEstimator::<f64>::new(&settings, first)
-                .map_err(|e| anyhow!("the model-based filter cannot start: {e:?}"))?;
+            let start = |l: f64| {
+                ModelEstimator::<f64>::new(&settings, l)
+                    .map_err(|e| anyhow!("the model-based filter cannot start: {e:?}"))
+            };
+            let mut est = start(last_length)?;
             for k in 0..n {
+                if restarts.contains(&k) {
+                    est = start(length_from(k).unwrap_or(last_length))?;
+                }
                 let e = est.step(gyro[k], incl[k], length[k], command[k]);
                 columns[0][k] = e.tip_angle;
                 columns[1][k] = e.vibration;
@@ -123,9 +144,12 @@ pub fn estimate_with(
             }
         }
         Method::Paper => {
-            let mut est = PaperEstimator::<f64>::new(&PaperSettings::new(dt, ar, config.gyro.scale));
-            let mut last_length = length.iter().copied().find(|l| l.is_finite()).context("no finite boom_length")?;
+            let settings = PaperSettings::new(dt, ar, config.gyro.scale);
+            let mut est = PaperEstimator::<f64>::new(&settings);
             for k in 0..n {
+                if restarts.contains(&k) {
+                    est = PaperEstimator::<f64>::new(&settings);
+                }
                 if length[k].is_finite() {
                     last_length = length[k];
                 }

@@ -21,6 +21,7 @@ pub mod config;
 pub mod estimate;
 pub mod modal;
 pub mod peaks;
+pub mod plot;
 pub mod runs;
 pub mod sensors;
 pub mod simulate;

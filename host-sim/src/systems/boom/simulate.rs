@@ -223,3 +223,17 @@ pub fn static_record(config: &BoomConfig, duration: f64, seed: u64) -> Result<(V
     let rate_col = t.iter().map(|&tk| gyro.read(0.0, tk, &mut rng)).collect();
     Ok((t, rate_col))
 }
+
+/// The inclinometer over the same rest as [`static_record`] (the root at the runs' start
+/// angle; its own noise stream, `seed` + 2 000 003): the static record's `incl_angle`, from
+/// which the estimators take the inclinometer's noise when `[inclinometer] noise` is absent.
+pub fn static_inclinometer(config: &BoomConfig, duration: f64, seed: u64) -> Result<Vec<f64>> {
+    if !(duration.is_finite() && duration > 0.0 && duration <= 3600.0) {
+        bail!("the static record's length {duration} must lie in (0, 3600] s");
+    }
+    let rate = config.inclinometer.sample_rate;
+    let mut rng = ChaCha8Rng::seed_from_u64(seed.wrapping_add(2_000_003));
+    let angle = config.runs.start_angle;
+    let mut incl = Inclinometer::new(InclinometerModel::of(config), angle, 1.0 / rate);
+    Ok((0..(duration * rate).round() as usize).map(|_| incl.read(angle, &mut rng)).collect())
+}
