@@ -57,6 +57,11 @@ pub fn uuv_elf() -> Result<PathBuf> {
     elf_from("EDGEKF_UUV_ELF")
 }
 
+/// The boom tip-vibration image: `$EDGEKF_BOOM_ELF` (set by `cargo xtask test`).
+pub fn boom_elf() -> Result<PathBuf> {
+    elf_from("EDGEKF_BOOM_ELF")
+}
+
 fn elf_from(var: &str) -> Result<PathBuf> {
     let path = std::env::var_os(var).with_context(|| {
         format!("{var} is not set: run the HIL tests through `cargo xtask test` (it builds the image)")

@@ -82,7 +82,7 @@ pub struct Image {
 }
 
 /// Every image, in the order `cargo xtask test` builds them.
-pub const IMAGES: [Image; 6] = [
+pub const IMAGES: [Image; 7] = [
     Image {
         bin: "edgekf-board",
         flag: Some("--board"),
@@ -136,6 +136,15 @@ pub const IMAGES: [Image; 6] = [
         role: Role::Hil { env: "EDGEKF_UUV_ELF", tests: &["uuv_node"] },
         proof: PanicProof::Except(CORE_CSV_PARSING),
         budgets: &[("uuv_step", 20, 6, 1_100_000), ("uuv_step_dvl", 20, 6, 1_200_000)],
+    },
+    Image {
+        bin: "edgekf-boom-qemu",
+        flag: Some("--boom"),
+        features: "qemu",
+        what: "the boom tip-vibration QEMU image",
+        role: Role::Hil { env: "EDGEKF_BOOM_ELF", tests: &["boom_node"] },
+        proof: PanicProof::Except(CORE_CSV_PARSING),
+        budgets: &[("boom_step", 10, 2, 40_000), ("boom_rereduce", 10, 2, 18_000_000)],
     },
     Image {
         bin: "edgekf-bench",

@@ -5,8 +5,10 @@
 //! * [`oscillator`]: the harmonic force driving a structural mode, from one ADXL355 axis;
 //! * [`rotor`]: rotor virtual sensing (disk motion and unbalance forces from four probes);
 //! * [`crank`]: slider-crank joint clearance from the crank angular acceleration;
-//! * [`uuv`]: an underwater vehicle's thruster health from its IMU, depth, compass and DVL.
+//! * [`uuv`]: an underwater vehicle's thruster health from its IMU, depth, compass and DVL;
+//! * [`boom`]: a telescoping boom's tip vibration from a tip gyro and a root inclinometer.
 
+pub mod boom;
 pub mod crank;
 pub mod oscillator;
 pub mod rotor;

@@ -44,5 +44,8 @@ mod solve;
 pub use cholesky::{cholesky, solve_lower, solve_lower_transposed};
 pub use solve::solve;
 
+mod jacobi;
+pub use jacobi::symmetric_eigen;
+
 mod dot;
 pub use dot::{column, dot, mul_tr, mul_tr_add};

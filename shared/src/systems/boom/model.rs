@@ -280,6 +280,11 @@ impl<T: Real> ModelEstimator<T> {
         self.reduce_failures
     }
 
+    /// The filter's repair counters.
+    pub fn health(&self) -> crate::filter::FilterHealth {
+        self.kf.health()
+    }
+
     /// The filter's state (see [`slot`]).
     pub fn state(&self) -> &SVector<T, STATES> {
         self.kf.state()

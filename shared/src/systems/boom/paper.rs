@@ -212,10 +212,11 @@ impl<T: Real> PaperEstimator<T> {
         self.angle = [angle, self.angle[0]];
         // y = α l (θ_tip − θ_root), smoothed.
         let y = alpha * length * (angle - incl);
-        let n = self.settings.smoothing;
-        let at = self.k % n;
-        self.sum = self.sum - self.ring[at] + y;
-        self.ring[at] = y;
+        let n = self.settings.smoothing.max(1);
+        if let Some(slot) = self.ring.get_mut(self.k % n) {
+            self.sum = self.sum - *slot + y;
+            *slot = y;
+        }
         self.k += 1;
         let count = self.k.min(n);
         PaperEstimate { tip_angle: angle, vibration: self.sum / t(count as f64), fused }

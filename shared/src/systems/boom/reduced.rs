@@ -90,13 +90,20 @@ fn eval(p: &Poly, x: f64) -> f64 {
     p.iter().rev().fold(0.0, |acc, c| acc * x + c)
 }
 
+/// Index of the highest non-zero coefficient (0 for the zero polynomial).
+fn degree(p: &Poly) -> usize {
+    p.iter().rposition(|c| *c != 0.0).unwrap_or(0)
+}
+
 fn mul(a: &Poly, b: &Poly) -> Poly {
     let mut out = [0.0; DEGREE + 1];
-    for (i, ai) in a.iter().enumerate() {
+    // Only up to each factor's degree: the shapes are of degree 6 in a basis of 14.
+    let (da, db) = (degree(a), degree(b));
+    for (i, ai) in a.iter().enumerate().take(da + 1) {
         if *ai == 0.0 {
             continue;
         }
-        for (j, bj) in b.iter().enumerate() {
+        for (j, bj) in b.iter().enumerate().take(db + 1) {
             if let Some(o) = out.get_mut(i + j) {
                 *o += ai * bj;
             }
@@ -151,7 +158,7 @@ impl BoomConstants {
     /// Where each section starts at `length`, m (synchronous extension).
     fn starts(&self, length: f64) -> [f64; MAX_SECTIONS] {
         let n = self.count;
-        let top = self.sections[n - 1].length;
+        let top = self.sections.get(n.wrapping_sub(1)).map_or(0.0, |s| s.length);
         let e = if n > 1 { (length - top).max(0.0) / (n - 1) as f64 } else { 0.0 };
         let mut s = [0.0; MAX_SECTIONS];
         for (k, v) in s.iter_mut().enumerate().take(n) {
@@ -218,18 +225,19 @@ impl BoomConstants {
             pieces[np] = (a, b, ei, m);
             np += 1;
         }
-        let pieces = &pieces[..np];
+        let pieces = pieces.get(..np).unwrap_or(&[]);
         // Each basis shape per piece: w'' = M / EI integrated twice from the clamped root, then
         // scaled to a unit tip deflection.
         let mut shape = [[[0.0; DEGREE + 1]; MAX_PIECES]; BASIS];
         for (j, sh) in shape.iter_mut().enumerate() {
             let moment = moment_of_load(j);
             let (mut slope0, mut w0) = (0.0, 0.0);
-            for (i, &(a, b, ei, _)) in pieces.iter().enumerate() {
+            for (piece, out) in pieces.iter().zip(sh.iter_mut()) {
+                let &(a, b, ei, _) = piece;
                 let slope = antiderivative(&scale(&moment, 1.0 / ei), a, slope0);
                 let w = antiderivative(&slope, a, w0);
                 (slope0, w0) = (eval(&slope, b), eval(&w, b));
-                sh[i] = w;
+                *out = w;
             }
             if w0.is_nan() || w0 <= 0.0 {
                 return Err(ReducedError::Singular);
@@ -251,24 +259,34 @@ impl BoomConstants {
             // On this piece: beyond(b) + m l (b − ξ) = A − B ξ; P = −g sin φ (A − B ξ).
             let mut axial = [0.0; DEGREE + 1];
             (axial[0], axial[1]) = (-g * sp * (beyond + m * l * b), g * sp * m * l);
-            for j in 0..BASIS {
-                let wj = &shape[j][i];
-                let (dj, cj) = (deriv(wj), deriv(&deriv(wj)));
+            // Each shape on this piece (`i < np ≤ MAX_PIECES`: `get` only keeps the proof).
+            let on: [Poly; BASIS] = core::array::from_fn(|j| shape[j].get(i).copied().unwrap_or([0.0; DEGREE + 1]));
+            let slopes: [Poly; BASIS] = core::array::from_fn(|j| on.get(j).map_or([0.0; DEGREE + 1], deriv));
+            let curvatures: [Poly; BASIS] = core::array::from_fn(|j| slopes.get(j).map_or([0.0; DEGREE + 1], deriv));
+            for (j, ((wj, dj), cj)) in on.iter().zip(&slopes).zip(&curvatures).enumerate() {
                 r[j] += m * l * l * integral(&mul(&xi, wj), a, b);
                 gm[j] += m * l * integral(wj, a, b);
-                for k in 0..BASIS {
-                    let wk = &shape[k][i];
-                    let (dk, ck) = (deriv(wk), deriv(&deriv(wk)));
-                    mm[(j, k)] += m * l * integral(&mul(wj, wk), a, b);
-                    kk[(j, k)] += ei / (l * l * l) * integral(&mul(&cj, &ck), a, b);
-                    kk[(j, k)] += integral(&mul(&axial, &mul(&dj, &dk)), a, b) / l;
+                // The upper triangle; both matrices are symmetric (mirrored below).
+                for (k, ((wk, dk), ck)) in on.iter().zip(&slopes).zip(&curvatures).enumerate().skip(j) {
+                    if let (Some(mjk), Some(kjk)) = (mm.get_mut((j, k)), kk.get_mut((j, k))) {
+                        *mjk += m * l * integral(&mul(wj, wk), a, b);
+                        *kjk += ei / (l * l * l) * integral(&mul(cj, ck), a, b)
+                            + integral(&mul(&axial, &mul(dj, dk)), a, b) / l;
+                    }
                 }
             }
             beyond += m * l * (b - a);
         }
+        for j in 0..BASIS {
+            for k in 0..j {
+                mm[(j, k)] = mm[(k, j)];
+                kk[(j, k)] = kk[(k, j)];
+            }
+        }
         // The platform at the tip: every shape is 1 there; its slope per unit ξ.
-        let last = np - 1;
-        let tip_slope: [f64; BASIS] = core::array::from_fn(|j| eval(&deriv(&shape[j][last]), 1.0) / l);
+        let last = np.wrapping_sub(1);
+        let tip_slope: [f64; BASIS] =
+            core::array::from_fn(|j| shape[j].get(last).map_or(f64::NAN, |w| eval(&deriv(w), 1.0) / l));
         for j in 0..BASIS {
             r[j] += self.tip_mass * l + self.tip_inertia * tip_slope[j];
             gm[j] += self.tip_mass;
@@ -279,12 +297,8 @@ impl BoomConstants {
         let chol = crate::linalg::cholesky(&mm).ok_or(ReducedError::Singular)?;
         let a = crate::linalg::solve_lower(&chol, &crate::linalg::solve_lower(&chol, &kk).transpose());
         let a = (a + a.transpose()) * 0.5;
-        let eig = a.symmetric_eigen();
-        let mut order = [0usize; BASIS];
-        for (i, o) in order.iter_mut().enumerate() {
-            *o = i;
-        }
-        order.sort_unstable_by(|&x, &y| eig.eigenvalues[x].total_cmp(&eig.eigenvalues[y]));
+        // Ascending (Jacobi rotations: no panic path on the chip).
+        let (values, vectors) = crate::linalg::symmetric_eigen(&a);
         let tip_values = |c: &SVector<f64, BASIS>| {
             let mut d = 0.0;
             let mut s = 0.0;
@@ -295,13 +309,13 @@ impl BoomConstants {
             (d, s)
         };
         let mut modes = [Mode { omega: 0.0, tip_deflection: 0.0, tip_slope: 0.0, participation: 0.0 }; MODES];
-        for (mode, &i) in modes.iter_mut().zip(&order) {
-            let w2 = eig.eigenvalues[i];
+        for (i, mode) in modes.iter_mut().enumerate() {
+            let w2 = values.get(i).copied().unwrap_or(f64::NAN);
             if w2.is_nan() || w2 <= 0.0 {
                 return Err(ReducedError::Singular);
             }
             // ψ = L⁻ᵀ u, mass-normalised; its tip deflection positive.
-            let u: SVector<f64, BASIS> = eig.eigenvectors.column(i).into_owned();
+            let u = SVector::<f64, BASIS>::from_fn(|r, _| vectors.get((r, i)).copied().unwrap_or(f64::NAN));
             let mut psi = crate::linalg::solve_lower_transposed(&chol, &u);
             if tip_values(&psi).0 < 0.0 {
                 psi = -psi;

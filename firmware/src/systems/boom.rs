@@ -1,0 +1,248 @@
+//! Boom tip vibration on the node: both of the shared estimators in `f32` side by side, the
+//! model-based filter ([`edgekf::systems::boom::ModelEstimator`]) and the paper's method
+//! ([`edgekf::systems::boom::PaperEstimator`]), on the boom of
+//! `host-sim/configs/boom_ladder30.toml` ([`LADDER30`], restated here; a cross-crate test
+//! checks it against the file) with its declared sensors.
+//!
+//! Input: `gyro_rate`, `incl_angle`, `boom_length`, `luff_rate_cmd` ([`CHANNELS`]) at
+//! [`SAMPLE_RATE_HZ`]. Output: a [`BoomFrame`] per sample and a [`BoomEnd`] at the end of the
+//! run. The gyro's noise model is the declared one ([`GYRO`]): a node has no static record to
+//! identify it from until one is recorded on it. Memory: about 3 KB of filter in the caller's
+//! [`Storage`]; re-reducing the boom (every 0.5 m of telescoping or 0.1 rad of luffing) takes
+//! about 12 KB of stack in `f64`.
+
+use crate::frame::FrameSink;
+use crate::hil::{HilError, HilImage, HilNode};
+use crate::line_feed::{ByteSource, ChannelReader};
+use crate::node::{Innovation, Node, NodeEstimator, Poll};
+use crate::source::ChannelSource;
+use edgekf::systems::boom::{
+    Ar2, BoomConstants, BoomSection, ModelError, ModelEstimate, ModelEstimator, ModelSettings, PaperEstimator,
+    PaperSettings, MAX_SECTIONS,
+};
+
+/// Sample rate, Hz (`[gyro] sample_rate`).
+pub const SAMPLE_RATE_HZ: u32 = 100;
+
+/// The input channels, in the data file's names.
+pub const CHANNELS: [&str; 4] = ["gyro_rate", "incl_angle", "boom_length", "luff_rate_cmd"];
+
+const fn section(length: f64, ei: f64, mass_per_length: f64) -> BoomSection {
+    BoomSection { length, ei, mass_per_length }
+}
+
+/// The ladder of `boom_ladder30.toml`: four steel box sections of 9.6 m, a 300 kg platform.
+pub const LADDER30: BoomConstants = {
+    let unused = section(1.0, 1.0, 1.0);
+    let mut sections = [unused; MAX_SECTIONS];
+    sections[0] = section(9.6, 1.628e8, 150.0);
+    sections[1] = section(9.6, 1.0e8, 110.0);
+    sections[2] = section(9.6, 5.8e7, 80.0);
+    sections[3] = section(9.6, 3.0e7, 55.0);
+    BoomConstants { sections, count: 4, tip_mass: 300.0, tip_inertia: 75.0, gravity: 9.81 }
+};
+
+/// The declared gyro's noise and bias: the paper's AR(2), 3e-4 rad/s of driving noise, 2e-3
+/// rad/s of bias (the simulator's defaults).
+pub const GYRO: Ar2 = Ar2 { a: [-0.6538, 0.06745], sigma: 3e-4, mean: 2e-3 };
+
+/// `[damping] zeta`.
+pub const ZETA: [f64; 2] = [0.015, 0.020];
+/// `[drive]`: lag (s) and acceleration limit (rad/s²).
+pub const DRIVE: (f64, f64) = (0.15, 0.3);
+/// `[inclinometer]`: lag (s), offset (rad), and the simulator's default noise (rad).
+pub const INCLINOMETER: (f64, f64, f64) = (0.30, 0.0, 5e-4);
+/// `[gyro] scale`.
+pub const GYRO_SCALE: f64 = 1.0;
+/// The length the filter is built at before the first row says otherwise, m.
+const START_LENGTH: f64 = 30.0;
+
+/// The model-based filter's settings.
+pub fn model_settings() -> ModelSettings {
+    let dt = 1.0 / f64::from(SAMPLE_RATE_HZ);
+    ModelSettings::new(dt, LADDER30, ZETA, DRIVE, GYRO_SCALE, GYRO, INCLINOMETER)
+}
+
+/// The paper's method's settings.
+pub fn paper_settings() -> PaperSettings {
+    PaperSettings::new(1.0 / f64::from(SAMPLE_RATE_HZ), GYRO, GYRO_SCALE)
+}
+
+/// Both estimators, kept by the caller.
+pub type Storage = Option<(ModelEstimator<f32>, PaperEstimator<f32>)>;
+
+/// The built-in estimators.
+pub fn estimators() -> Result<(ModelEstimator<f32>, PaperEstimator<f32>), ModelError> {
+    Ok((ModelEstimator::new(&model_settings(), START_LENGTH)?, PaperEstimator::new(&paper_settings())))
+}
+
+/// The node: both estimators, the samples stepped, and the last estimate until it is reported.
+pub struct BoomNode<'s> {
+    model: &'s mut ModelEstimator<f32>,
+    paper: &'s mut PaperEstimator<f32>,
+    samples: u32,
+    fusions: u32,
+    /// The last finite length (the paper's method has no prediction to bridge with).
+    length: f32,
+    pending: Option<BoomFrame>,
+}
+
+impl<'s> BoomNode<'s> {
+    /// The node on its estimators.
+    pub fn new(model: &'s mut ModelEstimator<f32>, paper: &'s mut PaperEstimator<f32>) -> Self {
+        Self { model, paper, samples: 0, fusions: 0, length: START_LENGTH as f32, pending: None }
+    }
+
+    /// One row (`None`: missing or unparsable, predicted through); the frame after it.
+    ///
+    /// ```
+    /// use edgekf_firmware::systems::boom::{estimators, BoomNode};
+    /// let (mut model, mut paper) = estimators().unwrap();
+    /// let mut node = BoomNode::new(&mut model, &mut paper);
+    /// let f = node.step(Some([0.002, 0.5, 30.0, 0.0]));
+    /// assert!(f.vibration.abs() < 1e-3 && f.deflection < -0.5); // at rest, sagging
+    /// let f = node.step(None);
+    /// assert!(f.tip_angle.is_finite() && f.sample == 2);
+    /// ```
+    pub fn step(&mut self, row: Option<[f32; 4]>) -> BoomFrame {
+        let [gyro, incl, length, command] = row.unwrap_or([f32::NAN; 4]);
+        self.samples = self.samples.saturating_add(1);
+        let e: ModelEstimate<f32> = self.model.step(gyro, incl, length, command);
+        if length.is_finite() && length > 0.0 {
+            self.length = length;
+        }
+        let p = self.paper.step(gyro, incl, self.length);
+        self.fusions = self.fusions.saturating_add(u32::from(p.fused));
+        BoomFrame {
+            sample: self.samples,
+            tip_angle: e.tip_angle,
+            vibration: e.vibration,
+            deflection: e.deflection,
+            paper_vibration: p.vibration,
+            innovation_gyro: e.innovation[0],
+            innovation_incl: e.innovation[1],
+            nis: e.nis,
+        }
+    }
+
+    /// Samples stepped (rows, and missing rows bridged).
+    pub fn samples(&self) -> u32 {
+        self.samples
+    }
+
+    /// The model-based filter.
+    pub fn model(&self) -> &ModelEstimator<f32> {
+        self.model
+    }
+
+    /// Equilibrium instants the paper's method fused.
+    pub fn fusions(&self) -> u32 {
+        self.fusions
+    }
+}
+
+crate::frame! {
+    /// One sample's estimates.
+    pub struct BoomFrame = "boom {=u32} {=f32} {=f32} {=f32} {=f32} {=f32} {=f32} {=f32}" {
+        /// Samples stepped so far.
+        pub sample: u32,
+        /// The model's tip angle from the horizontal, rad.
+        pub tip_angle: f32,
+        /// The model's tip vibration about the static equilibrium, m.
+        pub vibration: f32,
+        /// The model's tip deflection with the sag, m.
+        pub deflection: f32,
+        /// The paper's method's tip vibration, m.
+        pub paper_vibration: f32,
+        /// The model's gyro innovation, rad/s.
+        pub innovation_gyro: f32,
+        /// Its inclinometer innovation, rad.
+        pub innovation_incl: f32,
+        /// Its NIS.
+        pub nis: f32,
+    }
+}
+
+crate::frame! {
+    /// The end of a run: counts.
+    pub struct BoomEnd = "boomend {=u32} {=u32} {=u32} {=u32} {=u32} {=u32} {=u32} {=u32} {=u32}" {
+        /// Samples stepped (rows, and missing rows bridged).
+        pub samples: u32,
+        /// Rows that did not parse (stepped as missing).
+        pub bad_lines: u32,
+        /// Rows missing from the file (by their `t`), stepped as missing.
+        pub missing_lines: u32,
+        /// Rows without a usable `t` (not stepped).
+        pub untimed_lines: u32,
+        /// Rows off the sample grid (not bridged).
+        pub time_jumps: u32,
+        /// Reductions of the boom that failed (the last good one kept).
+        pub reduce_failures: u32,
+        /// The model's covariance resets.
+        pub covariance_resets: u32,
+        /// Its refused updates.
+        pub refused_updates: u32,
+        /// The paper's method's fusions.
+        pub fusions: u32,
+    }
+}
+
+impl NodeEstimator for BoomNode<'_> {
+    type Input = [f32; 4];
+    type Frame = BoomFrame;
+
+    fn step(&mut self, input: Option<[f32; 4]>) -> Innovation {
+        let f = BoomNode::step(self, input);
+        self.pending = Some(f);
+        Innovation { residual: None, nis: Some(f.nis) }
+    }
+
+    fn report(&mut self, _: &Poll) -> Option<BoomFrame> {
+        self.pending.take()
+    }
+}
+
+/// The QEMU image `edgekf-boom-qemu`: the boom's channels from the HIL file (other columns
+/// ignored; an empty or NaN cell is a missing reading of that channel alone, lines that do not
+/// parse are stepped as missing samples and counted, lines missing by their `t` are bridged
+/// for up to [`crate::source::MAX_GAP_S`]); a `boom` frame per sample, then `boomend`.
+pub struct BoomImage;
+
+impl HilImage for BoomImage {
+    const NAME: &'static str = "edgekf-boom-qemu";
+    const COLUMNS: &'static [&'static str] = &CHANNELS;
+    type Input = [f32; 4];
+    type Storage = Storage;
+    type Source<B: ByteSource> = ChannelSource<B, 4>;
+    type Estimator<'s> = BoomNode<'s>;
+    type StartError = ModelError;
+
+    fn storage() -> Storage {
+        None
+    }
+
+    #[inline(never)] // start-up temporaries stay out of the caller's frame
+    fn start<B: ByteSource>(input: B, storage: &mut Storage) -> Result<HilNode<'_, Self, B>, HilError<ModelError>> {
+        let reader = ChannelReader::new(input, CHANNELS).map_err(HilError::Header)?.with_empty_cells();
+        let (model, paper) = storage.insert(estimators().map_err(HilError::Start)?);
+        let max_gap = crate::source::MAX_GAP_S * f64::from(SAMPLE_RATE_HZ);
+        let source = ChannelSource::new(reader).with_clock(1.0 / f64::from(SAMPLE_RATE_HZ), max_gap as u32);
+        Ok(Node::new(source, BoomNode::new(model, paper), Default::default()))
+    }
+
+    fn finish<B: ByteSource>(node: &HilNode<'_, Self, B>, sink: &mut impl FrameSink) {
+        let n = node.estimator();
+        let h = n.model().health();
+        sink.frame(&BoomEnd {
+            samples: n.samples(),
+            bad_lines: node.source().reader().bad_lines(),
+            missing_lines: node.source().missing_lines(),
+            untimed_lines: node.source().untimed_lines(),
+            time_jumps: node.source().time_jumps(),
+            reduce_failures: n.model().reduce_failures(),
+            covariance_resets: h.covariance_resets,
+            refused_updates: h.refused_updates,
+            fusions: n.fusions(),
+        });
+    }
+}

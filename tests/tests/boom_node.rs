@@ -1,0 +1,131 @@
+//! Boom tip vibration on the node (`edgekf-boom-qemu`, `edgekf_firmware::systems::boom`): the
+//! image's code on the host, fed the CSV text the QEMU image reads, estimates the tip's
+//! vibration as the host's `f64` filter does; garbage and lost rows are counted and bridged;
+//! its built-in boom and sensors are `boom_ladder30.toml`'s; and, with `--features hil` (run by
+//! `cargo xtask test`, which sets `EDGEKF_BOOM_ELF`), the image in QEMU reports bit for bit
+//! what its code reports on the host.
+
+use edgekf_firmware::frame::Frame;
+use edgekf_firmware::systems::boom::{self as node, BoomEnd, BoomFrame, BoomImage};
+use edgekf_sim::systems::boom::peaks::peak_errors;
+use edgekf_sim::systems::boom::{simulate, BoomConfig, BoomRecording, Scenario, SimOptions};
+use edgekf_tests::host::lines;
+use edgekf_tests::report::frames;
+
+/// `duration` s of `scenario`, seed 2, as the CSV the image reads.
+fn recording(scenario: Scenario, duration: f64) -> (BoomRecording, String) {
+    let rec = simulate(&BoomConfig::default(), &SimOptions { scenario, duration, seed: 2 }, &mut |_| {}).unwrap();
+    let text = rec.to_csv(std::path::Path::new("boom.csv")).unwrap();
+    (rec, text)
+}
+
+fn run_host(text: &str) -> (Vec<BoomFrame>, BoomEnd) {
+    let out = lines::<BoomImage>(text.as_bytes()).unwrap();
+    let per_sample = frames::<BoomFrame>(&out).unwrap();
+    let end = frames::<BoomEnd>(&out).unwrap().pop().expect("boomend frame");
+    (per_sample, end)
+}
+
+#[test]
+fn the_nodes_boom_and_sensors_are_the_configurations() {
+    use edgekf_sim::systems::boom::estimate::{model_settings, INCLINOMETER_NOISE};
+    let c = BoomConfig::default();
+    assert_eq!(node::LADDER30, c.constants().unwrap());
+    assert_eq!(node::SAMPLE_RATE_HZ as f64, c.gyro.sample_rate);
+    assert_eq!(node::model_settings(), model_settings(&c, node::GYRO, INCLINOMETER_NOISE).unwrap());
+    let g = edgekf_sim::systems::boom::sensors::GyroModel::of(&c);
+    assert_eq!((node::GYRO.a, node::GYRO.sigma, node::GYRO.mean), (g.ar, g.noise, g.bias));
+}
+
+#[test]
+fn the_node_estimates_the_vibration_on_both_runs() {
+    for (scenario, duration) in [(Scenario::Luffing, 60.0), (Scenario::Extension, 140.0)] {
+        let (rec, text) = recording(scenario, duration);
+        let (frames, end) = run_host(&text);
+        assert_eq!(frames.len(), rec.t.len());
+        assert_eq!((end.samples as usize, end.bad_lines, end.missing_lines), (rec.t.len(), 0, 0));
+        assert_eq!((end.covariance_resets, end.refused_updates, end.reduce_failures), (0, 0, 0));
+        let col = |n: &str| rec.column(n).unwrap();
+        let (truth, rate) = (col("truth_tip_vibration"), col("truth_root_rate"));
+        let vib: Vec<f64> = frames.iter().map(|f| f.vibration as f64).collect();
+        let paper: Vec<f64> = frames.iter().map(|f| f.paper_vibration as f64).collect();
+        let (m, p) = (peak_errors(&rec.t, &vib, truth, rate), peak_errors(&rec.t, &paper, truth, rate));
+        eprintln!(
+            "node (host run), {}: model {:.2} % over {} peaks, paper {:.1} %; {} fusions",
+            scenario.name(),
+            m.mean_pct,
+            m.peaks,
+            p.mean_pct,
+            end.fusions
+        );
+        assert!(m.peaks >= 27 && m.mean_pct <= 2.0, "{m:?}");
+        assert!(p.mean_pct > 10.0 * m.mean_pct && end.fusions > 20, "{p:?}");
+    }
+}
+
+#[test]
+fn garbage_and_lost_rows_are_counted_and_bridged() {
+    let (rec, text) = recording(Scenario::Luffing, 30.0);
+    let mut rows: Vec<String> = text.lines().map(str::to_owned).collect();
+    // Row 1001 lost, row 1501 with garbage for the gyro, row 2001 with a NaN inclinometer.
+    let set = |row: &str, field: usize, value: &str| {
+        let mut cells: Vec<&str> = row.split(',').collect();
+        cells[field] = value;
+        cells.join(",")
+    };
+    rows[1502] = set(&rows[1502], 1, "x");
+    rows[2002] = set(&rows[2002], 2, "NaN");
+    rows.remove(1002);
+    let faulty = rows.join("\n") + "\n";
+    let (frames, end) = run_host(&faulty);
+    assert_eq!(end.samples as usize, rec.t.len(), "every sample stepped, the lost row bridged");
+    assert_eq!((end.missing_lines, end.time_jumps, end.bad_lines), (1, 0, 1));
+    assert_eq!((end.covariance_resets, end.refused_updates), (0, 0));
+    // Frames by sample number (a bridged sample and the row after it are reported as one).
+    let (clean, _) = run_host(&text);
+    let worst =
+        frames.iter().map(|f| (f.vibration - clean[f.sample as usize - 1].vibration).abs()).fold(0.0f32, f32::max);
+    eprintln!("a lost row and two bad readings move the vibration by at most {worst:.2e} m");
+    assert!(worst < 1e-3, "a lost row and two bad readings move the vibration by {worst} m");
+}
+
+#[test]
+fn frames_read_back() {
+    let f = BoomFrame { sample: 3, vibration: 0.25, nis: 1.5, ..BoomFrame::default() };
+    let mut line = String::new();
+    f.write_line(&mut line).unwrap();
+    assert_eq!(BoomFrame::parse(&line).unwrap().unwrap(), f);
+}
+
+#[cfg(feature = "hil")]
+mod hil {
+    use super::*;
+    use edgekf_tests::qemu;
+    use std::time::Duration;
+
+    /// The image in QEMU on 40 s of the extension run (it telescopes, so the boom is re-reduced
+    /// on the chip): every frame bit-identical to the image's code on the host.
+    #[test]
+    fn boom_in_qemu_matches_the_host() {
+        let elf = qemu::boom_elf().unwrap_or_else(|e| panic!("{e:#}"));
+        let (_, text) = recording(Scenario::Extension, 40.0);
+        let run = qemu::run(&elf, text.as_bytes(), Duration::from_secs(600)).unwrap_or_else(|e| panic!("{e:#}"));
+        if let Some(msg) = run.failure() {
+            panic!("{msg}");
+        }
+        let chip = frames::<BoomFrame>(&run.lines).unwrap();
+        let (host, end) = run_host(&text);
+        let bits = |f: &BoomFrame| {
+            [f.tip_angle, f.vibration, f.deflection, f.paper_vibration, f.innovation_gyro, f.innovation_incl, f.nis]
+                .map(f32::to_bits)
+        };
+        assert_eq!(chip.len(), host.len());
+        for (c, h) in chip.iter().zip(&host) {
+            assert_eq!((c.sample, bits(c)), (h.sample, bits(h)), "sample {}", h.sample);
+        }
+        let chip_end = frames::<BoomEnd>(&run.lines).unwrap().pop().expect("boomend");
+        assert_eq!(chip_end, end);
+        let stack = frames::<edgekf_firmware::frame::StackFrame>(&run.lines).unwrap().pop().expect("stack line");
+        eprintln!("HIL boom: {} frames bit-identical to the host run; {stack:?}", chip.len());
+    }
+}
