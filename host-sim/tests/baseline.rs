@@ -83,9 +83,10 @@ fn a_grown_unbalance_is_reported_as_its_ratio_to_the_baseline() {
 }
 
 /// Healthy records of 1 s get nothing: seeds 30–49 with `EDGEKF_LONG=1` (in two tests that run
-/// side by side, about 7 min in release), the first two of each ten otherwise.
+/// side by side, about 7 min in release), the first of each ten otherwise (a minute each in
+/// the test profile: CI's budget).
 fn healthy_records_get_nothing(seeds: std::ops::Range<u64>) {
-    let count = if std::env::var_os("EDGEKF_LONG").is_some() { usize::MAX } else { 2 };
+    let count = if std::env::var_os("EDGEKF_LONG").is_some() { usize::MAX } else { 1 };
     for seed in seeds.take(count) {
         let r = diagnose(Twin { duration: 1.0, ..Twin::default() }, seed);
         assert!(r.effects_added.is_empty(), "seed {seed}: {:?}", r.effects_added);

@@ -334,6 +334,53 @@ fn boom_simulate_then_estimate_writes_the_issues_columns() {
 }
 
 #[test]
+fn loop_boom_names_an_undeclared_inclinometer_lag() {
+    let dir = scratch("loop-boom");
+    let (data, statics, report) = (dir.join("luffing.csv"), dir.join("static.csv"), dir.join("report"));
+    let out = edgekf(&[
+        "boom",
+        "simulate",
+        "--scenario",
+        "luffing",
+        "--duration",
+        "60",
+        "--out",
+        path(&data),
+        "--static",
+        path(&statics),
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    // The configuration says the inclinometer has no lag; the simulated one lags by 0.3 s.
+    let config = dir.join("no_lag.toml");
+    let shipped = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/configs/boom_ladder30.toml")).unwrap();
+    let no_lag = shipped
+        .replace("lag = 0.30\n", "lag = 0.0\n")
+        .replace("[sim.inclinometer]\n", "[sim.inclinometer]\nlag = 0.30\n");
+    assert!(no_lag.contains("lag = 0.0\n") && no_lag != shipped);
+    std::fs::write(&config, no_lag).unwrap();
+    let c = path(&config);
+    let args = ["loop", "boom", "--config", c, "--data", path(&data), "--static", path(&statics), "--report"];
+    let out = edgekf(&[&args[..], &[path(&report), "--quiet"]].concat());
+    assert!(out.status.success(), "{}\n{}", text(&out.stdout), text(&out.stderr));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(report.join("report.json")).unwrap()).unwrap();
+    assert_eq!(json["system"], "boom");
+    let added = &json["effects_added"][0];
+    assert_eq!(
+        (added["kind"].as_str(), added["location"].as_str()),
+        (Some("sensor_lag"), Some("incl_angle")),
+        "{json}"
+    );
+    assert!((added["value"].as_f64().unwrap() - 0.3).abs() < 0.06, "{added}");
+    let (before, after) =
+        (json["before"]["peak_error_pct"].as_f64().unwrap(), json["after"]["peak_error_pct"].as_f64().unwrap());
+    assert!(after < 0.5 * before, "peak error {before} % → {after} %");
+    // Without --static the loop says what it needs.
+    let out = edgekf(&["loop", "boom", "--config", c, "--data", path(&data), "--report", path(&dir.join("r2"))]);
+    assert!(!out.status.success() && text(&out.stderr).contains("--static"), "{}", text(&out.stderr));
+}
+
+#[test]
 fn loop_uuv_names_an_undeclared_offset_and_reports_the_declared_model() {
     let dir = scratch("loop-uuv");
     let (config, data, report) = (dir.join("no_biases.toml"), dir.join("healthy.csv"), dir.join("report"));

@@ -195,6 +195,10 @@ pub struct RunSummary {
     pub consistent: bool,
     /// RMS error of the virtual-sensing rows against `truth_` columns, in the rows' SI unit.
     pub error_rms: BTreeMap<String, f64>,
+    /// A system's own error figures against truth, beside the RMS (a boom's `peak_error_pct`),
+    /// reported as fields of the summary; the engine only carries them.
+    #[serde(flatten)]
+    pub metrics: BTreeMap<String, f64>,
     /// `−½ Σ (ln det S + NIS)` over the run.
     pub log_likelihood: f64,
     /// Per-channel signatures.
@@ -393,6 +397,7 @@ pub fn summarise(run: &Run, ctx: &SummaryContext<'_>, o: &SignatureOptions) -> R
         whiteness_p,
         consistent,
         error_rms,
+        metrics: BTreeMap::new(),
         log_likelihood: run.log_likelihood(),
         channels: out,
         bin_width_hz,

@@ -66,7 +66,16 @@ pub const REGISTRY: &[SystemEntry] = &[
         about: "Long telescoping boom (fire-ladder truck): simulate its tip vibration (FE model), estimate it from a tip gyro and a root inclinometer",
         command: subcommands::<boom::cli::BoomCommand>,
         run: |m| dispatch(m, boom::cli::run),
-        close_loop: None,
+        close_loop: Some(LoopEntry {
+            about: "Boom: run the model-based tip-vibration filter the configuration declares on a data file, read \
+                    the gyro's and the inclinometer's innovations, add what the data asks for (the inclinometer's \
+                    lag or offset, the gyro's scale, a wrong stiffness or platform) and that pays for its \
+                    parameter (BIC) in both halves, and report before/after with the peak error (report.json, \
+                    report.html); needs --static",
+            args: <boom::cli::BoomLoopArgs as clap::Args>::augment_args,
+            run: boom::cli::close_loop,
+            baseline: None,
+        }),
         demo: None,
     },
     SystemEntry {

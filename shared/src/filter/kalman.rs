@@ -257,6 +257,12 @@ where
     pub residual: OVector<T, M>,
     /// Sum of the scalar NIS values; equals `rᵀ S⁻¹ r` of the joint update.
     pub nis: T,
+    /// Each scalar update's innovation `eᵢ`, against the state the earlier scalars left (the
+    /// first is `residual`'s).
+    pub scalar: OVector<T, M>,
+    /// Its variance `sᵢ`: `Σ ln sᵢ = ln det S` and `Σ eᵢ² / sᵢ` is [`nis`](Self::nis), so the
+    /// two give the log-likelihood.
+    pub variance: OVector<T, M>,
 }
 
 /// What a sequential update used, `M` fixed at compile time.
@@ -552,6 +558,7 @@ where
         let (mut x, mut p) = (self.x.clone(), self.p.clone());
         let n = x.nrows();
         let mut nis = T::zero();
+        let (mut scalar, mut variance) = (residual.clone(), residual.clone());
         for i in 0..m {
             let h = self.model.c.row(i);
             let phi = &p * h.transpose();
@@ -571,11 +578,14 @@ where
                 }
             }
             nis += e * e / s;
+            if let (Some(ei), Some(si)) = (scalar.get_mut(i), variance.get_mut(i)) {
+                (*ei, *si) = (e, s);
+            }
         }
         self.x = x;
         self.p = p;
         self.guard();
-        Ok(GenericSequentialInnovation { residual, nis })
+        Ok(GenericSequentialInnovation { residual, nis, scalar, variance })
     }
 
     /// Resets a broken covariance (non-finite, or a non-positive diagonal) or state. The

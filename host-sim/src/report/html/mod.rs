@@ -170,6 +170,7 @@ mod tests {
             whiteness_p: 0.5,
             consistent: false,
             error_rms: BTreeMap::from([("n12_x".to_string(), rms)]),
+            metrics: BTreeMap::new(),
             log_likelihood: -10.0,
             channels: vec![channel("n5_x"), channel("n5_y")],
             bin_width_hz: 1000.0 / 1024.0,

@@ -221,3 +221,40 @@ fn spread(v: &[f64]) -> Option<f64> {
     let sd = (x.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
     (sd > 0.0).then_some(sd)
 }
+
+/// `edgekf loop boom`'s own flag.
+#[derive(Debug, Args)]
+pub struct BoomLoopArgs {
+    /// The sensors at rest (t, gyro_rate; incl_angle optional): the gyro's AR(2) noise and bias,
+    /// the inclinometer's noise.
+    #[arg(long = "static", value_name = "CSV")]
+    pub static_data: PathBuf,
+}
+
+/// `edgekf loop boom --config C --data data.csv --static static.csv --report DIR`.
+pub fn close_loop(
+    request: &crate::cli::looping::LoopRequest,
+    m: &clap::ArgMatches,
+) -> anyhow::Result<crate::residual_loop::LoopReport> {
+    use clap::FromArgMatches;
+    let args = BoomLoopArgs::from_arg_matches(m).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let config = BoomConfig::load(&request.config)?;
+    let known: Vec<&str> = MEASURED.iter().chain(TRUTH.iter()).copied().collect();
+    let file =
+        crate::cli::registry::read_data(&request.data, &known, config.gyro.sample_rate, &TimelineOptions::default())?;
+    for name in MEASURED {
+        if file.column(name).is_none() {
+            anyhow::bail!(
+                "{}: no `{name}` column (the boom's loop needs {})",
+                request.data.display(),
+                MEASURED.join(", ")
+            );
+        }
+    }
+    let (statics, notes) =
+        crate::io::data::read_required(&args.static_data, &["gyro_rate"], &["gyro_rate", "incl_angle"])?;
+    eprintln!("{}: {notes}", args.static_data.display());
+    let ar = gyro_model(&config, statics.column("gyro_rate").unwrap_or_default())?;
+    let incl_noise = statics.column("incl_angle").and_then(spread).unwrap_or(INCLINOMETER_NOISE);
+    super::loop_system::close_loop(&config, &file, ar, incl_noise, &request.options)
+}

@@ -218,6 +218,20 @@ impl Default for Runs {
     }
 }
 
+/// How far the residual loop may take what it fits (`edgekf loop boom`).
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Bounds {
+    /// Longest first-order lag of a sensor, s.
+    pub lag: f64,
+}
+
+impl Default for Bounds {
+    fn default() -> Self {
+        Self { lag: 1.0 }
+    }
+}
+
 /// The whole configuration.
 #[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
@@ -248,6 +262,9 @@ pub struct BoomConfig {
     /// The test runs.
     #[serde(default)]
     pub runs: Runs,
+    /// The residual loop's bounds.
+    #[serde(default)]
+    pub bounds: Bounds,
 }
 
 impl Default for BoomConfig {
@@ -341,6 +358,7 @@ impl BoomConfig {
             );
         }
         not_negative("inclinometer.lag", self.inclinometer.lag)?;
+        positive("bounds.lag".into(), self.bounds.lag)?;
         if !self.inclinometer.offset.is_finite() {
             bail!("inclinometer.offset must be finite");
         }

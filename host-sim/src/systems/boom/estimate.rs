@@ -88,7 +88,7 @@ pub const INCLINOMETER_NOISE: f64 = 5e-4;
 /// inclinometer's noise `incl_noise` (rad).
 pub fn model_settings(config: &BoomConfig, ar: Ar2, incl_noise: f64) -> Result<ModelSettings> {
     let i = &config.inclinometer;
-    Ok(ModelSettings::new(
+    let s = ModelSettings::new(
         1.0 / config.gyro.sample_rate,
         config.constants()?,
         config.damping.zeta,
@@ -96,7 +96,8 @@ pub fn model_settings(config: &BoomConfig, ar: Ar2, incl_noise: f64) -> Result<M
         config.gyro.scale,
         ar,
         (i.lag, i.offset, i.noise.unwrap_or(incl_noise)),
-    ))
+    );
+    Ok(s)
 }
 
 /// Runs `method` of `config` over `data` with the gyro model `ar`.

@@ -19,6 +19,7 @@ pub mod beam;
 pub mod cli;
 pub mod config;
 pub mod estimate;
+pub mod loop_system;
 pub mod modal;
 pub mod peaks;
 pub mod plot;

@@ -19,7 +19,7 @@ use crate::filter::{KalmanFilter, LinearModel};
 use crate::Real;
 use nalgebra::{SMatrix, SVector};
 
-/// States: `[φ, φ̇, η₁, η̇₁, η₂, η̇₂, b, ψ, n_k, n_{k−1}]`.
+/// States: `[φ, φ̇, η₁, η̇₁, …, η₃, η̇₃, b, ψ, n_k, n_{k−1}]`.
 pub const STATES: usize = 6 + 2 * MODES;
 /// Measurements: `[gyro_rate, incl_angle]`.
 pub const MEASUREMENTS: usize = 2;
@@ -59,8 +59,9 @@ pub struct ModelSettings {
     pub dt: f64,
     /// The boom.
     pub constants: BoomConstants,
-    /// Damping ratios of the modes.
-    pub zeta: [f64; MODES],
+    /// Damping ratios of the first two modes; the others' follow from the Rayleigh damping
+    /// through these two (as the reference's damping is fitted).
+    pub zeta: [f64; 2],
     /// The luffing drive's first-order lag (s) and acceleration limit (rad/s²).
     pub drive: (f64, f64),
     /// The gyro's declared scale factor.
@@ -89,7 +90,7 @@ impl ModelSettings {
     pub fn new(
         dt: f64,
         constants: BoomConstants,
-        zeta: [f64; MODES],
+        zeta: [f64; 2],
         drive: (f64, f64),
         gyro_scale: f64,
         ar: Ar2,
@@ -121,8 +122,11 @@ pub struct ModelEstimate<T> {
     pub vibration: T,
     /// The tip's deflection with the gravity sag, m.
     pub deflection: T,
-    /// Innovations `[gyro, inclinometer]` (0 where a reading was missing).
+    /// Innovations `[gyro, inclinometer]`, the inclinometer's after the gyro's update (0 where a
+    /// reading was missing).
     pub innovation: [T; MEASUREMENTS],
+    /// Their variances (NaN where a reading was missing).
+    pub variance: [T; MEASUREMENTS],
     /// Normalised innovation squared of the readings used.
     pub nis: T,
 }
@@ -194,9 +198,19 @@ fn discretise<T: Real>(
 ) -> Discrete<T> {
     let dt = settings.dt;
     let t = T::of_f64;
+    // Rayleigh's ζ(ω) = (a/ω + b ω)/2 through the two declared ζ.
+    let (w1, w2) = (values[0].max(1e-6), values[4].max(2e-6));
+    let [z1, z2] = settings.zeta;
+    let b = 2.0 * (z2 * w2 - z1 * w1) / (w2 * w2 - w1 * w1);
+    let a = 2.0 * z1 * w1 - b * w1 * w1;
     let modes = core::array::from_fn(|i| {
         let (w, p) = (values[4 * i].max(1e-6), values[4 * i + 3]);
-        let zeta = settings.zeta[i].clamp(0.0, 0.99);
+        let zeta = match i {
+            0 => z1,
+            1 => z2,
+            _ => 0.5 * (a / w + b * w),
+        };
+        let zeta = if zeta.is_finite() { zeta.clamp(0.0, 0.99) } else { z2.clamp(0.0, 0.99) };
         let (sigma, wd) = (zeta * w, w * libm::sqrt(1.0 - zeta * zeta));
         let e = libm::exp(-sigma * dt);
         let (s, c) = libm::sincos(wd * dt);
@@ -476,9 +490,17 @@ impl<T: Real> ModelEstimator<T> {
             },
             if incl_ok { incl - t(s.inclinometer.1) } else { predicted[1] },
         );
-        let (innovation, nis) = match self.kf.update_sequential(&y) {
-            Ok(i) => ([i.residual[0], i.residual[1]], i.nis),
-            Err(_) => ([T::zero(); MEASUREMENTS], T::zero()),
+        let ok = [gyro_ok, incl_ok];
+        let (innovation, variance, nis) = match self.kf.update_sequential(&y) {
+            Ok(i) => (
+                core::array::from_fn(|c| i.scalar.get(c).copied().unwrap_or_else(T::zero)),
+                core::array::from_fn(|c| match (ok.get(c), i.variance.get(c)) {
+                    (Some(true), Some(v)) => *v,
+                    _ => T::of_f64(f64::NAN),
+                }),
+                i.nis,
+            ),
+            Err(_) => ([T::zero(); MEASUREMENTS], [T::of_f64(f64::NAN); MEASUREMENTS], T::zero()),
         };
         if command.is_finite() {
             self.command = command;
@@ -497,6 +519,7 @@ impl<T: Real> ModelEstimator<T> {
             vibration,
             deflection: t(values[4 * MODES]) + vibration,
             innovation,
+            variance,
             nis,
         }
     }

@@ -15,7 +15,7 @@ use nalgebra::{SMatrix, SVector};
 /// Polynomials in the Ritz basis.
 pub const BASIS: usize = 5;
 /// Modes kept.
-pub const MODES: usize = 2;
+pub const MODES: usize = 3;
 /// Most sections a boom may have.
 pub const MAX_SECTIONS: usize = 8;
 
@@ -147,9 +147,15 @@ fn moment_of_load(j: usize) -> Poly {
     match j {
         0 => (p[0], p[1]) = (1.0, -1.0),
         1 => p[0] = 1.0,
-        2 => (p[0], p[1], p[2]) = (0.5, -1.0, 0.5),
-        3 => (p[0], p[1], p[3]) = (1.0 / 3.0, -0.5, 1.0 / 6.0),
-        _ => (p[0], p[1], p[4]) = (0.25, -1.0 / 3.0, 1.0 / 12.0),
+        // A load ξⁿ (n = j − 2): M = 1/(n+2) − ξ/(n+1) + ξⁿ⁺²/((n+1)(n+2)).
+        _ => {
+            let n = (j - 2) as f64;
+            p[0] = 1.0 / (n + 2.0);
+            p[1] = -1.0 / (n + 1.0);
+            if let Some(c) = p.get_mut(j) {
+                *c += 1.0 / ((n + 1.0) * (n + 2.0));
+            }
+        }
     }
     p
 }
