@@ -53,3 +53,22 @@ fn matched_data_gets_nothing() {
         assert!(r.effects_added.is_empty(), "seed {seed}: {:?}", r.effects_added);
     }
 }
+
+/// The gyro's bias drifting at 2e-5 rad/s per s (20 times the simulator's default; 2.4e-3 rad/s
+/// over the run, more than the bias itself): named as a drift of the gyro's bias within a fifth.
+#[test]
+fn a_drifting_gyro_bias_is_named_with_its_drift() {
+    let declared = BoomConfig::default();
+    let mut truth = declared.clone();
+    truth.sim.gyro.bias_drift = Some(2e-5);
+    let r = loop_on(&truth, &declared, 120.0, 1);
+    let added: Vec<_> = r.effects_added.iter().map(|e| (e.kind.as_str(), e.location.as_str(), e.value)).collect();
+    eprintln!(
+        "gyro bias drift 2e-5: added {added:?}; peak error {:.2} % → {:.2} %",
+        peak_error(&r, "before"),
+        peak_error(&r, "after")
+    );
+    let drift = r.effects_added.iter().find(|e| e.kind.as_str() == "sensor_bias" && e.location == "gyro_rate");
+    let drift = drift.unwrap_or_else(|| panic!("no drift of the gyro's bias: {:?}", r.trials)).value;
+    assert!((drift / 2e-5 - 1.0).abs() <= 0.2, "drift {drift}");
+}

@@ -4,7 +4,9 @@
 //!
 //! * `sensor_lag` on `incl_angle`: the inclinometer's first-order lag, 0 to `[bounds] lag` s;
 //! * `sensor_bias` on `incl_angle`: an offset, ±0.05 rad;
-//! * `sensor_scale` on `gyro_rate`: a factor 0.95–1.05 on the declared scale.
+//! * `sensor_scale` on `gyro_rate`: a factor 0.95–1.05 on the declared scale;
+//! * `sensor_bias` on `gyro_rate` with `drift`: a steady drift of the gyro's bias beside the
+//!   random walk the filter gives it, ±1e-3 rad/s per s.
 //!
 //! Not yet: the boom's own parameters (its EI, its platform) and an extra mode. The reduced
 //! boom's third mode is 1 % stiffer than the finite elements' (five Ritz shapes), and an EI
@@ -38,6 +40,8 @@ const SETTLE_S: f64 = 5.0;
 /// scale of about 1.001) gained at most 12.1 over 12 000 readings, 6e-4 a reading beyond its
 /// cost; an undeclared 0.3 s inclinometer lag gains 1.1 a reading.
 pub const MODEL_FLOOR: f64 = 2e-3;
+/// The largest drift of the gyro's bias fitted, rad/s per s.
+const MAX_DRIFT: f64 = 1e-3;
 /// The largest inclinometer offset fitted, rad.
 const MAX_OFFSET: f64 = 0.05;
 
@@ -50,6 +54,8 @@ pub enum Effect {
     InclinometerOffset,
     /// A factor on the gyro's declared scale.
     GyroScale,
+    /// A drift of the gyro's bias, rad/s per s.
+    GyroDrift,
 }
 
 /// The boom, its data and the loop's options.
@@ -98,6 +104,7 @@ impl<'a> BoomSystem<'a> {
                 Effect::InclinometerLag => s.inclinometer.0 = a.theta.max(0.0),
                 Effect::InclinometerOffset => s.inclinometer.1 += a.theta,
                 Effect::GyroScale => s.gyro_scale *= factor,
+                Effect::GyroDrift => s.bias_drift += a.theta,
             }
         }
         s
@@ -190,14 +197,14 @@ impl LoopSystem for BoomSystem<'_> {
             named.extend([Effect::InclinometerLag, Effect::InclinometerOffset]);
         }
         if off(0) {
-            named.push(Effect::GyroScale);
+            named.extend([Effect::GyroScale, Effect::GyroDrift]);
         }
         let in_model = |e: &Effect| effects.iter().any(|a| a.effect == *e);
         named.retain(|e| !in_model(e));
         let mut catch_all = if s.consistent {
             Vec::new()
         } else {
-            vec![Effect::InclinometerLag, Effect::InclinometerOffset, Effect::GyroScale]
+            vec![Effect::InclinometerLag, Effect::InclinometerOffset, Effect::GyroScale, Effect::GyroDrift]
         };
         catch_all.retain(|e| !in_model(e) && !named.contains(e));
         vec![named, catch_all]
@@ -208,6 +215,8 @@ impl LoopSystem for BoomSystem<'_> {
             Effect::InclinometerLag => (EffectKind::SensorLag, MEASURED[1], "s", EffectDetail::default()),
             Effect::InclinometerOffset => (EffectKind::SensorBias, MEASURED[1], "rad", EffectDetail::default()),
             Effect::GyroScale => (EffectKind::SensorScale, MEASURED[0], "1", EffectDetail::default()),
+            // Its value is the drift (rad/s per s), beside the bias the filter tracks.
+            Effect::GyroDrift => (EffectKind::SensorBias, MEASURED[0], "rad/s/s", EffectDetail::default()),
         };
         EffectLabel { kind, location: location.into(), detail, unit: unit.into() }
     }
@@ -239,13 +248,16 @@ impl LoopSystem for BoomSystem<'_> {
                 (ScalarRange { low: -MAX_OFFSET, high: MAX_OFFSET, neutral: 0.0, log: false, tolerance: 1e-5 }, 5)
             }
             Effect::GyroScale => (factor(0.95, 1.05), 5),
+            Effect::GyroDrift => {
+                (ScalarRange { low: -MAX_DRIFT, high: MAX_DRIFT, neutral: 0.0, log: false, tolerance: 1e-8 }, 5)
+            }
         })
     }
 
     /// The fitted lag (s) or offset (rad), or the factor.
     fn value(&self, _: &(), _: &Run, effect: &Applied<Effect>) -> f64 {
         match effect.effect {
-            Effect::InclinometerLag | Effect::InclinometerOffset => effect.theta,
+            Effect::InclinometerLag | Effect::InclinometerOffset | Effect::GyroDrift => effect.theta,
             Effect::GyroScale => effect.theta.exp(),
         }
     }

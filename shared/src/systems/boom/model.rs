@@ -78,6 +78,8 @@ pub struct ModelSettings {
     pub mode_noise: f64,
     /// The bias's random walk, rad/s per √s.
     pub bias_walk: f64,
+    /// The bias's known drift, rad/s per s (0: none; the residual loop fits it).
+    pub bias_drift: f64,
     /// How far the inclinometer's declared lag may be off, s: while the boom luffs at φ̇ its
     /// reading is trusted to `lag_sd · φ̇` less (a lag off by δτ reads δτ · φ̇ behind).
     pub lag_sd: f64,
@@ -108,6 +110,7 @@ impl ModelSettings {
             drive_noise: 0.01,
             mode_noise: 0.003,
             bias_walk: 1e-5,
+            bias_drift: 0.0,
             lag_sd: if inclinometer.0 > 0.0 { 0.5 * inclinometer.0 } else { 0.1 },
         }
     }
@@ -275,6 +278,7 @@ impl<T: Real> ModelEstimator<T> {
         let non_negative =
             [s.gyro_floor, s.inclinometer.0, s.inclinometer.2, s.drive_noise, s.mode_noise, s.bias_walk, s.lag_sd];
         if positive.iter().any(|v| !(v.is_finite() && *v > 0.0))
+            || !s.bias_drift.is_finite()
             || non_negative.iter().any(|v| !(v.is_finite() && *v >= 0.0))
             || !(length.is_finite() && length > 0.0)
         {
@@ -411,6 +415,7 @@ impl<T: Real> ModelEstimator<T> {
             kick[r] = gamma[1];
         }
         a[(slot::BIAS, slot::BIAS)] = T::one();
+        u[slot::BIAS] = t(s.bias_drift * dt);
         // ψ' = (1 − k) ψ + k φ'.
         let k = if s.inclinometer.0 > 0.0 { 1.0 - libm::exp(-dt / s.inclinometer.0) } else { 1.0 };
         let kt = t(k);
