@@ -65,14 +65,9 @@ pub fn read_data(
     rate: f64,
     timeline: &crate::io::timeline::TimelineOptions,
 ) -> Result<crate::io::data::DataFile> {
-    use crate::io::timeline::bridge;
     let (file, notes) = crate::io::data::read(path, known)?;
-    eprintln!("{}: {notes}", path.display());
-    let (file, timeline) = bridge(&file, &notes.timing, timeline);
-    for n in timeline.notices() {
-        eprintln!("notice: {n}");
-    }
-    if let Some(r) = timeline.restarts.first() {
+    let (file, restarts) = on_one_timeline(path, file, &notes, rate, timeline)?;
+    if let Some(r) = restarts.first() {
         anyhow::bail!(
             "{}: a {:.3} s gap before t = {:.6} s is too long to bridge (timeline.max_gap_s); close the loop on each stretch",
             path.display(),
@@ -80,6 +75,32 @@ pub fn read_data(
             r.t
         );
     }
+    Ok(file)
+}
+
+/// Reads `path` as a data file with its `required` channels among the `known` ones, checks its
+/// rate and puts it on one timeline as [`read_data`] does; an estimator starts afresh at the
+/// rows returned, where a gap too long to bridge restarts the timeline.
+pub fn read_estimator_data(
+    path: &Path,
+    required: &[&str],
+    known: &[&str],
+    rate: f64,
+) -> Result<(crate::io::data::DataFile, Vec<usize>)> {
+    let (file, notes) = crate::io::data::read_required(path, required, known)?;
+    let (file, restarts) = on_one_timeline(path, file, &notes, rate, &Default::default())?;
+    Ok((file, restarts.iter().map(|r| r.row).collect()))
+}
+
+/// The notices, the rate check (within 1 % of `rate` Hz) and the bridging both readers share.
+fn on_one_timeline(
+    path: &Path,
+    file: crate::io::data::DataFile,
+    notes: &crate::io::data::DataReport,
+    rate: f64,
+    timeline: &crate::io::timeline::TimelineOptions,
+) -> Result<(crate::io::data::DataFile, Vec<crate::io::timeline::Restart>)> {
+    eprintln!("{}: {notes}", path.display());
     if (notes.timing.sample_rate - rate).abs() > 0.01 * rate {
         anyhow::bail!(
             "{}: sampled at {:.3} Hz, the configuration says {rate} Hz",
@@ -87,5 +108,9 @@ pub fn read_data(
             notes.timing.sample_rate
         );
     }
-    Ok(file)
+    let (file, bridged) = crate::io::timeline::bridge(&file, &notes.timing, timeline);
+    for n in bridged.notices() {
+        eprintln!("notice: {n}");
+    }
+    Ok((file, bridged.restarts))
 }

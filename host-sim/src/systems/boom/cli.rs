@@ -15,7 +15,7 @@ use super::runs::Scenario;
 use super::simulate::{simulate, static_inclinometer, static_record, SimOptions};
 use super::simulate::{MEASURED, TRUTH};
 use crate::io::output::{check, write_atomic};
-use crate::io::timeline::{bridge, TimelineOptions};
+use crate::io::timeline::TimelineOptions;
 use anyhow::Context as _;
 use clap::{Args, Subcommand};
 use std::path::PathBuf;
@@ -153,21 +153,8 @@ fn estimate_command(args: EstimateArgs) -> anyhow::Result<()> {
         Method::Model => &MEASURED[..],
         Method::Paper => &MEASURED[..3],
     };
-    let (file, notes) = crate::io::data::read_required(&args.data, required, &known)?;
-    eprintln!("{}: {notes}", args.data.display());
-    let rate = config.gyro.sample_rate;
-    if (notes.timing.sample_rate - rate).abs() > 0.01 * rate {
-        anyhow::bail!(
-            "{}: sampled at {:.3} Hz, the configuration says {rate} Hz ([gyro] sample_rate)",
-            args.data.display(),
-            notes.timing.sample_rate
-        );
-    }
-    let (file, timeline) = bridge(&file, &notes.timing, &TimelineOptions::default());
-    for n in timeline.notices() {
-        eprintln!("notice: {n}");
-    }
-    let restarts: Vec<usize> = timeline.restarts.iter().map(|r| r.row).collect();
+    let (file, restarts) =
+        crate::cli::registry::read_estimator_data(&args.data, required, &known, config.gyro.sample_rate)?;
     let (statics, notes) =
         crate::io::data::read_required(&args.static_data, &["gyro_rate"], &["gyro_rate", "incl_angle"])?;
     eprintln!("{}: {notes}", args.static_data.display());

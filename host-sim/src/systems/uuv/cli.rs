@@ -11,7 +11,7 @@ use super::estimate::{estimate, EstimateTable, REQUIRED};
 use super::scenario::Scenario;
 use super::simulate::{simulate, SimOptions, TRUTH};
 use crate::io::output::{check, write_atomic};
-use crate::io::timeline::{bridge, TimelineOptions};
+use crate::io::timeline::TimelineOptions;
 use crate::residual_loop::LoopReport;
 use anyhow::Context as _;
 use clap::{Args, Subcommand};
@@ -118,21 +118,8 @@ fn estimate_command(args: EstimateArgs) -> anyhow::Result<()> {
     check(&[Some(&args.out), args.plot.as_deref()], &[Some(&args.data), args.config.as_deref()])?;
     let config = load(args.config.as_deref())?;
     let known: Vec<&str> = REQUIRED.iter().chain(TRUTH.iter()).copied().collect();
-    let (file, notes) = crate::io::data::read_required(&args.data, &REQUIRED, &known)?;
-    eprintln!("{}: {notes}", args.data.display());
-    let rate = config.sensors.rate;
-    if (notes.timing.sample_rate - rate).abs() > 0.01 * rate {
-        anyhow::bail!(
-            "{}: sampled at {:.3} Hz, the configuration says {rate} Hz",
-            args.data.display(),
-            notes.timing.sample_rate
-        );
-    }
-    let (file, timeline) = bridge(&file, &notes.timing, &TimelineOptions::default());
-    for n in timeline.notices() {
-        eprintln!("notice: {n}");
-    }
-    let restarts: Vec<usize> = timeline.restarts.iter().map(|r| r.row).collect();
+    let (file, restarts) =
+        crate::cli::registry::read_estimator_data(&args.data, &REQUIRED, &known, config.sensors.rate)?;
     let table = estimate(&config, &file, &restarts)?;
     let figure = match &args.plot {
         Some(_) => super::plot::health_figure(&table, [file.column("truth_k_t"), file.column("truth_k_v")])?,
