@@ -268,6 +268,10 @@ pub struct ModelEstimator<T: Real> {
     k: u64,
     /// Reductions that failed (the last good one kept).
     reduce_failures: u32,
+    /// The settings' fixed exponentials, once (soft-float `f64` on the chip): the drive's
+    /// acceleration per unit rate error over a sample, and the inclinometer lag's step.
+    drive_gain: f64,
+    lag_step: f64,
 }
 
 impl<T: Real> ModelEstimator<T> {
@@ -290,7 +294,20 @@ impl<T: Real> ModelEstimator<T> {
         let model =
             LinearModel { a: SMatrix::identity(), c: SMatrix::zeros(), q: SMatrix::zeros(), r: SMatrix::identity() };
         let kf = KalmanFilter::new(model, SVector::zeros(), SMatrix::identity());
-        Ok(Self { settings: *s, kf, lin, discrete, length, command: T::zero(), k: 0, reduce_failures: 0 })
+        let drive_gain = (1.0 - libm::exp(-s.dt / s.drive.0)) / s.dt;
+        let lag_step = if s.inclinometer.0 > 0.0 { 1.0 - libm::exp(-s.dt / s.inclinometer.0) } else { 1.0 };
+        Ok(Self {
+            settings: *s,
+            kf,
+            lin,
+            discrete,
+            length,
+            command: T::zero(),
+            k: 0,
+            reduce_failures: 0,
+            drive_gain,
+            lag_step,
+        })
     }
 
     /// Reductions that failed since the start (the last good reduced boom was kept for them).
@@ -377,8 +394,7 @@ impl<T: Real> ModelEstimator<T> {
         let t = T::of_f64;
         let dt = s.dt;
         // The drive: φ̈ = (u − φ̇)(1 − e^{−Δ/τ})/Δ, limited: φ̈ = a0 + g φ̇ over the step.
-        let (lag, max_accel) = s.drive;
-        let c = (1.0 - libm::exp(-dt / lag)) / dt;
+        let (c, max_accel) = (self.drive_gain, s.drive.1);
         let wanted = (self.command - rate) * t(c);
         let (a0, g) = if wanted.abs() <= t(max_accel) {
             (self.command * t(c), t(-c))
@@ -417,8 +433,7 @@ impl<T: Real> ModelEstimator<T> {
         a[(slot::BIAS, slot::BIAS)] = T::one();
         u[slot::BIAS] = t(s.bias_drift * dt);
         // ψ' = (1 − k) ψ + k φ'.
-        let k = if s.inclinometer.0 > 0.0 { 1.0 - libm::exp(-dt / s.inclinometer.0) } else { 1.0 };
-        let kt = t(k);
+        let kt = t(self.lag_step);
         a[(slot::LAGGED, slot::LAGGED)] = T::one() - kt;
         a[(slot::LAGGED, slot::ANGLE)] = kt * a[(slot::ANGLE, slot::ANGLE)];
         a[(slot::LAGGED, slot::RATE)] = kt * a[(slot::ANGLE, slot::RATE)];
