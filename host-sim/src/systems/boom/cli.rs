@@ -199,14 +199,12 @@ fn estimate_command(args: EstimateArgs) -> anyhow::Result<()> {
 
 /// Standard deviation of the finite values of `v` (at least 16 of them, not all equal).
 fn spread(v: &[f64]) -> Option<f64> {
-    let x: Vec<f64> = v.iter().copied().filter(|v| v.is_finite()).collect();
-    let n = x.len() as f64;
-    if x.len() < 16 {
-        return None;
+    let mut stats = edgekf::residual::RunningStats::<f64>::new();
+    for x in v.iter().copied().filter(|x| x.is_finite()) {
+        stats.push(x);
     }
-    let mean = x.iter().sum::<f64>() / n;
-    let sd = (x.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
-    (sd > 0.0).then_some(sd)
+    let sd = stats.variance().sqrt();
+    (stats.count() >= 16 && sd > 0.0).then_some(sd)
 }
 
 /// `edgekf loop boom`'s own flag.
