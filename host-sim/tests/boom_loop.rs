@@ -72,3 +72,50 @@ fn a_drifting_gyro_bias_is_named_with_its_drift() {
     let drift = drift.unwrap_or_else(|| panic!("no drift of the gyro's bias: {:?}", r.trials)).value;
     assert!((drift / 2e-5 - 1.0).abs() <= 0.2, "drift {drift}");
 }
+
+/// The platform carries 100 kg the configuration does not declare (two of the crew and their
+/// kit: 400 kg against 300): named as the platform's mass within a tenth, and the peak error
+/// comes back near the matched configuration's.
+#[test]
+fn an_undeclared_load_on_the_platform_is_named_as_its_mass() {
+    let declared = BoomConfig::default();
+    let mut truth = declared.clone();
+    truth.tip.mass = 400.0;
+    truth.tip.rotary_inertia = 100.0;
+    let r = loop_on(&truth, &declared, 120.0, 1);
+    let matched = loop_on(&truth, &truth, 120.0, 1);
+    let added: Vec<_> = r.effects_added.iter().map(|e| (e.kind.as_str(), e.location.as_str(), e.value)).collect();
+    eprintln!(
+        "platform +100 kg: added {added:?}; peak error {:.2} % → {:.2} % (matched {:.2} %)",
+        peak_error(&r, "before"),
+        peak_error(&r, "after"),
+        peak_error(&matched, "before")
+    );
+    let mass = r.effects_added.iter().find(|e| e.kind.as_str() == "parameter" && e.location == "tip");
+    let mass = mass.unwrap_or_else(|| panic!("no parameter of the tip: {:?}", r.trials)).value;
+    assert!((mass / (4.0 / 3.0) - 1.0).abs() <= 0.1, "factor {mass}");
+    assert!(peak_error(&r, "after") <= 1.5 * peak_error(&matched, "before"), "{r:?}");
+    assert!(peak_error(&r, "before") > 2.0 * peak_error(&r, "after"), "{r:?}");
+}
+
+/// Every section 5 % less stiff than declared (the off-declaration boom): named as the
+/// boom's EI within 1 % of 0.95.
+#[test]
+fn a_softer_boom_is_named_as_its_ei() {
+    let declared = BoomConfig::default();
+    let mut truth = declared.clone();
+    for s in &mut truth.section {
+        s.ei *= 0.95;
+    }
+    let r = loop_on(&truth, &declared, 120.0, 1);
+    let added: Vec<_> = r.effects_added.iter().map(|e| (e.kind.as_str(), e.location.as_str(), e.value)).collect();
+    eprintln!(
+        "EI −5 %: added {added:?}; peak error {:.2} % → {:.2} %",
+        peak_error(&r, "before"),
+        peak_error(&r, "after")
+    );
+    let ei = r.effects_added.iter().find(|e| e.kind.as_str() == "parameter" && e.location == "boom");
+    let ei = ei.unwrap_or_else(|| panic!("no parameter of the boom: {:?}", r.trials)).value;
+    assert!((ei / 0.95 - 1.0).abs() <= 0.01, "factor {ei}");
+    assert!(peak_error(&r, "before") > 2.0 * peak_error(&r, "after"), "{r:?}");
+}

@@ -9,7 +9,7 @@
 //! use edgekf_sim::systems::boom::BoomConfig;
 //! let c = BoomConfig::from_toml_str(edgekf_sim::systems::boom::config::LADDER30).unwrap();
 //! assert_eq!(c.section.len(), 4);
-//! assert_eq!(c.boom.elements, 30);
+//! assert_eq!(c.boom.elements, 60);
 //! let e = BoomConfig::from_toml_str("[[section]]\nlength = 9.6\nei = -1.0\nmass_per_length = 100.0\n").unwrap_err();
 //! assert!(e.to_string().contains("section[0].ei"), "{e}");
 //! ```
@@ -55,7 +55,7 @@ pub struct BoomTable {
 
 impl Default for BoomTable {
     fn default() -> Self {
-        Self { extension: Extension::Synchronous, elements: 30, gravity: 9.81 }
+        Self { extension: Extension::Synchronous, elements: 60, gravity: 9.81 }
     }
 }
 

@@ -4,6 +4,7 @@
 //! * [`config`]: [`BoomConfig`], the TOML configuration (`host-sim/configs/boom_ladder30.toml`);
 //! * [`beam`]: the finite-element boom at one length (sections that overlap, the platform,
 //!   gravity's geometric stiffness);
+//! * [`band`]: Cholesky within the finite elements' band;
 //! * [`modal`]: its natural frequencies and the Rayleigh damping fitted to ζ₁, ζ₂;
 //! * [`runs`]: the test runs (luffing stops; telescoping while luffing) and the luffing drive;
 //! * [`sensors`]: the true gyro (AR(2) noise, bias and drift, scale, quantum) and inclinometer
@@ -15,6 +16,7 @@
 //! * [`cli`]: `edgekf boom simulate | estimate`.
 
 pub mod ablation;
+pub mod band;
 pub mod beam;
 pub mod cli;
 pub mod config;

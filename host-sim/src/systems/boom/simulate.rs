@@ -15,6 +15,7 @@
 //! [`runs`]: super::runs
 //! [`sensors`]: super::sensors
 
+use super::band::BandCholesky;
 use super::beam::{assemble, BeamMatrices};
 use super::config::BoomConfig;
 use super::modal::{frequencies, rayleigh, stiffness};
@@ -22,7 +23,7 @@ use super::runs::{Luffing, Scenario};
 use super::sensors::{Gyro, GyroModel, Inclinometer, InclinometerModel};
 use crate::io::data::DataFile;
 use anyhow::{anyhow, bail, Result};
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DVector;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
@@ -113,7 +114,7 @@ fn fit_damping(config: &BoomConfig, beam: &BeamMatrices, angle: f64) -> Result<(
 fn sag(config: &BoomConfig, beam: &BeamMatrices, angle: f64) -> Result<DVector<f64>> {
     let g = config.boom.gravity;
     let k = stiffness(beam, g, angle);
-    let chol = k.cholesky().ok_or_else(|| anyhow!("the boom buckles at {:.2} m", beam.length))?;
+    let chol = BandCholesky::new(&k).ok_or_else(|| anyhow!("the boom buckles at {:.2} m", beam.length))?;
     Ok(chol.solve(&(&beam.gm * (-g * angle.cos()))))
 }
 
@@ -192,12 +193,12 @@ pub fn simulate(config: &BoomConfig, options: &SimOptions, progress: &mut dyn Fn
             let b = &stage.beam;
             let k_tot = stiffness(b, g, luff.angle);
             let (ra, rb) = (stage.damping.0, stage.damping.1);
-            let c: DMatrix<f64> = &b.m * ra + &k_tot * rb;
+            // C = ra M + rb K, so K_eff = K + a0 M + a1 C and C v = ra M v + rb K v.
             let f = &b.r * (-luff.accel) + &b.gm * (-g * luff.angle.cos());
-            let k_eff = &k_tot + &b.m * a0 + &c * a1;
-            let rhs = f + &b.m * (&q * a0 + &qd * a2 + &qdd) + &c * (&q * a1 + &qd);
-            let q1 = k_eff
-                .cholesky()
+            let k_eff = &k_tot * (1.0 + a1 * rb) + &b.m * (a0 + a1 * ra);
+            let cv = &q * a1 + &qd;
+            let rhs = f + &b.m * (&q * a0 + &qd * a2 + &qdd + &cv * ra) + &k_tot * (cv * rb);
+            let q1 = BandCholesky::new(&k_eff)
                 .ok_or_else(|| anyhow!("the simulation failed at t = {t1:.3} s: the step's matrix is singular"))?
                 .solve(&rhs);
             let qdd1 = (&q1 - &q) * a0 - &qd * a2 - &qdd;
