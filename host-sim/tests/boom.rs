@@ -364,3 +364,36 @@ fn the_model_based_filter_in_f32() {
     println!("f32 against f64: within {:.2e} m; f32 mean peak error {:.2} %", worst, p.mean_pct);
     assert!(worst < 1e-3 && p.mean_pct <= 2.0, "{worst} m, {p:?}");
 }
+
+/// The sideways boom of `[sim.lateral]`: a gyro leaning by δ reads cos δ of the luffing plane's
+/// rate (with no wind, exactly), and wind with the gyro upright changes no reading (its own
+/// random stream); with both, the gyro reads the sideways bending on top.
+#[test]
+fn the_sideways_boom_reaches_the_gyro_only_through_its_lean() {
+    use edgekf_sim::systems::boom::config::SimLateral;
+    let mut c = BoomConfig::default();
+    // An ideal gyro: its reading is its rate.
+    c.sim.gyro = edgekf_sim::systems::boom::config::SimGyro {
+        noise: Some(0.0),
+        bias: Some(0.0),
+        bias_drift: Some(0.0),
+        quantum: Some(0.0),
+        ..Default::default()
+    };
+    let plain = run(&c, Scenario::Luffing, 30.0);
+    let with = |gust: f64, lean: f64| {
+        let mut l = c.clone();
+        l.sim.lateral = Some(SimLateral { ei_factor: 2.5, gust, misalignment: lean });
+        run(&l, Scenario::Luffing, 30.0)
+    };
+    let gyro = |r: &BoomRecording| r.column("gyro_rate").unwrap().to_vec();
+    let calm = with(0.0, 0.05);
+    let scaled: Vec<f64> = gyro(&plain).iter().map(|v| v * 0.05f64.cos()).collect();
+    let worst = scaled.iter().zip(gyro(&calm)).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+    assert!(worst < 1e-12, "calm, leaning: {worst}");
+    assert_eq!(gyro(&with(1.0, 0.0)), gyro(&plain), "wind, upright");
+    let windy = with(1.0, 0.05);
+    let extra = gyro(&windy).iter().zip(&scaled).map(|(a, b)| (a - b).powi(2)).sum::<f64>() / scaled.len() as f64;
+    assert!(extra.sqrt() > 1e-4, "the sideways bending reads {:.2e} rad/s RMS", extra.sqrt());
+    assert_eq!(windy.column("truth_tip_vibration"), plain.column("truth_tip_vibration"));
+}

@@ -157,6 +157,21 @@ pub struct SimInclinometer {
     pub quantum: Option<f64>,
 }
 
+/// The boom's sideways bending, out of the luffing plane, which the estimators do not model:
+/// wind drives it, and a gyro whose axis leans toward it reads a share of it.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SimLateral {
+    /// The sections' sideways EI over their EI in the luffing plane (a ladder is wider than
+    /// it is deep).
+    pub ei_factor: f64,
+    /// RMS of the wind's sideways load per unit of the boom's mass, m/s² (a first-order
+    /// process with a 1 s correlation time).
+    pub gust: f64,
+    /// How far the gyro's axis leans toward the sideways rotation, rad.
+    pub misalignment: f64,
+}
+
 /// The simulator's own keys.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Deserialize, Serialize)]
 #[serde(default, deny_unknown_fields)]
@@ -165,6 +180,8 @@ pub struct SimTable {
     pub gyro: SimGyro,
     /// The true inclinometer.
     pub inclinometer: SimInclinometer,
+    /// The boom's sideways bending (absent: none).
+    pub lateral: Option<SimLateral>,
 }
 
 /// The luffing drive: the operator's commanded rate followed with a first-order lag and an
@@ -390,6 +407,13 @@ impl BoomConfig {
         }
         if let Some(s) = self.sim.gyro.scale {
             positive("sim.gyro.scale".into(), s)?;
+        }
+        if let Some(l) = self.sim.lateral {
+            positive("sim.lateral.ei_factor".into(), l.ei_factor)?;
+            not_negative("sim.lateral.gust", l.gust)?;
+            if !(l.misalignment.is_finite() && l.misalignment.abs() < 0.5) {
+                bail!("sim.lateral.misalignment = {} rad must lie within ±0.5", l.misalignment);
+            }
         }
         positive("drive.lag".into(), self.drive.lag)?;
         positive("drive.max_accel".into(), self.drive.max_accel)?;

@@ -9,16 +9,16 @@
 //!   random walk the filter gives it, ±1e-3 rad/s per s;
 //! * `parameter` of `boom`, `ei`: a factor 0.8–1.25 on every section's bending stiffness;
 //! * `parameter` of `tip`, `mass`: a factor 0.5–2.5 on the platform's mass (its load: the
-//!   crew and their kit), its rotary inertia scaled with it.
+//!   crew and their kit), its rotary inertia scaled with it;
+//! * `extra_mode` at `gyro_rate`: a lightly damped mode the reduced boom lacks (its sideways
+//!   bending seen by a gyro that leans toward it, say), proposed by a line in the gyro's
+//!   innovations at none of the reduced boom's frequencies; its frequency is fitted within two
+//!   bins of the line, in the filter's [`ExtraMode`] slot.
 //!
-//! Each is a setting of the filter fitted by maximum likelihood; none adds a state. A
-//! parameter re-reduces the boom. The report's `before` and `after` carry the paper's peak
-//! error (`peak_error_pct`) where the data has `truth_tip_vibration`.
-//!
-//! Not in the library: a mode the reduced boom lacks (`extra_mode`). The candidates tried, a
-//! platform on a compliant levelling joint, either do not show (its centre of mass at the tip:
-//! the peak error stays at 0.20 %) or couple into every mode at once (its centre of mass 0.3 to
-//! 0.8 m beyond the tip), which no single added oscillator explains.
+//! Each is a setting of the filter fitted by maximum likelihood. A parameter re-reduces the
+//! boom; only the extra mode uses states, the slot the filter keeps for it. The report's
+//! `before` and `after` carry the paper's peak error (`peak_error_pct`) where the data has
+//! `truth_tip_vibration`.
 
 use super::config::BoomConfig;
 use super::estimate::model_settings;
@@ -31,9 +31,9 @@ use crate::residual_loop::search::{
     search, Applied, Channel, EffectDetail, EffectKind, EffectLabel, LoopOptions, LoopReport, LoopSystem, RunSummary,
     SystemSection, Traces,
 };
-use crate::residual_loop::signature::{summarise, ReferenceLines, SummaryContext};
+use crate::residual_loop::signature::{summarise, ReferenceLines, SummaryContext, SEGMENT};
 use anyhow::{anyhow, Context, Result};
-use edgekf::systems::boom::{Ar2, ModelEstimator, ModelSettings};
+use edgekf::systems::boom::{Ar2, ExtraMode, ModelEstimator, ModelSettings};
 
 /// Seconds of the filter's start left out of the statistics (the bias and the AR noise settle).
 const SETTLE_S: f64 = 5.0;
@@ -47,6 +47,10 @@ pub const MODEL_FLOOR: f64 = 2e-3;
 const MAX_DRIFT: f64 = 1e-3;
 /// The largest inclinometer offset fitted, rad.
 const MAX_OFFSET: f64 = 0.05;
+/// An extra mode's damping ratio: not fitted (a line's width says little in a few minutes).
+const EXTRA_ZETA: f64 = 0.02;
+/// Lines proposed as extra modes in a round, strongest first.
+const EXTRA_LINES: usize = 2;
 
 /// What the boom's model may lack.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -63,6 +67,13 @@ pub enum Effect {
     Stiffness,
     /// A factor on the platform's mass and rotary inertia.
     PlatformMass,
+    /// A mode the reduced boom lacks, seen by the gyro. Value: its frequency, Hz.
+    ExtraMode {
+        /// Frequency of the line that proposed it, mHz.
+        seed_mhz: u32,
+        /// Its rate's level: the gyro's innovation RMS when it was proposed, µrad/s.
+        level_urad: u32,
+    },
 }
 
 /// The boom, its data and the loop's options.
@@ -74,6 +85,9 @@ pub struct BoomSystem<'a> {
     channels: Vec<Channel>,
     rows: Vec<Channel>,
     options: LoopOptions,
+    /// The reduced boom's frequencies (Hz) at the recording's middle length and first angle:
+    /// lines there are the boom's own, not an extra mode's.
+    naturals: Vec<f64>,
 }
 
 impl<'a> BoomSystem<'a> {
@@ -89,14 +103,25 @@ impl<'a> BoomSystem<'a> {
     ) -> Result<Self> {
         let col = |n: &str| data.column(n).ok_or_else(|| anyhow!("the data has no `{n}` column"));
         let columns = [col(MEASURED[0])?, col(MEASURED[1])?, col(MEASURED[2])?, col(MEASURED[3])?];
+        let settings = model_settings(config, ar, incl_noise)?;
+        let finite = |c: &[f64]| c.iter().copied().filter(|v| v.is_finite()).collect::<Vec<_>>();
+        let (lengths, angles) = (finite(columns[2]), finite(columns[1]));
+        let naturals = match (lengths.get(lengths.len() / 2), angles.first()) {
+            (Some(&l), Some(&a)) => settings
+                .constants
+                .reduce(l, a - settings.inclinometer.1)
+                .map_or(Vec::new(), |r| r.modes.iter().map(|m| m.omega / std::f64::consts::TAU).collect()),
+            _ => Vec::new(),
+        };
         Ok(Self {
             config: config.clone(),
-            settings: model_settings(config, ar, incl_noise)?,
+            settings,
             data,
             columns,
             channels: vec![Channel::new(MEASURED[0], "rad/s"), Channel::new(MEASURED[1], "rad")],
             rows: vec![Channel::new("tip_vibration", "m")],
             options: *options,
+            naturals,
         })
     }
 
@@ -121,9 +146,18 @@ impl<'a> BoomSystem<'a> {
                     s.constants.tip_mass *= factor;
                     s.constants.tip_inertia *= factor;
                 }
+                Effect::ExtraMode { level_urad, .. } => {
+                    s.extra_mode = Some(ExtraMode { hz: a.theta, zeta: EXTRA_ZETA, level: level_urad as f64 * 1e-6 });
+                }
             }
         }
         s
+    }
+
+    /// The innovation spectra's bin width, Hz (at the boom's rates the spectra use
+    /// [`SEGMENT`]-sample segments).
+    fn bin_width_hz(&self) -> f64 {
+        1.0 / (self.settings.dt * SEGMENT as f64)
     }
 
     fn truth(&self) -> Vec<Option<&[f64]>> {
@@ -179,7 +213,7 @@ impl LoopSystem for BoomSystem<'_> {
 
     fn summarise(&self, run: &Run) -> RunSummary {
         let truth = self.truth();
-        let lines = ReferenceLines::default();
+        let lines = ReferenceLines { naturals: self.naturals.clone(), ..ReferenceLines::default() };
         let ctx = SummaryContext {
             t: &self.data.t,
             channels: &self.channels,
@@ -215,6 +249,23 @@ impl LoopSystem for BoomSystem<'_> {
         if off(0) {
             named.extend([Effect::GyroScale, Effect::GyroDrift, Effect::Stiffness, Effect::PlatformMass]);
         }
+        // Lines in the gyro's innovations at none of the boom's frequencies, for the one slot.
+        if !effects.iter().any(|a| matches!(a.effect, Effect::ExtraMode { .. })) {
+            let level = s.innovation_rms.get(MEASURED[0]).copied().unwrap_or(0.0);
+            let level_urad = (level * 1e6).round().clamp(1.0, u32::MAX as f64) as u32;
+            let mut seeds: Vec<(f64, u32)> = Vec::new();
+            for p in s.channels.first().map_or(&[][..], |c| c.peaks.as_slice()) {
+                let mhz = (p.frequency_hz * 1e3).round() as u32;
+                let near = |m: &(f64, u32)| (m.1 as f64 - mhz as f64).abs() * 1e-3 < 2.0 * s.bin_width_hz;
+                if p.class == "unexplained" && !seeds.iter().any(near) {
+                    seeds.push((p.prominence_db, mhz));
+                }
+            }
+            seeds.sort_by(|a, b| b.0.total_cmp(&a.0));
+            named.extend(
+                seeds.iter().take(EXTRA_LINES).map(|&(_, seed_mhz)| Effect::ExtraMode { seed_mhz, level_urad }),
+            );
+        }
         let in_model = |e: &Effect| effects.iter().any(|a| a.effect == *e);
         named.retain(|e| !in_model(e));
         let mut catch_all = if s.consistent {
@@ -243,12 +294,22 @@ impl LoopSystem for BoomSystem<'_> {
             Effect::GyroDrift => (EffectKind::SensorBias, MEASURED[0], "rad/s/s", EffectDetail::default()),
             Effect::Stiffness => (EffectKind::Parameter, "boom", "1", parameter("ei")),
             Effect::PlatformMass => (EffectKind::Parameter, "tip", "1", parameter("mass")),
+            Effect::ExtraMode { .. } => (
+                EffectKind::ExtraMode,
+                MEASURED[0],
+                "Hz",
+                EffectDetail { damping: Some(EXTRA_ZETA), ..EffectDetail::default() },
+            ),
         };
         EffectLabel { kind, location: location.into(), detail, unit: unit.into() }
     }
 
-    fn parameters(&self, _: &Effect) -> usize {
-        1
+    /// One for a setting; an extra mode's frequency and its two states' start.
+    fn parameters(&self, e: &Effect) -> usize {
+        match e {
+            Effect::ExtraMode { .. } => 3,
+            _ => 1,
+        }
     }
 
     fn scalar(&self, e: &Effect) -> Option<(ScalarRange, usize)> {
@@ -276,6 +337,10 @@ impl LoopSystem for BoomSystem<'_> {
             Effect::GyroScale => (factor(0.95, 1.05), 5),
             Effect::Stiffness => (factor(0.8, 1.25), 5),
             Effect::PlatformMass => (factor(0.5, 2.5), 5),
+            Effect::ExtraMode { seed_mhz, .. } => {
+                let (f, w) = (*seed_mhz as f64 * 1e-3, 2.0 * self.bin_width_hz());
+                (ScalarRange { low: (f - w).max(0.05), high: f + w, neutral: f, log: false, tolerance: 1e-3 }, 5)
+            }
             Effect::GyroDrift => {
                 (ScalarRange { low: -MAX_DRIFT, high: MAX_DRIFT, neutral: 0.0, log: false, tolerance: 1e-8 }, 5)
             }
@@ -285,7 +350,9 @@ impl LoopSystem for BoomSystem<'_> {
     /// The fitted lag (s) or offset (rad), or the factor.
     fn value(&self, _: &(), _: &Run, effect: &Applied<Effect>) -> f64 {
         match effect.effect {
-            Effect::InclinometerLag | Effect::InclinometerOffset | Effect::GyroDrift => effect.theta,
+            Effect::InclinometerLag | Effect::InclinometerOffset | Effect::GyroDrift | Effect::ExtraMode { .. } => {
+                effect.theta
+            }
             Effect::GyroScale | Effect::Stiffness | Effect::PlatformMass => effect.theta.exp(),
         }
     }

@@ -11,6 +11,11 @@
 //! the sliding sections' Coriolis load (∝ l̇ φ̇), the rotation's softening (∝ φ̇² w) and its
 //! centrifugal tension.
 //!
+//! With `[sim.lateral]` the boom also bends sideways, out of the luffing plane: the same
+//! elements with the sideways EI, the same damping fit, driven by a gust load on every
+//! element's mass and by nothing of the luffing. Only a gyro whose axis leans toward it sees
+//! it; the estimators know nothing of it (a mode nobody declared).
+//!
 //! [`beam`]: super::beam
 //! [`runs`]: super::runs
 //! [`sensors`]: super::sensors
@@ -23,9 +28,11 @@ use super::runs::{Luffing, Scenario};
 use super::sensors::{Gyro, GyroModel, Inclinometer, InclinometerModel};
 use crate::io::data::DataFile;
 use anyhow::{anyhow, bail, Result};
-use nalgebra::DVector;
+use nalgebra::{DMatrix, DVector};
+use rand::Rng;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
+use rand_distr::StandardNormal;
 
 /// Integration steps per sample.
 pub const SUBSTEPS: usize = 5;
@@ -102,6 +109,98 @@ impl Stage {
         let damping = fit_damping(config, &beam, angle)?;
         Ok(Self { beam, damping })
     }
+
+    /// Follows the boom to `length` and `angle`: the matrices rebuilt when it telescopes, the
+    /// damping refitted when it has moved by 5 cm or 0.02 rad since the last fit.
+    fn follow(&mut self, config: &BoomConfig, length: f64, angle: f64) -> Result<()> {
+        let (_, _, l_fit, phi_fit) = self.damping;
+        if (length - self.beam.length).abs() > 1e-12 {
+            self.beam = assemble(config, length);
+        }
+        if (length - l_fit).abs() > 0.05 || (angle - phi_fit).abs() > 0.02 {
+            self.damping = fit_damping(config, &self.beam, angle)?;
+        }
+        Ok(())
+    }
+}
+
+/// Displacement, velocity and acceleration of the elements' DOFs.
+struct Motion {
+    q: DVector<f64>,
+    qd: DVector<f64>,
+    qdd: DVector<f64>,
+}
+
+impl Motion {
+    fn at_rest(q: DVector<f64>) -> Self {
+        let n = q.len();
+        Self { q, qd: DVector::zeros(n), qdd: DVector::zeros(n) }
+    }
+
+    /// One step of Newmark's average acceleration over `dt` under the load `f`, at stiffness
+    /// `k_tot`; `t1` names the step in an error.
+    fn step(&mut self, stage: &Stage, k_tot: &DMatrix<f64>, f: DVector<f64>, dt: f64, t1: f64) -> Result<()> {
+        let (a0, a1, a2) = (4.0 / (dt * dt), 2.0 / dt, 4.0 / dt);
+        let (b, (ra, rb)) = (&stage.beam, (stage.damping.0, stage.damping.1));
+        // C = ra M + rb K, so K_eff = K + a0 M + a1 C and C v = ra M v + rb K v.
+        let k_eff = k_tot * (1.0 + a1 * rb) + &b.m * (a0 + a1 * ra);
+        let cv = &self.q * a1 + &self.qd;
+        let rhs = f + &b.m * (&self.q * a0 + &self.qd * a2 + &self.qdd + &cv * ra) + k_tot * (cv * rb);
+        let q1 = BandCholesky::new(&k_eff)
+            .ok_or_else(|| anyhow!("the simulation failed at t = {t1:.3} s: the step's matrix is singular"))?
+            .solve(&rhs);
+        let qdd1 = (&q1 - &self.q) * a0 - &self.qd * a2 - &self.qdd;
+        self.qd += (&self.qdd + &qdd1) * (0.5 * dt);
+        self.q = q1;
+        self.qdd = qdd1;
+        Ok(())
+    }
+}
+
+/// The sideways boom of `[sim.lateral]` and its gust.
+struct Lateral {
+    config: BoomConfig,
+    stage: Stage,
+    motion: Motion,
+    /// The gust's load per unit mass, m/s².
+    gust: f64,
+    /// Its RMS and how far the gyro's axis leans.
+    rms: f64,
+    lean: f64,
+}
+
+/// The gust's correlation time, s.
+const GUST_TIME: f64 = 1.0;
+
+impl Lateral {
+    fn new(config: &BoomConfig, length: f64, angle: f64) -> Result<Option<Self>> {
+        let Some(l) = config.sim.lateral else { return Ok(None) };
+        let mut sideways = config.clone();
+        for s in &mut sideways.section {
+            s.ei *= l.ei_factor;
+        }
+        let stage = Stage::new(&sideways, length, angle)?;
+        let motion = Motion::at_rest(DVector::zeros(stage.beam.dofs()));
+        Ok(Some(Self { config: sideways, stage, motion, gust: 0.0, rms: l.gust, lean: l.misalignment }))
+    }
+
+    /// One sub-step at the boom's new `length` and `angle`.
+    fn step(&mut self, length: f64, angle: f64, dt: f64, t1: f64, rng: &mut ChaCha8Rng) -> Result<()> {
+        self.stage.follow(&self.config, length, angle)?;
+        // Ornstein–Uhlenbeck: exact over dt, stationary RMS `rms`.
+        let e = (-dt / GUST_TIME).exp();
+        let white: f64 = rng.sample(StandardNormal);
+        self.gust = e * self.gust + self.rms * (1.0 - e * e).sqrt() * white;
+        let b = &self.stage.beam;
+        let k_tot = stiffness(b, self.config.boom.gravity, angle);
+        let f = &b.gm * self.gust;
+        self.motion.step(&self.stage, &k_tot, f, dt, t1)
+    }
+
+    /// The tip's sideways slope rate, rad/s.
+    fn tip_rate(&self) -> f64 {
+        self.motion.qd[self.stage.beam.tip() + 1]
+    }
 }
 
 fn fit_damping(config: &BoomConfig, beam: &BeamMatrices, angle: f64) -> Result<(f64, f64, f64, f64)> {
@@ -134,12 +233,11 @@ pub fn simulate(config: &BoomConfig, options: &SimOptions, progress: &mut dyn Fn
     let mut luff = Luffing::at_rest(runs.start_angle);
     let mut incl = Inclinometer::new(InclinometerModel::of(config), luff.angle, dt_sample);
     let mut stage = Stage::new(config, scenario.length(runs, 0.0), luff.angle)?;
+    let mut lateral = Lateral::new(config, stage.beam.length, luff.angle)?;
+    // Its own stream, so that the sensors' noise is the same with and without it.
+    let mut wind = ChaCha8Rng::seed_from_u64(options.seed.wrapping_add(3_000_003));
     // At rest in the static equilibrium.
-    let mut q = sag(config, &stage.beam, luff.angle)?;
-    let n = q.len();
-    let mut qd = DVector::zeros(n);
-    let mut qdd = DVector::zeros(n);
-    let (a0, a1, a2) = (4.0 / (dt * dt), 2.0 / dt, 4.0 / dt);
+    let mut m = Motion::at_rest(sag(config, &stage.beam, luff.angle)?);
     let mut t_out = Vec::with_capacity(samples);
     let mut cols = vec![Vec::with_capacity(samples); MEASURED.len() + TRUTH.len()];
     let mut next_progress = 10.0;
@@ -148,7 +246,11 @@ pub fn simulate(config: &BoomConfig, options: &SimOptions, progress: &mut dyn Fn
         // Record the sample at t (the state as it is now), then integrate to the next.
         let tip = stage.beam.tip();
         let length = stage.beam.length;
-        let rate_true = luff.rate + qd[tip + 1];
+        let (q, qd) = (&m.q, &m.qd);
+        let rate_true = match &lateral {
+            Some(side) => (luff.rate + qd[tip + 1]) * side.lean.cos() + side.tip_rate() * side.lean.sin(),
+            None => luff.rate + qd[tip + 1],
+        };
         let static_tip = sag(config, &stage.beam, luff.angle)?[tip];
         let command = scenario.command(runs, t);
         let row = [
@@ -178,33 +280,14 @@ pub fn simulate(config: &BoomConfig, options: &SimOptions, progress: &mut dyn Fn
             let t1 = t + (s + 1) as f64 * dt;
             luff.step(&config.drive, command, dt);
             let length1 = scenario.length(runs, t1);
-            if (length1 - stage.beam.length).abs() > 1e-12 {
-                let beam = assemble(config, length1);
-                let (_, _, l_fit, phi_fit) = stage.damping;
-                let damping = if (length1 - l_fit).abs() > 0.05 || (luff.angle - phi_fit).abs() > 0.02 {
-                    fit_damping(config, &beam, luff.angle)?
-                } else {
-                    stage.damping
-                };
-                stage = Stage { beam, damping };
-            } else if (luff.angle - stage.damping.3).abs() > 0.02 {
-                stage.damping = fit_damping(config, &stage.beam, luff.angle)?;
-            }
+            stage.follow(config, length1, luff.angle)?;
             let b = &stage.beam;
             let k_tot = stiffness(b, g, luff.angle);
-            let (ra, rb) = (stage.damping.0, stage.damping.1);
-            // C = ra M + rb K, so K_eff = K + a0 M + a1 C and C v = ra M v + rb K v.
             let f = &b.r * (-luff.accel) + &b.gm * (-g * luff.angle.cos());
-            let k_eff = &k_tot * (1.0 + a1 * rb) + &b.m * (a0 + a1 * ra);
-            let cv = &q * a1 + &qd;
-            let rhs = f + &b.m * (&q * a0 + &qd * a2 + &qdd + &cv * ra) + &k_tot * (cv * rb);
-            let q1 = BandCholesky::new(&k_eff)
-                .ok_or_else(|| anyhow!("the simulation failed at t = {t1:.3} s: the step's matrix is singular"))?
-                .solve(&rhs);
-            let qdd1 = (&q1 - &q) * a0 - &qd * a2 - &qdd;
-            qd += (&qdd + &qdd1) * (0.5 * dt);
-            q = q1;
-            qdd = qdd1;
+            m.step(&stage, &k_tot, f, dt, t1)?;
+            if let Some(side) = &mut lateral {
+                side.step(length1, luff.angle, dt, t1, &mut wind)?;
+            }
         }
     }
     Ok(BoomRecording { t: t_out, columns: cols })

@@ -9,6 +9,10 @@
 //! is the sensor's and not the boom's, and the tip's deflection per unit slope comes from the
 //! mode shapes at the current length, not from a fixed `α`.
 //!
+//! A mode the reduced boom lacks (the boom's sideways bending seen by a gyro that leans toward
+//! it, say) has a slot of its own ([`ExtraMode`]): an oscillator driven by white noise whose
+//! rate the gyro reads. The residual loop fits its frequency; without one the slot is inert.
+//!
 //! As the boom telescopes or luffs the reduced boom is re-reduced around the current length
 //! and angle and extrapolated linearly in between; the gravity sag's slope changes with both,
 //! and its rate (which the gyro reads) is in the measurement.
@@ -19,8 +23,8 @@ use crate::filter::{KalmanFilter, LinearModel};
 use crate::Real;
 use nalgebra::{SMatrix, SVector};
 
-/// States: `[φ, φ̇, η₁, η̇₁, …, η₃, η̇₃, b, ψ, n_k, n_{k−1}]`.
-pub const STATES: usize = 6 + 2 * MODES;
+/// States: `[φ, φ̇, η₁, η̇₁, …, η₃, η̇₃, ξ, ξ̇, b, ψ, n_k, n_{k−1}]` (`ξ`: the extra mode's slot).
+pub const STATES: usize = 8 + 2 * MODES;
 /// Measurements: `[gyro_rate, incl_angle]`.
 pub const MEASUREMENTS: usize = 2;
 
@@ -32,6 +36,8 @@ pub mod slot {
     pub const RATE: usize = 1;
     /// Mode `i`'s coordinate is at `MODE + 2 i`, its rate at `MODE + 2 i + 1`.
     pub const MODE: usize = 2;
+    /// The extra mode's coordinate (rad, as the gyro sees it) and rate.
+    pub const EXTRA: usize = MODE + 2 * super::MODES;
     /// Gyro bias, rad/s.
     pub const BIAS: usize = super::STATES - 4;
     /// The inclinometer's lagged angle, rad.
@@ -51,6 +57,41 @@ const STEP: (f64, f64) = (0.25, 0.05);
 const REDISCRETISE: (f64, f64) = (0.01, 0.005);
 /// A missing reading's variance: its update moves nothing.
 const MISSING: f64 = 1e12;
+
+/// A mode the reduced boom lacks, seen by the gyro: `ξ̈ + 2ζω ξ̇ + ω² ξ = w`, the gyro reading
+/// `ξ̇` beside the boom's rates, `w` white with the intensity that gives `ξ̇` the standard
+/// deviation `level`.
+///
+/// ```
+/// use edgekf::systems::boom::ExtraMode;
+/// let m = ExtraMode { hz: 1.1, zeta: 0.02, level: 1e-3 };
+/// assert!(m.is_valid() && !ExtraMode { hz: -1.0, ..m }.is_valid());
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ExtraMode {
+    /// Natural frequency, Hz.
+    pub hz: f64,
+    /// Damping ratio.
+    pub zeta: f64,
+    /// Standard deviation of its rate, rad/s.
+    pub level: f64,
+}
+
+impl ExtraMode {
+    /// A positive frequency and level and a damping ratio in (0, 1).
+    pub fn is_valid(&self) -> bool {
+        self.hz.is_finite()
+            && self.hz > 0.0
+            && self.zeta > 0.0
+            && self.zeta < 1.0
+            && self.level.is_finite()
+            && self.level > 0.0
+    }
+
+    fn omega(&self) -> f64 {
+        2.0 * core::f64::consts::PI * self.hz
+    }
+}
 
 /// The filter's settings: the boom, its sensors as declared, and the process noise.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -83,6 +124,8 @@ pub struct ModelSettings {
     /// How far the inclinometer's declared lag may be off, s: while the boom luffs at φ̇ its
     /// reading is trusted to `lag_sd · φ̇` less (a lag off by δτ reads δτ · φ̇ behind).
     pub lag_sd: f64,
+    /// A mode the reduced boom lacks (none: the slot is inert).
+    pub extra_mode: Option<ExtraMode>,
 }
 
 impl ModelSettings {
@@ -112,6 +155,7 @@ impl ModelSettings {
             bias_walk: 1e-5,
             bias_drift: 0.0,
             lag_sd: if inclinometer.0 > 0.0 { 0.5 * inclinometer.0 } else { 0.1 },
+            extra_mode: None,
         }
     }
 }
@@ -192,6 +236,14 @@ struct Discrete<T> {
     sag_slope_rate: (T, T),
 }
 
+/// The exact transition over `dt` of `η̈ + 2ζω η̇ + ω² η = 0` (`ζ < 1`).
+fn transition(w: f64, zeta: f64, dt: f64) -> [[f64; 2]; 2] {
+    let (sigma, wd) = (zeta * w, w * libm::sqrt(1.0 - zeta * zeta));
+    let e = libm::exp(-sigma * dt);
+    let (s, c) = libm::sincos(wd * dt);
+    [[e * (c + sigma / wd * s), e * s / wd], [-e * w * w / wd * s, e * (c - sigma / wd * s)]]
+}
+
 fn discretise<T: Real>(
     values: &[f64; VALUES],
     lin: &Linearised,
@@ -214,13 +266,7 @@ fn discretise<T: Real>(
             _ => 0.5 * (a / w + b * w),
         };
         let zeta = if zeta.is_finite() { zeta.clamp(0.0, 0.99) } else { z2.clamp(0.0, 0.99) };
-        let (sigma, wd) = (zeta * w, w * libm::sqrt(1.0 - zeta * zeta));
-        let e = libm::exp(-sigma * dt);
-        let (s, c) = libm::sincos(wd * dt);
-        let f11 = e * (c + sigma / wd * s);
-        let f12 = e * s / wd;
-        let f21 = -e * w * w / wd * s;
-        let f22 = e * (c - sigma / wd * s);
+        let [[f11, f12], [f21, f22]] = transition(w, zeta, dt);
         // A unit acceleration held over dt: η = (1 − φ11)/ω², η̇ = φ12; the load is −p φ̈.
         let g = [(1.0 - f11) / (w * w) * -p, f12 * -p];
         ([[t(f11), t(f12)], [t(f21), t(f22)]], [t(g[0]), t(g[1])])
@@ -272,6 +318,10 @@ pub struct ModelEstimator<T: Real> {
     /// acceleration per unit rate error over a sample, and the inclinometer lag's step.
     drive_gain: f64,
     lag_step: f64,
+    /// The extra mode's transition and its rate's process noise per sample; inert without
+    /// one (no transition, and a unit variance renewed every step: the filter resets a
+    /// covariance whose diagonal is not positive).
+    extra: ([[T; 2]; 2], T),
 }
 
 impl<T: Real> ModelEstimator<T> {
@@ -285,6 +335,7 @@ impl<T: Real> ModelEstimator<T> {
             || !s.bias_drift.is_finite()
             || non_negative.iter().any(|v| !(v.is_finite() && *v >= 0.0))
             || !(length.is_finite() && length > 0.0)
+            || s.extra_mode.is_some_and(|m| !m.is_valid())
         {
             return Err(ModelError::Settings);
         }
@@ -296,6 +347,15 @@ impl<T: Real> ModelEstimator<T> {
         let kf = KalmanFilter::new(model, SVector::zeros(), SMatrix::identity());
         let drive_gain = (1.0 - libm::exp(-s.dt / s.drive.0)) / s.dt;
         let lag_step = if s.inclinometer.0 > 0.0 { 1.0 - libm::exp(-s.dt / s.inclinometer.0) } else { 1.0 };
+        // White forcing of intensity S gives the rate the variance S / (4ζω).
+        let extra = match s.extra_mode {
+            Some(m) => {
+                let f = transition(m.omega(), m.zeta, s.dt);
+                let intensity = 4.0 * m.zeta * m.omega() * m.level * m.level;
+                (f.map(|row| row.map(T::of_f64)), T::of_f64(intensity * s.dt))
+            }
+            None => ([[T::zero(); 2]; 2], T::one()),
+        };
         Ok(Self {
             settings: *s,
             kf,
@@ -307,6 +367,7 @@ impl<T: Real> ModelEstimator<T> {
             reduce_failures: 0,
             drive_gain,
             lag_step,
+            extra,
         })
     }
 
@@ -355,6 +416,12 @@ impl<T: Real> ModelEstimator<T> {
             p[(slot::MODE + 2 * i, slot::MODE + 2 * i)] = t(sd * sd);
             p[(slot::MODE + 2 * i + 1, slot::MODE + 2 * i + 1)] = t(sd * sd * w * w);
         }
+        let (var, rate_var) = match s.extra_mode {
+            Some(m) => (m.level * m.level / (m.omega() * m.omega()), m.level * m.level),
+            None => (1.0, 1.0),
+        };
+        p[(slot::EXTRA, slot::EXTRA)] = t(var);
+        p[(slot::EXTRA + 1, slot::EXTRA + 1)] = t(rate_var);
         p[(slot::BIAS, slot::BIAS)] = t(1e-8);
         // The AR process's stationary variance.
         let [a1, a2] = s.ar.a;
@@ -430,6 +497,12 @@ impl<T: Real> ModelEstimator<T> {
             kick[e] = gamma[0];
             kick[r] = gamma[1];
         }
+        let (f, noise) = self.extra;
+        for (i, row) in f.iter().enumerate() {
+            for (j, v) in row.iter().enumerate() {
+                a[(slot::EXTRA + i, slot::EXTRA + j)] = *v;
+            }
+        }
         a[(slot::BIAS, slot::BIAS)] = T::one();
         u[slot::BIAS] = t(s.bias_drift * dt);
         // ψ' = (1 − k) ψ + k φ'.
@@ -451,6 +524,10 @@ impl<T: Real> ModelEstimator<T> {
             let r = slot::MODE + 2 * i + 1;
             q[(r, r)] += t(sd * sd * dt);
         }
+        q[(slot::EXTRA + 1, slot::EXTRA + 1)] += noise;
+        if s.extra_mode.is_none() {
+            q[(slot::EXTRA, slot::EXTRA)] += noise;
+        }
         q[(slot::BIAS, slot::BIAS)] += t(s.bias_walk * s.bias_walk * dt);
         q[(slot::NOISE, slot::NOISE)] += t(s.ar.sigma * s.ar.sigma);
         // The gyro reads s (φ̇ (1 + ∂S/∂φ) + Σ τᵢ η̇ᵢ) + b + n (the sag's slope rate by length is
@@ -460,6 +537,9 @@ impl<T: Real> ModelEstimator<T> {
         c[(0, slot::RATE)] = scale * (T::one() + self.discrete.sag_slope_rate.0);
         for (i, (_, slope)) in self.discrete.tip.iter().enumerate() {
             c[(0, slot::MODE + 2 * i + 1)] = scale * *slope;
+        }
+        if s.extra_mode.is_some() {
+            c[(0, slot::EXTRA + 1)] = scale;
         }
         c[(0, slot::BIAS)] = T::one();
         c[(0, slot::NOISE)] = T::one();
