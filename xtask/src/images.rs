@@ -144,7 +144,7 @@ pub const IMAGES: [Image; 7] = [
         what: "the boom tip-vibration QEMU image",
         role: Role::Hil { env: "EDGEKF_BOOM_ELF", tests: &["boom_node"] },
         proof: PanicProof::Except(CORE_CSV_PARSING),
-        budgets: &[("boom_step", 12, 2, 50_000), ("boom_rereduce", 12, 2, 18_000_000)],
+        budgets: &[("boom_step", 14, 2, 65_000), ("boom_rereduce", 14, 2, 18_000_000)],
     },
     Image {
         bin: "edgekf-bench",

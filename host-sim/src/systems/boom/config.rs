@@ -440,3 +440,22 @@ impl BoomConfig {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_sideways_boom_is_read_and_checked() {
+        let with = |table: &str| BoomConfig::from_toml_str(&format!("{LADDER30}\n[sim.lateral]\n{table}"));
+        let c = with("ei_factor = 2.5\ngust = 1.0\nmisalignment = 0.05\n").unwrap();
+        assert_eq!(c.sim.lateral, Some(SimLateral { ei_factor: 2.5, gust: 1.0, misalignment: 0.05 }));
+        let e = with("ei_factor = 2.5\ngust = 1.0\nmisalignment = 0.7\n").unwrap_err();
+        assert!(e.to_string().contains("sim.lateral.misalignment"), "{e}");
+        let e = with("ei_factor = 0.0\ngust = 1.0\nmisalignment = 0.0\n").unwrap_err();
+        assert!(e.to_string().contains("sim.lateral.ei_factor"), "{e}");
+        // Every key is needed once the table is there.
+        assert!(with("ei_factor = 2.5\n").is_err());
+        assert_eq!(BoomConfig::default().sim.lateral, None);
+    }
+}
