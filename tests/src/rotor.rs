@@ -141,3 +141,62 @@ pub fn check_faulty_run(lines: &[String], clean: &[(u32, RotorReport)], rec: &Re
     }
     Ok((err, mismatch))
 }
+
+/// The rotor node as it ran before its start-up term (stop 27), the reference that term is
+/// judged against: the dense 20-state time-varying Kalman filter of the exported `P0` in `f32`
+/// for the first [`STEADY_AFTER`] samples, then the steady-state filter of the exported gain
+/// started from its state. Over the probes of a clean HIL file (every line present).
+pub fn dense_start_run(csv: &str) -> Result<Vec<RotorReport>> {
+    use edgekf::export::{matrix, model};
+    use edgekf::filter::{KalmanFilter, SteadyStateFilter};
+    use edgekf_firmware::systems::rotor::constants::*;
+    use edgekf_firmware::systems::rotor::STEADY_AFTER;
+    use nalgebra::SVector;
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().ok_or_else(|| anyhow!("empty file"))?.split(',').collect();
+    let cols: Vec<usize> = CHANNELS
+        .iter()
+        .map(|c| header.iter().position(|h| h == c).ok_or_else(|| anyhow!("no column {c}")))
+        .collect::<Result<_>>()?;
+    let f64_model = model(&ROTOR_A, &ROTOR_C, &ROTOR_Q, &ROTOR_R);
+    let f32_model = f64_model.cast::<f32>();
+    let mut dense = KalmanFilter::new(f32_model.clone(), SVector::zeros(), matrix(&ROTOR_P0).map(|v| v as f32));
+    let mut steady: Option<SteadyStateFilter<f32, 20, 4>> = None;
+    let (disk, force) = (matrix(&ROTOR_DISK).map(|v| v as f32), matrix(&ROTOR_FORCE).map(|v| v as f32));
+    let mut out = Vec::new();
+    for (k, line) in lines.enumerate() {
+        let cells: Vec<&str> = line.split(',').collect();
+        let y: Vec<f32> = cols.iter().map(|&c| cells.get(c).and_then(|v| v.parse().ok()).unwrap_or(f32::NAN)).collect();
+        let y = SVector::<f32, 4>::from_column_slice(&y);
+        if k == STEADY_AFTER as usize {
+            let s = matrix(&ROTOR_S);
+            steady = Some(
+                SteadyStateFilter::from_parts(
+                    &f32_model.a,
+                    &f32_model.c,
+                    &matrix(&ROTOR_GAIN).map(|v| v as f32),
+                    &s,
+                    *dense.state(),
+                )
+                .map_err(|e| anyhow!("{e:?}"))?,
+            );
+        }
+        let (nis, x) = match steady.as_mut() {
+            Some(f) => {
+                let nis = f.update(&y).map_or(f32::NAN, |(_, n)| n);
+                let x = *f.state();
+                f.predict();
+                (nis, x)
+            }
+            None => {
+                let nis = dense.update(&y).map_or(f32::NAN, |i| i.nis);
+                let x = *dense.state();
+                dense.predict();
+                (nis, x)
+            }
+        };
+        let (d, f) = (disk * x, force * x);
+        out.push(RotorReport { disk: [d[0], d[1], d[2], d[3]], force: [f[0], f[1], f[2], f[3]], nis });
+    }
+    Ok(out)
+}

@@ -158,8 +158,8 @@ fn soak_oscillator(gain: GainMode, n: u64) -> Soak {
     soak
 }
 
-/// The rotor node's estimator in `f32` (`switch_at`: when it takes the steady-state gain, `None`
-/// for the time-varying filter throughout) on the paper rotor's reduced model: process noise
+/// The rotor node's estimator in `f32` (`switch_at`: when it drops its start-up term for the
+/// steady-state gain alone, `None` to carry the term throughout) on the paper rotor's reduced model: process noise
 /// from the model's `Q`, 1 µm probe noise, and unbalance forces whose sizes swing by ±50 % over
 /// 10 and 7 minutes while they turn with the shaft.
 fn soak_rotor(switch_at: Option<u32>, n: u64) -> Soak {
@@ -304,6 +304,6 @@ fn the_rotor_node_stays_sound() {
 }
 
 #[test]
-fn the_rotor_time_varying_filter_stays_sound() {
-    soak_rotor(None, steps(1_000_000)).check("rotor AKF, time-varying", 1.3, 0.05);
+fn the_rotor_filter_with_its_start_up_term_throughout_stays_sound() {
+    soak_rotor(None, steps(1_000_000)).check("rotor AKF, start-up term throughout", 1.3, 0.05);
 }

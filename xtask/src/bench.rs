@@ -87,8 +87,156 @@ pub fn run(root: &Path) -> Result<Vec<(String, usize, usize, u64)>> {
             missed.push(format!("{label} n={n} m={m}: not measured by the bench image"));
         }
     }
+    let (table, late) = real_time(&rows);
+    missed.extend(late);
+    write_results(root, &rows, &table)?;
     if !missed.is_empty() {
         bail!("instruction budgets missed: {}", missed.join("; "));
     }
     Ok(rows)
+}
+
+/// One image's real-time figures: name, rate, period, worst ordinary sample, worst spike (all
+/// in instructions), highest sustainable rate, and whether it is real time.
+type RealTimeRow = (&'static str, u32, f64, f64, f64, f64, bool);
+
+/// Writes `target/bench/results.json` (through a temporary file, renamed when complete): the
+/// instruction counts with their budgets, and the real-time table.
+fn write_results(root: &Path, rows: &[(String, usize, usize, u64)], table: &[RealTimeRow]) -> Result<()> {
+    let dir = root.join("target/bench");
+    std::fs::create_dir_all(&dir)?;
+    let unix = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_secs());
+    let mut json = format!(
+        "{{\n  \"unix_time\": {unix},\n  \"clock_hz\": {},\n  \"fifo_samples\": {},\n  \"kernels\": [\n",
+        images::CLOCK_HZ,
+        images::FIFO_SAMPLES
+    );
+    for (k, (label, n, m, count)) in rows.iter().enumerate() {
+        let budget = images::budgets()
+            .find(|t| (t.0, t.1, t.2) == (label.as_str(), *n, *m))
+            .map_or("null".to_string(), |t| t.3.to_string());
+        let comma = if k + 1 < rows.len() { "," } else { "" };
+        json += &format!(
+            "    {{\"label\": \"{label}\", \"n\": {n}, \"m\": {m}, \"instructions\": {count}, \"budget\": {budget}}}{comma}\n"
+        );
+    }
+    json += "  ],\n  \"real_time\": [\n";
+    for (k, (bin, rate, period, worst, spike, max_rate, ok)) in table.iter().enumerate() {
+        let comma = if k + 1 < table.len() { "," } else { "" };
+        json += &format!(
+            "    {{\"image\": \"{bin}\", \"rate_hz\": {rate}, \"period_cycles\": {period:.0}, \"worst_ordinary\": {worst:.0}, \
+             \"worst_spike\": {spike:.0}, \"max_rate_hz\": {max_rate:.0}, \"real_time\": {ok}}}{comma}\n"
+        );
+    }
+    json += "  ]\n}\n";
+    let (tmp, out) = (dir.join("results.json.tmp"), dir.join("results.json"));
+    std::fs::write(&tmp, json)?;
+    std::fs::rename(&tmp, &out)?;
+    println!("wrote {}", out.display());
+    Ok(())
+}
+
+/// Prints every image's real-time table from the measured `rows` ([`images::RealTime`]);
+/// returns it and what it misses.
+fn real_time(rows: &[(String, usize, usize, u64)]) -> (Vec<RealTimeRow>, Vec<String>) {
+    let count = |label: &str, n: usize, m: usize| {
+        rows.iter().find(|r| (r.0.as_str(), r.1, r.2) == (label, n, m)).map(|r| r.3 as f64)
+    };
+    let (mut missed, mut table) = (Vec::new(), Vec::new());
+    println!(
+        "\nreal time per FIFO block at {:.0} MHz, one instruction a cycle (a lower bound on the time), FIFO {} samples:",
+        images::CLOCK_HZ / 1e6,
+        images::FIFO_SAMPLES
+    );
+    println!(
+        "{:<20} {:>8} {:>10} {:>12} {:>7} {:>12} {:>12}  verdict",
+        "image", "rate Hz", "period", "worst ord.", "load", "worst spike", "max rate Hz"
+    );
+    for (image, rt) in images::real_time() {
+        let period = images::CLOCK_HZ / f64::from(rt.rate_hz);
+        let mut worst = 0.0f64;
+        let mut problems = Vec::new();
+        for phase in rt.phases {
+            let mut cost = 0.0;
+            for (label, n, m, samples) in phase.iter() {
+                match count(label, *n, *m) {
+                    Some(c) => cost += c / f64::from(*samples),
+                    None => problems.push(format!("{label} n={n} m={m} not measured")),
+                }
+            }
+            worst = worst.max(cost);
+        }
+        let mut spike = 0.0f64;
+        for (label, n, m) in rt.spikes {
+            match count(label, *n, *m) {
+                Some(c) => spike = spike.max(c),
+                None => problems.push(format!("{label} n={n} m={m} not measured")),
+            }
+        }
+        let fifo = images::FIFO_SAMPLES;
+        if worst > period {
+            problems.push(format!("an ordinary sample takes {worst:.0} of {period:.0} cycles"));
+        }
+        if spike + (fifo - 1.0) * worst > fifo * period {
+            problems.push(format!(
+                "a FIFO block with its costliest sample takes {:.0} of {:.0} cycles",
+                spike + (fifo - 1.0) * worst,
+                fifo * period
+            ));
+        }
+        // The highest rate at which both conditions hold.
+        let max_rate = (images::CLOCK_HZ / worst).min(images::CLOCK_HZ * fifo / (spike + (fifo - 1.0) * worst));
+        let verdict = if problems.is_empty() {
+            "real time".to_string()
+        } else {
+            format!("NOT REAL TIME: {}", problems.join(", "))
+        };
+        println!(
+            "{:<20} {:>8} {:>10.0} {:>12.0} {:>6.1}% {:>12.0} {:>12.0}  {verdict}",
+            image.bin.trim_start_matches("edgekf-"),
+            rt.rate_hz,
+            period,
+            worst,
+            100.0 * worst / period,
+            spike,
+            max_rate
+        );
+        table.push((image.bin, rt.rate_hz, period, worst, spike, max_rate, problems.is_empty()));
+        missed.extend(problems.into_iter().map(|p| format!("{}: {p}", image.bin)));
+    }
+    (table, missed)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every label the real-time table needs, at a cost of `each`, except `over` at `cost`.
+    fn rows(each: u64, over: &str, cost: u64) -> Vec<(String, usize, usize, u64)> {
+        let mut rows: Vec<(String, usize, usize, u64)> = Vec::new();
+        for (_, rt) in images::real_time() {
+            let labels =
+                rt.phases.iter().flat_map(|p| p.iter().map(|s| (s.0, s.1, s.2))).chain(rt.spikes.iter().copied());
+            for (label, n, m) in labels {
+                rows.push((label.to_string(), n, m, if label == over { cost } else { each }));
+            }
+        }
+        rows
+    }
+
+    /// The 1 kHz rotor misses real time with a start-up step of 90 000 instructions (the dense
+    /// filter's 94 000 did), and a 100 Hz boom with a re-reduction of 30 M (backlog 36 samples);
+    /// 20 000 and 16 M pass.
+    #[test]
+    fn the_real_time_check_fails_a_sample_over_its_period_or_a_block_over_the_fifo() {
+        assert!(real_time(&rows(100, "rotor_node_step", 20_000)).1.is_empty());
+        let (_, missed) = real_time(&rows(100, "rotor_node_step", 90_000));
+        assert!(!missed.is_empty() && missed.iter().all(|m| m.contains("edgekf-rotor-qemu")), "{missed:?}");
+        assert!(missed[0].contains("an ordinary sample takes 90000 of 84000 cycles"), "{missed:?}");
+        assert!(real_time(&rows(100, "boom_rereduce", 16_000_000)).1.is_empty());
+        let (_, missed) = real_time(&rows(100, "boom_rereduce", 30_000_000));
+        assert!(missed.len() == 1 && missed[0].contains("FIFO block"), "{missed:?}");
+        let (_, missed) = real_time(&rows(100, "none", 0)[1..]);
+        assert!(missed.iter().any(|m| m.contains("not measured")), "{missed:?}");
+    }
 }

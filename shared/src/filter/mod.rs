@@ -13,6 +13,7 @@
 
 mod joint;
 mod kalman;
+mod low_rank;
 mod steady;
 mod ukf;
 
@@ -23,6 +24,7 @@ pub use kalman::{
     FilterAllocator, FilterDim, FilterError, FilterHealth, GenericInnovation, GenericKalmanFilter, GenericLinearModel,
     GenericSequentialInnovation, Innovation, KalmanFilter, LinearModel, SequentialInnovation,
 };
+pub use low_rank::{LowRankDesign, LowRankFit, LowRankKalmanFilter};
 pub use steady::{
     solve_riccati, GenericSteadyState, GenericSteadyStateFilter, RiccatiError, SteadyState, SteadyStateFilter,
 };

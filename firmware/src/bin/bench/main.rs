@@ -115,9 +115,9 @@ fn ukf<const N: usize, const M: usize>(rng: &mut Lcg) {
 }
 
 /// The rotor node's per-sample step with its disk and force outputs, in both phases: the
-/// 20-state time-varying filter of start-up (`rotor_node_step`), the sample that switches to the
-/// steady-state gain (`rotor_node_switch`: builds the steady-state filter, once), and the
-/// steady-state step the node runs from 0.5 s on (`rotor_node_steady`).
+/// filter with its start-up term of rank 12 (`rotor_node_step`), the sample that drops the
+/// term (`rotor_node_switch`), and the steady-state step the node runs from 0.5 s on
+/// (`rotor_node_steady`).
 fn rotor() {
     use edgekf_firmware::systems::rotor::{RotorEstimator, STEADY_AFTER};
     let mut est = RotorEstimator::new();

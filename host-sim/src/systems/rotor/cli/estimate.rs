@@ -172,11 +172,15 @@ pub fn export(config: &Path, out: &Path, modes: usize) -> Result<()> {
     let text = export_text(config, modes)?;
     crate::io::output::write_atomic(out, text).with_context(|| format!("writing {}", out.display()))?;
     println!(
-        "wrote {}: discrete model (20 states, 4 sensors), steady-state gain, P0, disk and force rows",
+        "wrote {}: discrete model (20 states, 4 sensors), steady-state gain, P0 and its start-up filter, disk and force rows",
         out.display()
     );
     Ok(())
 }
+
+/// Rank of the node's start-up deviation from the steady state: the four unbalance-force
+/// states, whose prior is wide (`initial_force_std`), against a modal prior at the noise level.
+pub const START_RANK: usize = 12;
 
 /// The Rust source [`export`] writes (the firmware's `src/generated/rotor.rs` is this text for
 /// `host-sim/configs/rotor_paper.toml`, which a cross-crate test checks).
@@ -216,6 +220,22 @@ pub fn export_text(config: &Path, modes: usize) -> Result<String> {
     let disk_rows = [2 * disks[0], 2 * disks[0] + 1, 2 * disks[1], 2 * disks[1] + 1];
     let p0: nalgebra::SMatrix<f64, 20, 20> = nalgebra::SMatrix::from_fn(|i, j| red.p0[(i, j)]);
     write_matrix(&mut text, "ROTOR", "P0", "Initial state covariance.", &p0).map_err(err)?;
+    // The node's start-up filter: the steady state plus the prior's deviation from it, of
+    // rank START_RANK (the unbalance forces' wide prior).
+    let (start, fit) = edgekf::filter::LowRankDesign::<f64, 20, 4, START_RANK>::from_prior(&model, &ss, &p0)
+        .ok_or_else(|| anyhow::anyhow!("the steady innovation covariance is not positive definite"))?;
+    write_matrix(&mut text, "ROTOR", "CLOSED", "Steady closed loop A (I − K C).", &start.closed).map_err(err)?;
+    write_matrix(&mut text, "ROTOR", "PCT", "Steady predicted covariance times Cᵀ.", &start.pct).map_err(err)?;
+    write_matrix(&mut text, "ROTOR", "S_INV", "Inverse of the steady innovation covariance.", &start.s_inv)
+        .map_err(err)?;
+    let doc = format!(
+        "Start-up deviation U0 (P0 ≈ P + U0 diag(SIGNS) U0ᵀ): eigenvalues relative to P {:?} kept, largest left out {:e}.",
+        fit.kept.as_slice(),
+        fit.dropped
+    );
+    write_matrix(&mut text, "ROTOR", "U0", &doc, &start.u0).map_err(err)?;
+    write_matrix(&mut text, "ROTOR", "SIGNS", "Signs of the start-up deviation's columns.", &start.signs)
+        .map_err(err)?;
     let doc = format!("Displacement rows of the unbalance (disk) nodes {:?}: x, y of each, m.", disks);
     write_matrix(&mut text, "ROTOR", "DISK", &doc, &rows(&red.displacement, &disk_rows)).map_err(err)?;
     write_matrix(
