@@ -37,8 +37,10 @@ fn symbol(elf: &Path, name: &str) -> Result<String> {
         .with_context(|| format!("symbol {name} not found in {}", elf.display()))
 }
 
-/// Builds and runs the benchmark image; prints and returns `(label, n, m, instructions)`.
-pub fn run(root: &Path) -> Result<Vec<(String, usize, usize, u64)>> {
+/// Builds and runs the benchmark image; prints and returns `(label, n, m, instructions)`. With
+/// `host`, then also edgekf's host speed against the peers ([`crate::peers`]). Writes
+/// `target/bench/results.json` either way.
+pub fn run(root: &Path, host: bool) -> Result<Vec<(String, usize, usize, u64)>> {
     let lib = plugin(root)?;
     let elf = firmware::build(images::bench_image())?;
     let (start, end) = (symbol(&elf, "bench_start")?, symbol(&elf, "bench_end")?);
@@ -89,7 +91,9 @@ pub fn run(root: &Path) -> Result<Vec<(String, usize, usize, u64)>> {
     }
     let (table, late) = real_time(&rows);
     missed.extend(late);
-    write_results(root, &rows, &table)?;
+    // The chip's verdict first: the host half takes minutes and needs PyPI.
+    let host = if host && missed.is_empty() { Some(crate::peers::run_all(root)?) } else { None };
+    write_results(root, &rows, &table, host.as_ref())?;
     if !missed.is_empty() {
         bail!("instruction budgets missed: {}", missed.join("; "));
     }
@@ -102,12 +106,18 @@ type RealTimeRow = (&'static str, u32, f64, f64, f64, f64, bool);
 
 /// Writes `target/bench/results.json` (through a temporary file, renamed when complete): the
 /// instruction counts with their budgets, and the real-time table.
-fn write_results(root: &Path, rows: &[(String, usize, usize, u64)], table: &[RealTimeRow]) -> Result<()> {
+fn write_results(
+    root: &Path,
+    rows: &[(String, usize, usize, u64)],
+    table: &[RealTimeRow],
+    host: Option<&serde_json::Value>,
+) -> Result<()> {
     let dir = root.join("target/bench");
     std::fs::create_dir_all(&dir)?;
     let unix = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_secs());
     let mut json = format!(
-        "{{\n  \"unix_time\": {unix},\n  \"clock_hz\": {},\n  \"fifo_samples\": {},\n  \"kernels\": [\n",
+        "{{\n  \"unix_time\": {unix},\n  \"machine\": {},\n  \"clock_hz\": {},\n  \"fifo_samples\": {},\n  \"kernels\": [\n",
+        serde_json::Value::from(crate::peers::machine()),
         images::CLOCK_HZ,
         images::FIFO_SAMPLES
     );
@@ -128,7 +138,11 @@ fn write_results(root: &Path, rows: &[(String, usize, usize, u64)], table: &[Rea
              \"worst_spike\": {spike:.0}, \"max_rate_hz\": {max_rate:.0}, \"real_time\": {ok}}}{comma}\n"
         );
     }
-    json += "  ]\n}\n";
+    json += "  ]";
+    if let Some(h) = host {
+        json += &format!(",\n  \"host\": {h}");
+    }
+    json += "\n}\n";
     let (tmp, out) = (dir.join("results.json.tmp"), dir.join("results.json"));
     std::fs::write(&tmp, json)?;
     std::fs::rename(&tmp, &out)?;

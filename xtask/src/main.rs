@@ -8,8 +8,11 @@
 //!   proof and list its panic paths (source line, panic function, enclosing function).
 //! * `cargo xtask run [--data FILE.csv]` — run the QEMU image on a data file (default: the demo
 //!   scenario) and print the decoded defmt log, the stack high-water mark included.
-//! * `cargo xtask bench` — per-step instruction counts of the filters on the Cortex-M4F under
-//!   QEMU (an instruction-counting TCG plugin), checked against the budgets.
+//! * `cargo xtask bench [--check]` — per-step instruction counts of the filters on the
+//!   Cortex-M4F under QEMU (an instruction-counting TCG plugin), checked against the budgets,
+//!   and every image's real-time table; then (not with `--check`, which is what `test` runs) the
+//!   host's speed against ROSS and filterpy in a Python environment it creates
+//!   ([`peers`]). Both go to `target/bench/results.json`.
 //! * `cargo xtask fuzz [--seconds N] [TARGET…]` — the coverage-guided fuzz targets of `fuzz/`
 //!   for N seconds each (default 20), on stable (cargo-fuzz without a sanitizer; installed when
 //!   missing).
@@ -26,6 +29,7 @@ mod firmware;
 mod fuzz;
 mod images;
 mod panics;
+mod peers;
 mod provision;
 
 use images::{Role, IMAGES};
@@ -69,11 +73,11 @@ fn run() -> Result<()> {
         Some("fuzz") => fuzz::run(&firmware::workspace_root(), &args[1..]),
         Some("bench") => {
             provision::ensure()?;
-            bench::run(&firmware::workspace_root()).map(|_| ())
+            bench::run(&firmware::workspace_root(), !flag("--check")).map(|_| ())
         }
         _ => {
             eprintln!(
-                "usage: cargo xtask <test [--long] | fw [{0}] | panics [{0}] | run [--data FILE.csv] | bench | fuzz [--seconds N] [TARGET…] | provision>",
+                "usage: cargo xtask <test [--long] | fw [{0}] | panics [{0}] | run [--data FILE.csv] | bench [--check] | fuzz [--seconds N] [TARGET…] | provision>",
                 images::flags()
             );
             std::process::exit(2);
@@ -113,7 +117,7 @@ fn test(long: bool) -> Result<()> {
     }
 
     step("chip benchmarks: instruction counts per filter step in QEMU (deterministic, checked against budgets)");
-    bench::run(&firmware::workspace_root())?;
+    bench::run(&firmware::workspace_root(), false)?;
 
     step("hardware-in-the-loop tests in QEMU");
     for t in tests {
