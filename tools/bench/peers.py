@@ -56,6 +56,17 @@ def best(f, repeat):
     return min(times), out
 
 
+def step_time(f, z, n):
+    """Seconds per predict + update of filter `f` with measurement `z`, best of 3 runs of `n`."""
+
+    def steps():
+        for _ in range(n):
+            f.predict()
+            f.update(z)
+
+    return best(steps, 3)[0] / n
+
+
 def forces(rotor, t):
     """The unbalance forces m e w^2 (cos, sin)(w t + phase) at their nodes, (len(t), ndof)."""
     f = np.zeros((len(t), rotor.ndof))
@@ -109,30 +120,14 @@ def main():
     kf.F = np.eye(4) + 0.01 * rng.standard_normal((4, 4))
     kf.H = rng.standard_normal((4, 4))
     kf.Q, kf.R, kf.P = np.eye(4) * 1e-3, np.eye(4), np.eye(4)
-    z = rng.standard_normal(4)
-    n = 20000
-
-    def kf_run():
-        for _ in range(n):
-            kf.predict()
-            kf.update(z)
-
-    out["kf_step_s"] = best(kf_run, 3)[0] / n
+    out["kf_step_s"] = step_time(kf, rng.standard_normal(4), 20000)
     a = np.eye(14) + 0.01 * rng.standard_normal((14, 14))
     c = rng.standard_normal((4, 14))
     ukf = UnscentedKalmanFilter(dim_x=14, dim_z=4, dt=1.0, hx=lambda x: (lambda y: y + 0.05 * y * y)(c @ x),
                                 fx=lambda x, dt: a @ x - 0.01 * x**3,
                                 points=MerweScaledSigmaPoints(14, alpha=0.5, beta=2.0, kappa=0.0))
     ukf.Q, ukf.R = np.eye(14) * 1e-3, np.eye(4)
-    z = rng.standard_normal(4)
-    n = 2000
-
-    def ukf_run():
-        for _ in range(n):
-            ukf.predict()
-            ukf.update(z)
-
-    out["ukf_step_s"] = best(ukf_run, 3)[0] / n
+    out["ukf_step_s"] = step_time(ukf, rng.standard_normal(4), 2000)
     tmp = sys.argv[1] + ".tmp"
     with open(tmp, "w") as f:
         json.dump(out, f)
