@@ -569,3 +569,28 @@ fn bad_requests_are_errors_not_panics() {
     let modes = free.modes(0.0).unwrap();
     assert!(modes.modes[0].frequency_hz > 1.0, "{}", modes.modes[0].frequency_hz);
 }
+
+/// The Campbell diagram's reduced basis (the full model's low mode shapes at the lowest and
+/// highest speed) gives the full model's first modes at every speed: frequencies, damping and
+/// whirl.
+#[test]
+fn the_campbell_diagram_on_its_reduced_basis_matches_the_full_modes() {
+    let model = RotorModel::from_config(&paper()).unwrap();
+    let speeds: Vec<f64> = (0..11).map(|i| -300.0 + 130.0 * f64::from(i)).collect();
+    let c = model.campbell(&speeds, 6).unwrap();
+    let (mut worst_f, mut worst_zeta) = (0.0f64, 0.0f64);
+    for (w, reduced) in speeds.iter().zip(&c.modes) {
+        let full = model.modes(*w).unwrap().modes;
+        assert_eq!(reduced.len(), 6);
+        for (a, b) in reduced.iter().zip(&full) {
+            worst_f = worst_f.max((a.frequency_hz - b.frequency_hz).abs() / b.frequency_hz);
+            worst_zeta = worst_zeta.max((a.damping_ratio - b.damping_ratio).abs());
+            assert_eq!(a.whirl, b.whirl, "speed {w}: {} Hz", b.frequency_hz);
+        }
+    }
+    eprintln!(
+        "Campbell on the reduced basis against the full modes, 11 speeds from −300 to 1000 rad/s: \
+         frequencies within {worst_f:.1e}, damping ratios within {worst_zeta:.1e}"
+    );
+    assert!(worst_f < 1e-7 && worst_zeta < 1e-7, "{worst_f} {worst_zeta}");
+}
