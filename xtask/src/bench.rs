@@ -4,6 +4,7 @@
 
 use crate::{firmware, images};
 use anyhow::{bail, Context, Result};
+use serde_json::json;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Duration;
@@ -115,34 +116,32 @@ fn write_results(
     let dir = root.join("target/bench");
     std::fs::create_dir_all(&dir)?;
     let unix = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_secs());
-    let mut json = format!(
-        "{{\n  \"unix_time\": {unix},\n  \"machine\": {},\n  \"clock_hz\": {},\n  \"fifo_samples\": {},\n  \"kernels\": [\n",
-        serde_json::Value::from(crate::peers::machine()),
-        images::CLOCK_HZ,
-        images::FIFO_SAMPLES
-    );
-    for (k, (label, n, m, count)) in rows.iter().enumerate() {
-        let budget = images::budgets()
-            .find(|t| (t.0, t.1, t.2) == (label.as_str(), *n, *m))
-            .map_or("null".to_string(), |t| t.3.to_string());
-        let comma = if k + 1 < rows.len() { "," } else { "" };
-        json += &format!(
-            "    {{\"label\": \"{label}\", \"n\": {n}, \"m\": {m}, \"instructions\": {count}, \"budget\": {budget}}}{comma}\n"
-        );
+    let kernels: Vec<serde_json::Value> = rows
+        .iter()
+        .map(|(label, n, m, count)| {
+            let budget = images::budgets().find(|t| (t.0, t.1, t.2) == (label.as_str(), *n, *m)).map(|t| t.3);
+            json!({ "label": label, "n": n, "m": m, "instructions": count, "budget": budget })
+        })
+        .collect();
+    let real_time: Vec<serde_json::Value> = table
+        .iter()
+        .map(|(bin, rate, period, worst, spike, max_rate, ok)| {
+            json!({ "image": bin, "rate_hz": rate, "period_cycles": period.round(), "worst_ordinary": worst.round(),
+                    "worst_spike": spike.round(), "max_rate_hz": max_rate.round(), "real_time": ok })
+        })
+        .collect();
+    let mut results = json!({
+        "unix_time": unix,
+        "machine": crate::peers::machine(),
+        "clock_hz": images::CLOCK_HZ,
+        "fifo_samples": images::FIFO_SAMPLES,
+        "kernels": kernels,
+        "real_time": real_time,
+    });
+    if let (Some(h), Some(r)) = (host, results.as_object_mut()) {
+        r.insert("host".into(), h.clone());
     }
-    json += "  ],\n  \"real_time\": [\n";
-    for (k, (bin, rate, period, worst, spike, max_rate, ok)) in table.iter().enumerate() {
-        let comma = if k + 1 < table.len() { "," } else { "" };
-        json += &format!(
-            "    {{\"image\": \"{bin}\", \"rate_hz\": {rate}, \"period_cycles\": {period:.0}, \"worst_ordinary\": {worst:.0}, \
-             \"worst_spike\": {spike:.0}, \"max_rate_hz\": {max_rate:.0}, \"real_time\": {ok}}}{comma}\n"
-        );
-    }
-    json += "  ]";
-    if let Some(h) = host {
-        json += &format!(",\n  \"host\": {h}");
-    }
-    json += "\n}\n";
+    let json = serde_json::to_string_pretty(&results)? + "\n";
     let (tmp, out) = (dir.join("results.json.tmp"), dir.join("results.json"));
     std::fs::write(&tmp, json)?;
     std::fs::rename(&tmp, &out)?;

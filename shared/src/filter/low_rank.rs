@@ -13,7 +13,7 @@
 
 use super::kalman::{FilterError, FilterHealth, LinearModel};
 use super::steady::SteadyState;
-use crate::linalg::{cholesky, mul_tr, mul_tr_add, solve_lower, solve_lower_transposed, symmetric_eigen};
+use crate::linalg::{cholesky, mul_tr, mul_tr_add, solve, solve_lower, symmetric_eigen};
 use crate::Real;
 use nalgebra::{SMatrix, SVector};
 
@@ -81,7 +81,7 @@ impl<const N: usize, const M: usize, const R: usize> LowRankDesign<f64, N, M, R>
         ss: &SteadyState<N, M>,
         p0: &SMatrix<f64, N, N>,
     ) -> Option<(Self, LowRankFit<R>)> {
-        let s_inv = inverse(&ss.innovation)?;
+        let s_inv = solve(&ss.innovation, &SMatrix::<f64, M, M>::identity())?;
         let closed = model.a * (SMatrix::<f64, N, N>::identity() - ss.gain * model.c);
         // P̄ = S Ps S with S = diag(√P̄ᵢᵢ), Ps = L Lᵀ; the deviation whitened: L⁻¹ S⁻¹ D S⁻¹ L⁻ᵀ.
         let steady = &ss.predicted;
@@ -323,13 +323,6 @@ impl<T: Real, const N: usize, const M: usize, const R: usize> LowRankKalmanFilte
         self.live = false;
         self.health.covariance_resets = self.health.covariance_resets.saturating_add(1);
     }
-}
-
-/// The inverse of a symmetric positive definite matrix through its Cholesky factor.
-fn inverse<T: Real, const K: usize>(a: &SMatrix<T, K, K>) -> Option<SMatrix<T, K, K>> {
-    let l = cholesky(a)?;
-    let inv = solve_lower_transposed(&l, &solve_lower(&l, &SMatrix::<T, K, K>::identity()));
-    Some((inv + inv.transpose()) * T::of_f64(0.5))
 }
 
 #[cfg(test)]
