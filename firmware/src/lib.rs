@@ -15,6 +15,7 @@
 //! * [`systems`]: each system's estimator on the node, its report frames and its HIL image;
 //! * [`frame`]: report frames defined once, for the defmt emitter and the host's parser alike;
 //! * [`hil`]: the HIL images' run, shared by the QEMU entry point and the host reference runs;
+//! * [`soak`]: the numerical soak of every filter, the same code on the host and in QEMU;
 //! * `semihost` (QEMU images only): host files, exit codes, the QEMU entry skeleton;
 //! * `stack` (chip only): stack high-water marks by painting.
 //!
@@ -28,6 +29,7 @@ pub mod line_feed;
 pub mod node;
 #[cfg(all(target_os = "none", feature = "qemu"))]
 pub mod semihost;
+pub mod soak;
 pub mod source;
 #[cfg(target_os = "none")]
 pub mod stack;

@@ -7,6 +7,7 @@
 //! * [`host`] runs the very same image (driver, main loop, estimator, frames) on the host over
 //!   the same data, which is what a firmware run is compared with;
 //! * [`rotor`] and [`crank`] do the same for the rotor and slider-crank images;
+//! * [`soak`] judges the numerical soak's figures, from the host or from QEMU;
 //! * [`checks`] holds the scenarios and acceptance measures the host and HIL tests share.
 #![deny(missing_docs)]
 
@@ -17,6 +18,7 @@ pub mod host;
 pub mod qemu;
 pub mod report;
 pub mod rotor;
+pub mod soak;
 
 /// Compares two runs block by block and returns a readable description of the first
 /// difference, or `None` if every reported number is bit-identical.

@@ -322,6 +322,26 @@ pub struct ModelEstimator<T: Real> {
     /// one (no transition, and a unit variance renewed every step: the filter resets a
     /// covariance whose diagonal is not positive).
     extra: ([[T; 2]; 2], T),
+    /// The last step's known input and the gyro reading's part it took out ([`LastStep`]).
+    input: SVector<T, STATES>,
+    gyro_offset: T,
+}
+
+/// What the filter's last step ran on, so that a truth can be simulated from the filter's own
+/// model (the firmware's numerical soak): `x' = A x + input + w` with `w ~ N(0, Q)`, read as
+/// `C x + gyro_offset` (on the gyro) plus noise of `R`.
+#[derive(Debug, Clone, Copy)]
+pub struct LastStep<'a, T: Real> {
+    /// The transition, measurement and noises of the step.
+    pub model: &'a LinearModel<T, STATES, MEASUREMENTS>,
+    /// The known input (the luffing command through the drive) the step added.
+    pub input: &'a SVector<T, STATES>,
+    /// The part of the gyro reading the state does not carry (the sag's slope rate by length),
+    /// which the step took out of the reading.
+    pub gyro_offset: T,
+    /// Each mode's tip deflection per unit coordinate (the vibration is their sum over the
+    /// modes' coordinates).
+    pub tip: [T; MODES],
 }
 
 impl<T: Real> ModelEstimator<T> {
@@ -368,6 +388,8 @@ impl<T: Real> ModelEstimator<T> {
             drive_gain,
             lag_step,
             extra,
+            input: SVector::zeros(),
+            gyro_offset: T::zero(),
         })
     }
 
@@ -389,6 +411,16 @@ impl<T: Real> ModelEstimator<T> {
     /// The filter's covariance.
     pub fn covariance(&self) -> &SMatrix<T, STATES, STATES> {
         self.kf.covariance()
+    }
+
+    /// What the last step ran on ([`LastStep`]).
+    pub fn last_step(&self) -> LastStep<'_, T> {
+        LastStep {
+            model: self.kf.model(),
+            input: &self.input,
+            gyro_offset: self.gyro_offset,
+            tip: core::array::from_fn(|i| self.discrete.tip.get(i).map_or(T::zero(), |t| t.0)),
+        }
     }
 
     /// The first sample: the boom at rest in its static equilibrium at the inclinometer's angle.
@@ -572,6 +604,7 @@ impl<T: Real> ModelEstimator<T> {
             let _ = self.kf.set_model(model);
             self.kf.predict();
             let _ = self.kf.shift(&u);
+            self.input = u;
         }
         if self.k == 0 {
             let (model, _) = self.model(T::zero(), gyro_ok, incl_ok);
@@ -582,12 +615,9 @@ impl<T: Real> ModelEstimator<T> {
         // inclinometer's offset. A missing one is replaced by its prediction.
         let predicted = self.kf.model().c * self.kf.state();
         let s = &self.settings;
+        self.gyro_offset = t(s.gyro_scale) * self.discrete.sag_slope_rate.1 * t(length_rate);
         let y = SVector::<T, MEASUREMENTS>::new(
-            if gyro_ok {
-                gyro - t(s.gyro_scale) * self.discrete.sag_slope_rate.1 * t(length_rate)
-            } else {
-                predicted[0]
-            },
+            if gyro_ok { gyro - self.gyro_offset } else { predicted[0] },
             if incl_ok { incl - t(s.inclinometer.1) } else { predicted[1] },
         );
         let ok = [gyro_ok, incl_ok];
