@@ -62,6 +62,11 @@ pub fn boom_elf() -> Result<PathBuf> {
     elf_from("EDGEKF_BOOM_ELF")
 }
 
+/// The numerical soak image: `$EDGEKF_SOAK_ELF` (set by `cargo xtask test` and `soak`).
+pub fn soak_elf() -> Result<PathBuf> {
+    elf_from("EDGEKF_SOAK_ELF")
+}
+
 fn elf_from(var: &str) -> Result<PathBuf> {
     let path = std::env::var_os(var).with_context(|| {
         format!("{var} is not set: run the HIL tests through `cargo xtask test` (it builds the image)")

@@ -10,7 +10,7 @@ use std::process::Command;
 use std::time::Duration;
 
 /// Compiles the instruction-counting TCG plugin with the host C compiler.
-fn plugin(root: &Path) -> Result<PathBuf> {
+pub fn plugin(root: &Path) -> Result<PathBuf> {
     let src = root.join("xtask/qemu-plugin/insn_section.c");
     let out_dir = root.join("target/qemu-plugin");
     std::fs::create_dir_all(&out_dir)?;

@@ -2,9 +2,9 @@
 //!
 //! * `cargo xtask test [--long]` — everything: provisioning, host tests, firmware cross-builds
 //!   (QEMU and board images) with their footprint, then the hardware-in-the-loop tests in QEMU.
-//! * `cargo xtask fw [--board | --rotor | --crank | --uuv | --bench]` — cross-build an image
+//! * `cargo xtask fw [--board | --rotor | --crank | --uuv | --boom | --soak | --bench]` — cross-build an image
 //!   (`edgekf-qemu` without a flag), prove it panic-free and print its flash/RAM use.
-//! * `cargo xtask panics [--board | --rotor | --crank | --uuv | --bench]` — build an image without the
+//! * `cargo xtask panics [--board | --rotor | --crank | --uuv | --boom | --soak | --bench]` — build an image without the
 //!   proof and list its panic paths (source line, panic function, enclosing function).
 //! * `cargo xtask run [--data FILE.csv]` — run the QEMU image on a data file (default: the demo
 //!   scenario) and print the decoded defmt log, the stack high-water mark included.
@@ -13,14 +13,16 @@
 //!   and every image's real-time table; then (not with `--check`, which is what `test` runs) the
 //!   host's speed against ROSS and filterpy in a Python environment it creates
 //!   ([`peers`]). Both go to `target/bench/results.json`.
+//! * `cargo xtask soak` — the long numerical soak in QEMU: every filter of
+//!   `edgekf_firmware::soak` for about 10¹⁰ instructions, its instruction count measured by the
+//!   TCG plugin, bit-identical to the host's run and checked (`tests/tests/soak_qemu.rs`).
 //! * `cargo xtask fuzz [--seconds N] [TARGET…]` — the coverage-guided fuzz targets of `fuzz/`
 //!   for N seconds each (default 20), on stable (cargo-fuzz without a sanitizer; installed when
 //!   missing).
 //! * `cargo xtask provision` — install what a fresh Debian machine lacks (as root), or say what.
 //!
-//! Every build proves its image panic-free as the table says ([`images::PanicProof`]): at link
-//! time (feature `no-panic-proof`), or for the HIL images by their disassembly, where only
-//! `core`'s CSV parsing may keep a panic path; a failed proof lists where ([`panics`]).
+//! Every build proves its image panic-free at link time ([`images::PanicProof`], feature
+//! `no-panic-proof`); a failed proof lists where the panic paths are ([`panics`]).
 //!
 //! The images, their flags, HIL tests and instruction budgets are one table, [`images::IMAGES`].
 
@@ -71,13 +73,17 @@ fn run() -> Result<()> {
         }
         Some("provision") => provision::ensure(),
         Some("fuzz") => fuzz::run(&firmware::workspace_root(), &args[1..]),
+        Some("soak") => {
+            provision::ensure()?;
+            soak()
+        }
         Some("bench") => {
             provision::ensure()?;
             bench::run(&firmware::workspace_root(), !flag("--check")).map(|_| ())
         }
         _ => {
             eprintln!(
-                "usage: cargo xtask <test [--long] | fw [{0}] | panics [{0}] | run [--data FILE.csv] | bench [--check] | fuzz [--seconds N] [TARGET…] | provision>",
+                "usage: cargo xtask <test [--long] | fw [{0}] | panics [{0}] | run [--data FILE.csv] | bench [--check] | soak | fuzz [--seconds N] [TARGET…] | provision>",
                 images::flags()
             );
             std::process::exit(2);
@@ -127,6 +133,23 @@ fn test(long: bool) -> Result<()> {
     status(hil, "HIL tests")?;
     step("all tests passed");
     Ok(())
+}
+
+/// The long QEMU soak: the soak image on every filter's `qemu_long_steps`, with the
+/// instruction-counting plugin, through its HIL test.
+fn soak() -> Result<()> {
+    let root = firmware::workspace_root();
+    let image = IMAGES.iter().find(|i| i.bin == images::SOAK_IMAGE).context("the soak image is not in the table")?;
+    let elf = firmware::build(image)?;
+    let plugin = bench::plugin(&root)?;
+    step("the long numerical soak in QEMU (about 1e10 instructions a filter)");
+    let mut test = cargo_here();
+    test.args(["test", "--release", "-p", "edgekf-tests", "--features", "hil", "--test", "soak_qemu"])
+        .args(["--", "--nocapture"])
+        .env("EDGEKF_SOAK_ELF", &elf)
+        .env("EDGEKF_LONG", "1")
+        .env("EDGEKF_QEMU_PLUGIN", &plugin);
+    status(test, "the long QEMU soak")
 }
 
 fn step(what: &str) {
