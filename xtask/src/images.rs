@@ -115,7 +115,7 @@ pub struct Image {
 }
 
 /// Every image, in the order `cargo xtask test` builds them.
-pub const IMAGES: [Image; 7] = [
+pub const IMAGES: [Image; 8] = [
     Image {
         bin: "edgekf-board",
         flag: Some("--board"),
@@ -210,6 +210,16 @@ pub const IMAGES: [Image; 7] = [
         }),
     },
     Image {
+        bin: "edgekf-soak",
+        flag: Some("--soak"),
+        features: "qemu",
+        what: "the numerical soak image",
+        role: Role::Hil { env: "EDGEKF_SOAK_ELF", tests: &["soak_qemu"] },
+        proof: PanicProof::Link,
+        budgets: &[],
+        real_time: None,
+    },
+    Image {
         bin: "edgekf-bench",
         flag: Some("--bench"),
         features: "qemu",
@@ -220,6 +230,9 @@ pub const IMAGES: [Image; 7] = [
         real_time: None,
     },
 ];
+
+/// The numerical soak's image: it reads no sensor, and runs every image's filters.
+pub const SOAK_IMAGE: &str = "edgekf-soak";
 
 /// The image `cargo xtask fw` builds without a flag (and `cargo xtask run` runs).
 pub fn default_image() -> &'static Image {
@@ -269,10 +282,17 @@ mod tests {
         assert_eq!(select(&arg("--crank")).bin, "edgekf-crank-qemu");
         assert_eq!(select(&arg("--board")).bin, "edgekf-board");
         assert_eq!(select(&[]).bin, "edgekf-qemu");
-        // Every HIL image states how it keeps up with its sensor.
-        for i in IMAGES.iter().filter(|i| matches!(i.role, Role::Hil { .. })) {
+        // Every HIL image states how it keeps up with its sensor (the soak image reads none),
+        // and every filter a HIL image runs has its numerical soak (`edgekf_firmware::soak`).
+        for i in IMAGES.iter().filter(|i| matches!(i.role, Role::Hil { .. }) && i.bin != SOAK_IMAGE) {
             assert!(i.real_time.is_some(), "{} has no real-time requirement", i.bin);
+            assert!(
+                edgekf_firmware::soak::SOAKS.iter().any(|r| r.image == Some(i.bin)),
+                "{} has no row in edgekf_firmware::soak::SOAKS: its filter is not soaked",
+                i.bin
+            );
         }
+        assert!(IMAGES.iter().any(|i| i.bin == SOAK_IMAGE), "the soak image is in the table");
         // Every bin in the table is one the firmware crate declares.
         let manifest = include_str!("../../firmware/Cargo.toml");
         for i in &IMAGES {
