@@ -161,7 +161,7 @@ fn estimate_command_writes_the_estimate_file() {
             assert_eq!(cells(body[3])[1..], cells(body[4])[1..], "{text}");
             assert!((cells(body[4])[1] / 0.25e-3 - 1.0).abs() < 0.03, "{text}");
         }
-        let back = Recording::read(&data).unwrap();
+        let (back, _) = Recording::read(&data, &Default::default()).unwrap();
         assert_eq!(back.truth_clearance, Some([0.25e-3, 0.0, 0.0]));
     }
     // A mistake is one line, not a panic.

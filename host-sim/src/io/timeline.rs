@@ -13,7 +13,7 @@
 //! between updates are not dropouts.
 
 use super::data::{DataFile, TimingReport};
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 
 /// `[timeline]` of a configuration.
 ///
@@ -21,7 +21,7 @@ use serde::Deserialize;
 /// [timeline]
 /// max_gap_s = 2.0   # longer gaps restart the filters instead of being bridged
 /// ```
-#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct TimelineOptions {
     /// Gaps up to this long are bridged by prediction, longer ones restart the filters, s.

@@ -13,6 +13,7 @@
 //! ```
 
 use super::config::CrankConfig;
+use super::error::CrankError;
 use super::feature::window_features;
 use super::integrate::Integrator;
 use super::simulate::{CrankRecording, SimOptions};
@@ -126,10 +127,13 @@ pub enum MethodArg {
 /// Arguments of `edgekf crank estimate`.
 #[derive(Debug, Args)]
 pub struct EstimateArgs {
-    /// Configuration file of the mechanism (default: the paper's case).
+    /// Configuration file of the mechanism (default: the paper's case); its `[timeline]
+    /// max_gap_s` (default 2 s) is the longest gap in `t` bridged: the recording ends at a longer
+    /// one.
     #[arg(long, value_name = "TOML")]
     pub config: Option<PathBuf>,
-    /// Data file with `t` and `crank_alpha` (rad/s²).
+    /// Data file with `t` and `crank_alpha` (rad/s²). Rows lost from `t` are missing samples,
+    /// like empty cells: `fast` steps through them, `ukf` and a legacy `--model` map refuse them.
     #[arg(long, value_name = "CSV")]
     pub data: PathBuf,
     /// Estimator.
@@ -359,11 +363,18 @@ pub fn summary(mech: &Mechanism, rec: &CrankRecording, integrator: &Integrator, 
 fn feature(args: FeatureArgs) -> anyhow::Result<()> {
     let (file, report) = data::read(&args.data, &[args.column.as_str()])?;
     eprintln!("{}: {report}", args.data.display());
+    // Lost rows are missing samples here too (not a shorter recording), and refused alike.
+    let (file, bridged) = crate::io::timeline::bridge(&file, &report.timing, &Default::default());
     let x =
         file.column(&args.column).with_context(|| format!("{}: no column `{}`", args.data.display(), args.column))?;
-    if x.iter().any(|v| v.is_nan()) {
+    let first_missing = x.iter().position(|v| !v.is_finite()).map(|k| file.t[k]);
+    // A gap too long to bridge: its samples are missing from one period after the row before.
+    let unbridged = bridged.restarts.first().and_then(|r| file.t.get(r.row.checked_sub(1)?));
+    let unbridged = unbridged.map(|t| t + report.timing.dt_median);
+    if let Some(t) = first_missing.into_iter().chain(unbridged).reduce(f64::min) {
         anyhow::bail!(
-            "{}: column `{}` has missing samples; the spectrum needs them all",
+            "{}: column `{}` has sample(s) missing from t = {t:.6} s (rows lost from the time column or empty cells); \
+             the spectrum needs every sample",
             args.data.display(),
             args.column
         );
@@ -407,7 +418,11 @@ fn estimate(args: EstimateArgs) -> anyhow::Result<()> {
         Some(path) => CrankConfig::load(path)?,
         None => CrankConfig::default(),
     };
-    let rec = Recording::read(&args.data)?;
+    let (rec, notes) = Recording::read(&args.data, &config.timeline)?;
+    for line in notes {
+        eprintln!("{line}");
+    }
+    let on_data = |e: anyhow::Error| e.context(args.data.display().to_string());
     let truth = rec.truth_clearance.map(|c| describe_clearances(&c.map(|v| (v > 0.0).then_some(v))));
     let started = Instant::now();
     let rows = match args.method {
@@ -439,7 +454,10 @@ fn estimate(args: EstimateArgs) -> anyhow::Result<()> {
                     s.std * 1e3
                 );
             };
-            let run = ukf::run(&config, &rec, &opts, &mut progress)?;
+            let run = ukf::run(&config, &rec, &opts, &mut progress).map_err(|e| match e {
+                CrankError::Data(_) => on_data(e.into()),
+                e => e.into(),
+            })?;
             println!(
                 "ukf: {} windows of {} s, R std {:.1} rad/s², {} simulations, {} integration steps, wall {:.2} s",
                 run.steps.len(),
@@ -464,7 +482,7 @@ fn estimate(args: EstimateArgs) -> anyhow::Result<()> {
                     Ok(m) => Some(m),
                     Err(e) => match estimate::fast::FeatureMap::load(path) {
                         Ok(map) => {
-                            let est = map.estimate(&rec)?;
+                            let est = map.estimate(&rec).map_err(on_data)?;
                             println!(
                                 "fast (legacy impact-rate map, joint A): {} windows, {} feature operations",
                                 est.windows, est.operations
@@ -490,15 +508,19 @@ fn estimate(args: EstimateArgs) -> anyhow::Result<()> {
                     eprintln!("warning: {w}");
                 }
             }
-            let est = model.estimate(&rec)?;
+            let est = model.estimate(&rec).map_err(on_data)?;
             println!(
-                "fast: {} windows, {} operations, wall {:.3} s; joint scores A {:.2}, B {:.2}, C {:.2}",
+                "fast: {} windows, {} operations, wall {:.3} s; joint scores A {:.2}, B {:.2}, C {:.2}{}",
                 est.features.windows,
                 est.operations,
                 started.elapsed().as_secs_f64(),
                 est.scores[0],
                 est.scores[1],
-                est.scores[2]
+                est.scores[2],
+                match rec.missing() {
+                    0 => String::new(),
+                    m => format!("; {m} missing sample(s) skipped, their time counted by the release stage"),
+                }
             );
             let features_only = est.per_joint[est.joint.index()] * 1e3;
             match (est.features.release, est.release) {

@@ -1,5 +1,6 @@
-//! The slider-crank configuration: mechanism, release, contact material, sensor and integrator,
-//! read from TOML (`host-sim/configs/crank_paper.toml` is the paper's case written out).
+//! The slider-crank configuration: mechanism, release, contact material, sensor, integrator
+//! and the estimator's `[timeline]`, read from TOML (`host-sim/configs/crank_paper.toml` is the
+//! paper's case written out).
 //!
 //! Every table may be left out and then takes the paper's values; inside `[crank]` and `[rod]`
 //! all three numbers are required (a bar half described is more likely a typo than a wish).
@@ -13,10 +14,15 @@
 //! assert_eq!(c.rod.length, 0.12); // untouched tables keep the paper's values
 //! let err = CrankConfig::from_toml_str("[contact]\nrestitusion = 0.8\n").unwrap_err();
 //! assert!(err.to_string().contains("restitusion"));
+//! // `crank estimate` bridges gaps in `t` up to `[timeline] max_gap_s` (default 2 s).
+//! assert_eq!(CrankConfig::from_toml_str("[timeline]\nmax_gap_s = 0.5\n").unwrap().timeline.max_gap_s, 0.5);
+//! let err = CrankConfig::from_toml_str("[timeline]\nmax_gap_s = -1\n").unwrap_err();
+//! assert!(err.to_string().contains("timeline.max_gap_s"));
 //! ```
 
 use super::error::CrankError;
 use super::Joint;
+use crate::io::timeline::TimelineOptions;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -225,6 +231,9 @@ pub struct CrankConfig {
     pub sensor: SensorConfig,
     /// Integrator.
     pub integrator: IntegratorConfig,
+    /// How `crank estimate` puts a recording with gaps in its time column on one timeline
+    /// (`[timeline] max_gap_s`; see [`super::estimate::Recording::read`]).
+    pub timeline: TimelineOptions,
 }
 
 impl Default for CrankConfig {
@@ -238,6 +247,7 @@ impl Default for CrankConfig {
             contact: ContactConfig::default(),
             sensor: SensorConfig::default(),
             integrator: IntegratorConfig::default(),
+            timeline: TimelineOptions::default(),
         }
     }
 }
@@ -318,6 +328,6 @@ impl CrankConfig {
         if !(i.tolerance > 0.0 && i.tolerance <= 1e-2) {
             return Err(CrankError::Config(format!("integrator.tolerance = {} must be in (0, 0.01]", i.tolerance)));
         }
-        Ok(())
+        self.timeline.validate().map_err(CrankError::Config)
     }
 }

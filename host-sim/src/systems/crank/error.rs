@@ -19,6 +19,10 @@ pub enum CrankError {
         /// What the operating system said.
         source: std::io::Error,
     },
+    /// The recording cannot serve the estimator (a missing sample where every one is needed);
+    /// the caller names the file.
+    #[error("{0}")]
+    Data(String),
     /// A simulation option (duration, step, tolerance, initial state …) is invalid.
     #[error("invalid simulation option: {0}")]
     Options(String),

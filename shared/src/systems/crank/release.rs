@@ -23,6 +23,11 @@
 //! [`THRESHOLD_SIGMAS`] times the fit's own residual scatter (inflated for the extrapolation)
 //! is the contact. It works for the first [`RELEASE_SPAN`] only; about 40 operations per
 //! sample until the contact, nothing after.
+//!
+//! A missing sample (non-finite: a lost line or an empty cell, which the host's timeline and the
+//! node's line source both step as missing samples) is left out of the fit but its time is
+//! counted: the quadratic is in time, and `t₁` is a time, so a sample lost before the contact
+//! must not move the contact earlier by one period.
 
 use super::ClearanceFloat;
 
@@ -74,11 +79,13 @@ pub struct ReleaseFeatures<T> {
 /// ```
 #[derive(Debug, Clone)]
 pub struct ReleaseDetector<T> {
-    /// Scale of the fit's abscissa: `τ = k · step`, so `τ ≤ 1` over the span.
+    /// Scale of the fit's abscissa: `τ = index · step`, so `τ ≤ 1` over the span.
     step: T,
-    /// Samples examined at most.
+    /// Samples (missing ones included) examined at most.
     limit: usize,
-    /// Finite samples seen.
+    /// Samples seen, missing ones included: the time index of the next one.
+    index: usize,
+    /// Finite samples fitted.
     k: usize,
     /// The first sample: the fit runs on `y = x − x₀`.
     origin: T,
@@ -100,6 +107,7 @@ impl<T: ClearanceFloat> ReleaseDetector<T> {
         Self {
             step: T::of_f64(1.0 / limit.max(1) as f64),
             limit,
+            index: 0,
             k: 0,
             origin: z,
             s: [z; 5],
@@ -110,10 +118,29 @@ impl<T: ClearanceFloat> ReleaseDetector<T> {
         }
     }
 
-    /// Adds a sample (rad/s²). Non-finite samples are ignored (the recording's own counter
-    /// reports them); after the contact or the span, samples cost a comparison.
+    /// Adds a sample (rad/s²). A non-finite sample is a missing one: not fitted (the
+    /// recording's own counter reports it), but its time passes. After the contact or the
+    /// span, samples cost a comparison.
+    ///
+    /// ```
+    /// use edgekf::systems::crank::ReleaseDetector;
+    /// // The contact at sample 71, with samples 30 and 50 missing: still seen at 7.1 ms.
+    /// let mut d = ReleaseDetector::<f64>::new(10_000.0);
+    /// for k in 0..200 {
+    ///     let wobble = if k % 2 == 0 { 0.5 } else { -0.5 };
+    ///     let x = if k == 71 { 9_000.0 } else { -27.0 + wobble };
+    ///     d.push(if k == 30 || k == 50 { f64::NAN } else { x });
+    /// }
+    /// assert!((d.features().unwrap().contact - 71e-4).abs() < 1e-12);
+    /// assert_eq!(d.examined(), 69); // samples fitted: 71 before the contact, 2 missing
+    /// ```
     pub fn push(&mut self, x: T) {
-        if self.found.is_some() || self.k >= self.limit || !x.is_finite() {
+        if self.found.is_some() || self.index >= self.limit {
+            return;
+        }
+        let index = self.index;
+        self.index = index + 1;
+        if !x.is_finite() {
             return;
         }
         let k = self.k;
@@ -121,7 +148,7 @@ impl<T: ClearanceFloat> ReleaseDetector<T> {
             self.origin = x;
         }
         let y = x - self.origin;
-        let tau = T::of_f64(k as f64) * self.step;
+        let tau = T::of_f64(index as f64) * self.step;
         if k >= MIN_FIT {
             if let Some((beta, sigma)) = self.fit() {
                 let n = T::of_f64(k as f64);
@@ -129,7 +156,8 @@ impl<T: ClearanceFloat> ReleaseDetector<T> {
                 let inflate = (T::one() + T::of_f64(9.0) / n).sqrt();
                 if (y - predicted).abs() > T::of_f64(THRESHOLD_SIGMAS) * sigma * inflate {
                     let release_alpha = self.origin + self.ty[0] / n;
-                    self.found = Some(ReleaseFeatures { contact: n / self.rate, release_alpha });
+                    let contact = T::of_f64(index as f64) / self.rate;
+                    self.found = Some(ReleaseFeatures { contact, release_alpha });
                     return;
                 }
             }
@@ -174,7 +202,7 @@ impl<T: ClearanceFloat> ReleaseDetector<T> {
         self.found
     }
 
-    /// Samples examined (before the contact, or the whole span).
+    /// Samples fitted (the finite ones before the contact, or over the whole span).
     pub fn examined(&self) -> usize {
         self.k
     }

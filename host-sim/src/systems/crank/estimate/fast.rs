@@ -4,7 +4,8 @@
 //!
 //! The single-feature, joint-A-only predecessor of [`super::model`] (which `edgekf crank
 //! estimate --method fast` now uses); kept for old `--model` files with `impact_rate` and
-//! `clearance`.
+//! `clearance`. Its windows' statistics (the median `|Δα|`, the impact crossings) need every
+//! sample, so a recording with a missing one in a window it uses is refused, naming its time.
 
 use super::{EstimateRow, Recording};
 
@@ -27,9 +28,14 @@ pub struct Features {
     pub operations: u64,
 }
 
+/// Samples per window of `window_s` at `rate` Hz (at least 8).
+fn window_len(rate: f64, window_s: f64) -> usize {
+    ((window_s * rate).round() as usize).max(8)
+}
+
 /// Features of `x` sampled at `rate` Hz, averaged over windows of `window_s`.
 pub fn features(x: &[f64], rate: f64, window_s: f64) -> Features {
-    let n = ((window_s * rate).round() as usize).max(8);
+    let n = window_len(rate, window_s);
     let mut f = Features::default();
     let mut ops = 0u64;
     for w in x.chunks_exact(n) {
@@ -160,9 +166,15 @@ impl FeatureMap {
         y.exp().clamp(1e-5, 1e-3)
     }
 
-    /// Estimates the clearance at A from a recording (0.25 s windows).
+    /// Estimates the clearance at A from a recording (0.25 s windows); refuses one with a
+    /// missing sample in those windows.
     pub fn estimate(&self, rec: &Recording) -> anyhow::Result<FastEstimate> {
         self.validate().map_err(|e| anyhow::anyhow!("feature map: {e}"))?;
+        let n = window_len(rec.sample_rate, 0.25);
+        let why = "the legacy impact-rate map takes statistics of whole windows and needs every sample; \
+                   the built-in model (`--method fast` without `--model`) or one from `edgekf crank train` \
+                   steps through missing ones";
+        rec.require_every_sample(rec.crank_alpha.len() / n * n, why).map_err(anyhow::Error::msg)?;
         let f = features(&rec.crank_alpha, rec.sample_rate, 0.25);
         if f.windows == 0 {
             anyhow::bail!("the recording is shorter than one 0.25 s window");

@@ -37,6 +37,14 @@
 //! columns, when present, are only reported) and write one [`EstimateRow`] per window
 //! ([`write_estimates`]: columns `t, clearance_A, clearance_B, clearance_C` in m, 0 for a
 //! joint judged tight), the last row being the estimate for the whole recording.
+//!
+//! Lost samples, as on every system, are missing samples: [`Recording::read`] puts the rows lost
+//! from the time column back as empty cells ([`crate::io::timeline`]), so a deleted row and an
+//! emptied cell give the same estimate. [`model`] steps through them as the node does (the
+//! window statistics skip them, the release detector counts their time). [`ukf`] and [`fast`]
+//! compare spectra and impact statistics of whole windows, which a hole changes (a hole is not
+//! an impact-free stretch), so they refuse a recording with a missing sample in a window they use
+//! ([`Recording::require_every_sample`]), naming its time, rather than answer wrongly.
 
 pub mod chip;
 pub mod fast;
@@ -50,7 +58,7 @@ pub mod ukf;
 use super::simulate::CrankRecording;
 use super::Joint;
 use crate::io::data::{self, DataError};
-use crate::io::timeline::{bridge, TimelineOptions};
+use crate::io::timeline::{bridge, Bridging, TimelineOptions};
 use std::path::Path;
 
 /// The measured channel of a recording.
@@ -58,7 +66,7 @@ use std::path::Path;
 pub struct Recording {
     /// Sample times, s (uniform).
     pub t: Vec<f64>,
-    /// Measured crank angular acceleration, rad/s².
+    /// Measured crank angular acceleration, rad/s²; NaN for a missing sample.
     pub crank_alpha: Vec<f64>,
     /// Sample rate, Hz.
     pub sample_rate: f64,
@@ -77,36 +85,92 @@ impl Recording {
         }
     }
 
-    /// Reads `t` and `crank_alpha` (and `truth_clearance_A/B/C` if present) from a data CSV.
-    /// Missing samples are refused: the spectra need every sample.
-    pub fn read(path: &Path) -> anyhow::Result<Self> {
+    /// Reads `t` and `crank_alpha` (and `truth_clearance_A/B/C` if present) from a data CSV, on
+    /// one timeline ([`bridge`]): rows lost from the time column come back as missing samples
+    /// (NaN), exactly like empty cells, so the estimators see every sample at its time.
+    ///
+    /// A gap longer than `timeline.max_gap_s` (where the other systems restart their filters)
+    /// ends the recording: the estimate is for one run from its release (the release stage times
+    /// the first contact from the first sample, and the window features were learned on runs
+    /// from release), so the rows after it are not used, and a notice says how many.
+    ///
+    /// Returns the recording and the lines to show the user: the file's report, then the
+    /// timeline's notices.
+    pub fn read(path: &Path, timeline: &TimelineOptions) -> anyhow::Result<(Self, Vec<String>)> {
         let names = ["crank_alpha", "truth_clearance_A", "truth_clearance_B", "truth_clearance_C"];
         // The data error already names its cause and file.
         let (file, report) = data::read(path, &names).map_err(|e| anyhow::anyhow!("{e}"))?;
-        let (file, timeline) = bridge(&file, &report.timing, &TimelineOptions::default());
-        if let Some(gap) = timeline.filled.first().map(|r| r.start).or(timeline.restarts.first().map(|r| r.row)) {
-            anyhow::bail!(
-                "{}: samples are lost in the time column before t = {:.6} s; the spectra need every sample",
-                path.display(),
-                file.t.get(gap).copied().unwrap_or(f64::NAN)
-            );
+        let (file, bridged) = bridge(&file, &report.timing, timeline);
+        let end = bridged.restarts.first().map_or(file.len(), |r| r.row);
+        let mut notes = vec![format!("{}: {report}", path.display())];
+        notes.extend(Self::used(&bridged, end).notices().into_iter().map(|n| format!("notice: {n}")));
+        if let Some(r) = bridged.restarts.first() {
+            notes.push(format!(
+                "notice: timeline: a {:.3} s gap before t = {:.6} s is longer than timeline.max_gap_s; the estimate is \
+                 for one run from its release, so it ends there: {} row(s) from t = {:.6} s on are not used",
+                r.gap_s,
+                r.t,
+                file.len() - end,
+                r.t
+            ));
         }
         let alpha =
             file.column("crank_alpha").ok_or_else(|| anyhow::anyhow!("{}: no column `crank_alpha`", path.display()))?;
-        if alpha.iter().any(|v| !v.is_finite()) {
-            anyhow::bail!("{}: column `crank_alpha` has missing samples; the spectra need them all", path.display());
-        }
         let truth: Vec<Option<f64>> = Joint::ALL
             .iter()
-            .map(|j| file.column(&format!("truth_clearance_{j}")).and_then(|c| c.first().copied()))
+            .map(|j| {
+                let column = file.column(&format!("truth_clearance_{j}"))?;
+                column.iter().copied().find(|v| v.is_finite())
+            })
             .collect();
         let truth_clearance = truth.iter().all(Option::is_some).then(|| [0, 1, 2].map(|i| truth[i].unwrap_or(0.0)));
-        Ok(Self {
-            t: file.t.clone(),
-            crank_alpha: alpha.to_vec(),
+        let rec = Self {
+            t: file.t[..end].to_vec(),
+            crank_alpha: alpha[..end].to_vec(),
             sample_rate: report.timing.sample_rate,
             truth_clearance,
-        })
+        };
+        Ok((rec, notes))
+    }
+
+    /// What the bridging did to the rows before `end` (the part of the file used).
+    fn used(bridged: &Bridging, end: usize) -> Bridging {
+        let filled: Vec<_> = bridged.filled.iter().filter(|r| r.end <= end).cloned().collect();
+        Bridging {
+            inserted: filled.iter().map(ExactSizeIterator::len).sum(),
+            gaps: filled.len(),
+            filled,
+            restarts: Vec::new(),
+            slow_channels: bridged.slow_channels.clone(),
+        }
+    }
+
+    /// Missing samples (lost from the time column, or empty or NaN cells).
+    pub fn missing(&self) -> usize {
+        self.crank_alpha.iter().filter(|v| !v.is_finite()).count()
+    }
+
+    /// For an estimator that needs every one of the first `samples` samples: an error naming
+    /// the first missing one's time, then `why` (why it needs them, and what to use instead).
+    ///
+    /// ```
+    /// use edgekf_sim::systems::crank::estimate::Recording;
+    /// let rec = Recording { t: vec![0.0, 0.1, 0.2, 0.3], crank_alpha: vec![1.0, 2.0, 3.0, f64::NAN],
+    ///     sample_rate: 10.0, truth_clearance: None };
+    /// assert!(rec.require_every_sample(3, "").is_ok()); // the 4th sample is not used
+    /// let e = rec.require_every_sample(4, "the spectra need every sample").unwrap_err();
+    /// assert!(e.contains("t = 0.300000 s") && e.ends_with("; the spectra need every sample"), "{e}");
+    /// ```
+    pub fn require_every_sample(&self, samples: usize, why: &str) -> Result<(), String> {
+        let used = &self.crank_alpha[..samples.min(self.crank_alpha.len())];
+        match used.iter().position(|v| !v.is_finite()) {
+            None => Ok(()),
+            Some(k) => Err(format!(
+                "sample(s) missing from t = {:.6} s ({} in all: rows lost from the time column or empty cells); {why}",
+                self.t.get(k).copied().unwrap_or(f64::NAN),
+                self.missing()
+            )),
+        }
     }
 
     /// Samples in a window of `window_s` seconds (0 if not representable).

@@ -65,7 +65,9 @@ pub const RELEASE_OPS_PER_SAMPLE: u64 = 42;
 /// is dropped). `windows == 0` if `x` is shorter than one window.
 ///
 /// The computation is the chip's ([`edgekf::systems::crank::CrankFeatures`], streaming, one sample
-/// at a time) in `f64`: one implementation for the host, the training and the firmware.
+/// at a time) in `f64`: one implementation for the host, the training and the firmware. A
+/// missing sample (NaN) is skipped by the window statistics (a window closes after `n` usable
+/// samples) and its time is counted by the release detector, as on the node.
 pub fn feature_vector(x: &[f64], rate: f64, window_s: f64) -> FeatureVector {
     let n = edgekf::systems::crank::window_samples(window_s, rate);
     let Ok(mut f) = edgekf::systems::crank::CrankFeatures::new(vec![0.0; n.saturating_sub(1)], n, rate) else {

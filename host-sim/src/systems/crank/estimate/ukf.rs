@@ -54,6 +54,12 @@
 //! per 10 s recording (~20 s on two threads), against 3 M for the paper's single-simulation
 //! filter ([`UkfOptions::paper`], `edgekf crank estimate --method ukf --paper`), which reached
 //! only ±25 % (4 s) and ±35 % (10 s). The recording must start at release, like the paper's.
+//!
+//! The recording's windows must be whole: a missing sample (a row lost from the time column, or
+//! an empty cell) is refused with its time ([`CrankError::Data`]), because a window's spectrum
+//! with a hole in it is not the spectrum of that window, and the release window, which carries
+//! almost all the information, cannot be left out. The fast estimator ([`super::model`]) steps
+//! through missing samples.
 
 use super::{EstimateRow, Recording};
 use crate::systems::crank::feature::spectral_feature;
@@ -330,6 +336,9 @@ pub fn run(
             opts.window
         )));
     }
+    let why = "the UKF compares the spectra of whole windows and needs every sample; \
+               `--method fast` (the learned model) steps through missing ones";
+    rec.require_every_sample(rec.crank_alpha.len() / n * n, why).map_err(CrankError::Data)?;
     let (lo, hi) = opts.bounds;
     if !(lo > 0.0
         && hi > lo
