@@ -8,7 +8,8 @@
 //! and counted, never silently lost.
 
 use crate::virtual_adxl355::{CsvColumns, CsvError, FeedSample, SampleFeed};
-use edgekf::csv_header::Header;
+use edgekf::csv_header::{fields, Header};
+use edgekf::decimal::{parse_f32, parse_f64};
 
 /// Anything that yields bytes in chunks.
 pub trait ByteSource {
@@ -219,7 +220,7 @@ impl<S: ByteSource, const M: usize> ChannelReader<S, M> {
             Some(Err(BadLine)) => return Err(FeedError::BadHeader),
             Some(Ok(line)) => {
                 let columns = |e| FeedError::Columns(CsvError::Header(e));
-                let header = Header::parse(line.split(','), MAX_COLUMNS).map_err(columns)?;
+                let header = Header::parse(fields(line), MAX_COLUMNS).map_err(columns)?;
                 // Indices are below MAX_COLUMNS (128): they fit a u8.
                 let index = header.find_all(names).map_err(columns)?.map(|i| u8::try_from(i).unwrap_or(u8::MAX));
                 (index, header.width())
@@ -280,12 +281,12 @@ impl<S: ByteSource, const M: usize> ChannelReader<S, M> {
             };
             let mut t = None;
             let mut values = [f32::NAN; M];
-            let mut fields = 0;
+            let mut width = 0;
             let mut bad = false;
-            for (i, field) in line.split(',').enumerate() {
-                fields = i + 1;
+            for (i, field) in fields(line).enumerate() {
+                width = i + 1;
                 if timed && i == 0 {
-                    t = field.trim().parse::<f64>().ok().filter(|v| v.is_finite());
+                    t = parse_f64(field.trim()).filter(|v| v.is_finite());
                 }
                 if bad {
                     continue;
@@ -295,13 +296,13 @@ impl<S: ByteSource, const M: usize> ChannelReader<S, M> {
                     if self.empty_cells && (cell.is_empty() || cell.eq_ignore_ascii_case("nan")) {
                         continue; // stays NaN: no reading in this row
                     }
-                    match (field.trim().parse::<f32>(), values.get_mut(k)) {
-                        (Ok(v), Some(slot)) if v.is_finite() => *slot = v,
+                    match (parse_f32(cell), values.get_mut(k)) {
+                        (Some(v), Some(slot)) if v.is_finite() => *slot = v,
                         _ => bad = true,
                     }
                 }
             }
-            if bad || fields != self.width {
+            if bad || width != self.width {
                 self.bad_lines = self.bad_lines.saturating_add(1);
                 return Some((t, Err(BadLine)));
             }

@@ -14,7 +14,10 @@
 //! * [`systems`]: each system's chip code, one folder per system: the harmonic-force oscillator
 //!   ([`systems::oscillator`]) and the slider-crank's joint clearance ([`systems::crank`]);
 //! * [`csv_header`]: the data contract's header rules (BOM, `t` first, no repeated names), one
-//!   parser for the host's reader and the node's;
+//!   parser for the host's reader and the node's, and [`csv_header::fields`], its panic-free
+//!   field splitter;
+//! * [`decimal`]: decimal text to `f32`/`f64` rounded as `core` does, without `core`'s panic
+//!   paths, so the node's CSV readers pass the link-time no-panic proof;
 //! * [`export`]: models and steady-state gains written as Rust constants for the firmware;
 //! * [`residual`]: innovation diagnostics cheap enough for the chip: running mean and variance,
 //!   NIS with exact χ² bounds, Ljung–Box whiteness over a window, a Welch innovation spectrum
@@ -36,6 +39,7 @@
 #![forbid(unsafe_code)]
 
 pub mod csv_header;
+pub mod decimal;
 pub mod export;
 pub mod filter;
 pub mod linalg;

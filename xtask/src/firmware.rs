@@ -26,32 +26,24 @@ pub enum Proof {
 /// Builds `image`, proves it panic-free as its row says ([`PanicProof`]) and returns the ELF
 /// path. A failed proof lists the panic paths that survived ([`crate::panics`]).
 pub fn build(image: &Image) -> Result<PathBuf> {
-    let allowed = match image.proof {
-        PanicProof::Link => match build_with(image, Proof::NoPanic) {
-            Ok(elf) => return Ok(elf),
-            Err(e) => {
-                eprintln!(
-                    "\nxtask: {} did not build with the no-panic proof (feature no-panic-proof). If the \
-                     link failed with `undefined reference to ... panic-never ...`, a panic path \
-                     survived optimisation; building the ordinary image to find it",
-                    image.bin
-                );
-                let elf = build_with(image, Proof::Ordinary).context("the ordinary build failed too")?;
-                let sites = crate::panics::sites(&elf)?;
-                return if sites.is_empty() { Err(e) } else { surviving(image, &elf, &sites) };
+    let PanicProof::Link = image.proof;
+    match build_with(image, Proof::NoPanic) {
+        Ok(elf) => Ok(elf),
+        Err(e) => {
+            eprintln!(
+                "\nxtask: {} did not build with the no-panic proof (feature no-panic-proof). If the \
+                 link failed with `undefined reference to ... panic-never ...`, a panic path \
+                 survived optimisation; building the ordinary image to find it",
+                image.bin
+            );
+            let elf = build_with(image, Proof::Ordinary).context("the ordinary build failed too")?;
+            let sites = crate::panics::sites(&elf)?;
+            if sites.is_empty() {
+                Err(e)
+            } else {
+                surviving(image, &elf, &sites)
             }
-        },
-        PanicProof::Except(allowed) => allowed,
-    };
-    let elf = build_with(image, Proof::Ordinary)?;
-    let stray: Vec<_> = crate::panics::sites(&elf)?
-        .into_iter()
-        .filter(|s| !allowed.iter().any(|a| s.function.starts_with(a)))
-        .collect();
-    if stray.is_empty() {
-        Ok(elf)
-    } else {
-        surviving(image, &elf, &stray)
+        }
     }
 }
 

@@ -55,27 +55,11 @@ pub enum Role {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum PanicProof {
     /// At link time: built with feature `no-panic-proof`, so a surviving panic path fails the
-    /// link.
+    /// link. Every image takes it: the HIL images read `hil_input.csv` with the shared crate's
+    /// panic-free CSV fields and number parser (`edgekf::csv_header::fields`,
+    /// `edgekf::decimal`), not `core`'s.
     Link,
-    /// Built with the ordinary panic handler, and every panic path in its disassembly must lie
-    /// in one of these functions (symbol prefixes). For the HIL images, which read
-    /// `hil_input.csv` with `core`'s `f32` parser: its slow path keeps bounds checks that no
-    /// caller can remove, so those images cannot take the link proof yet.
-    Except(&'static [&'static str]),
 }
-
-/// The panic paths the HIL images may keep: `core`'s float parser and string splitting, used
-/// by test equipment only (reading `hil_input.csv` over semihosting; the board reads none).
-pub const CORE_CSV_PARSING: &[&str] = &[
-    "<core::num::imp::dec2flt::",
-    "core::num::imp::dec2flt::",
-    "<f32 as core::str::traits::FromStr>::from_str",
-    "<core::iter::adapters::enumerate::Enumerate<core::str::iter::Split<char>>",
-    "<core::str::pattern::CharSearcher as core::str::pattern::Searcher>::next_match",
-    // The same `Split<char>::next`, inlined into the header rules' field iterator
-    // (`shared/src/csv_header.rs`, `self.fields.next()`).
-    "<edgekf::csv_header::Names<core::str::iter::Split<char>> as core::iter::traits::iterator::Iterator>::next",
-];
 
 /// One firmware image.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -132,7 +116,7 @@ pub const IMAGES: [Image; 8] = [
         features: "qemu",
         what: "the QEMU image (harmonic force on a virtual ADXL355)",
         role: Role::Hil { env: "EDGEKF_FW_ELF", tests: &["hil"] },
-        proof: PanicProof::Except(CORE_CSV_PARSING),
+        proof: PanicProof::Link,
         budgets: &[
             ("harmonic_step", 4, 1, 5_000),
             ("adxl_poll", 16, 1, 10_000),
@@ -151,7 +135,7 @@ pub const IMAGES: [Image; 8] = [
         features: "qemu",
         what: "the rotor virtual-sensing QEMU image",
         role: Role::Hil { env: "EDGEKF_ROTOR_ELF", tests: &["hil"] },
-        proof: PanicProof::Except(CORE_CSV_PARSING),
+        proof: PanicProof::Link,
         budgets: &[("rotor_node_step", 20, 4, 40_000), ("rotor_node_steady", 20, 4, 8_000)],
         real_time: Some(RealTime {
             rate_hz: 1000,
@@ -165,7 +149,7 @@ pub const IMAGES: [Image; 8] = [
         features: "qemu",
         what: "the slider-crank clearance QEMU image",
         role: Role::Hil { env: "EDGEKF_CRANK_ELF", tests: &["crank_node"] },
-        proof: PanicProof::Except(CORE_CSV_PARSING),
+        proof: PanicProof::Link,
         budgets: &[
             ("crank_sample", 2500, 1, 200),
             ("crank_window", 2500, 1, 750_000),
@@ -187,7 +171,7 @@ pub const IMAGES: [Image; 8] = [
         features: "qemu",
         what: "the underwater-vehicle thruster-health QEMU image",
         role: Role::Hil { env: "EDGEKF_UUV_ELF", tests: &["uuv_node"] },
-        proof: PanicProof::Except(CORE_CSV_PARSING),
+        proof: PanicProof::Link,
         budgets: &[("uuv_step", 20, 6, 1_100_000), ("uuv_step_dvl", 20, 6, 1_200_000)],
         real_time: Some(RealTime {
             rate_hz: 50,
@@ -201,7 +185,7 @@ pub const IMAGES: [Image; 8] = [
         features: "qemu",
         what: "the boom tip-vibration QEMU image",
         role: Role::Hil { env: "EDGEKF_BOOM_ELF", tests: &["boom_node"] },
-        proof: PanicProof::Except(CORE_CSV_PARSING),
+        proof: PanicProof::Link,
         budgets: &[("boom_step", 14, 2, 65_000), ("boom_rereduce", 14, 2, 18_000_000)],
         real_time: Some(RealTime {
             rate_hz: 100,

@@ -359,7 +359,7 @@ mod tests {
         let mut systems = 0;
         for entry in std::fs::read_dir(&dir).unwrap() {
             let path = entry.unwrap().path();
-            let stem = path.file_stem().unwrap().to_str().unwrap().to_owned();
+            let stem = path.file_stem().unwrap().to_str().unwrap();
             if stem == "mod" {
                 continue;
             }

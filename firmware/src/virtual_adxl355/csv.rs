@@ -10,7 +10,8 @@
 
 use core::fmt;
 
-use edgekf::csv_header::{Header, HeaderError};
+use edgekf::csv_header::{fields, Header, HeaderError};
+use edgekf::decimal::parse_f32;
 
 use super::feed::FeedSample;
 
@@ -113,7 +114,7 @@ impl CsvColumns {
     /// Learns the layout from the header line, by the shared header rules (a BOM and spaces
     /// dropped, `t` first, no repeated names) and at most [`MAX_CSV_COLUMNS`] columns.
     pub fn from_header(line: &str) -> Result<Self, CsvError> {
-        let header = Header::parse(line.split(','), MAX_CSV_COLUMNS).map_err(CsvError::Header)?;
+        let header = Header::parse(fields(line), MAX_CSV_COLUMNS).map_err(CsvError::Header)?;
         let accel = header.find_all(["ax", "ay", "az"]).map_err(CsvError::Header)?;
         // Every index and count is below MAX_CSV_COLUMNS (64), so the conversions are exact.
         let small = |v: usize| u8::try_from(v).unwrap_or(u8::MAX);
@@ -171,13 +172,13 @@ impl CsvColumns {
         let mut t = None;
         let mut accel = [None; 3];
         let mut sample = FeedSample::default();
-        let mut fields: u8 = 0;
-        for (index, field) in line.split(',').enumerate() {
+        let mut seen: u8 = 0;
+        for (index, field) in fields(line).enumerate() {
             let column = u8::try_from(index).unwrap_or(u8::MAX);
             if column >= self.count {
                 return Err(CsvError::BadField { column });
             }
-            fields = column.saturating_add(1);
+            seen = column.saturating_add(1);
             let field = field.trim();
             let bad = CsvError::BadField { column };
             match self.role(column) {
@@ -191,8 +192,8 @@ impl CsvColumns {
                 Role::Ignored => {}
             }
         }
-        if fields < self.count {
-            return Err(CsvError::BadField { column: fields });
+        if seen < self.count {
+            return Err(CsvError::BadField { column: seen });
         }
         let t = t.ok_or(CsvError::BadField { column: 0 })?;
         for ((slot, value), column) in sample.accel.iter_mut().zip(accel).zip(self.accel) {
@@ -204,7 +205,7 @@ impl CsvColumns {
 
 /// A finite `f32`, or `None`.
 fn parse_finite(field: &str) -> Option<f32> {
-    field.parse::<f32>().ok().filter(|v| v.is_finite())
+    parse_f32(field).filter(|v| v.is_finite())
 }
 
 /// A whole number in `0..=max` written as an integer or an integral float; empty means 0.

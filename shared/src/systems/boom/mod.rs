@@ -21,6 +21,8 @@ mod paper;
 mod reduced;
 
 pub use ar::{Ar2, ArError};
-pub use model::{slot, ExtraMode, LastStep, ModelError, ModelEstimate, ModelEstimator, ModelSettings, MEASUREMENTS, STATES};
+pub use model::{
+    slot, ExtraMode, LastStep, ModelError, ModelEstimate, ModelEstimator, ModelSettings, MEASUREMENTS, STATES,
+};
 pub use paper::{PaperEstimate, PaperEstimator, PaperSettings, SMOOTHING_MAX};
 pub use reduced::{BoomConstants, BoomSection, Mode, ReducedBoom, ReducedError, BASIS, MAX_SECTIONS, MODES};
