@@ -16,7 +16,7 @@ pub fn problems(row: &SoakRow, f: &SoakFrame) -> Option<String> {
     if f.not_positive_definite != 0 {
         p.push(format!("{} of {} covariance checks not positive definite", f.not_positive_definite, f.checks));
     }
-    if !(f.worst_asymmetry <= 1e-5) {
+    if f.worst_asymmetry.is_nan() || f.worst_asymmetry > 1e-5 {
         p.push(format!("covariance asymmetry {:e}", f.worst_asymmetry));
     }
     if f.covariance_resets > f.steps / 1_000_000 {
@@ -29,14 +29,14 @@ pub fn problems(row: &SoakRow, f: &SoakFrame) -> Option<String> {
         p.push(format!("{} estimates out of bounds", f.out_of_bounds));
     }
     if let Some(limit) = row.nis_limit {
-        if !(f.worst_nis < limit) {
+        if f.worst_nis.is_nan() || f.worst_nis >= limit {
             p.push(format!("worst block NIS mean {} ≥ {limit}", f.worst_nis));
         }
     }
-    if !(f.worst_error < row.error_limit) {
+    if f.worst_error.is_nan() || f.worst_error >= row.error_limit {
         p.push(format!("worst block error {} ≥ {}", f.worst_error, row.error_limit));
     }
-    if !(f.worst_drift < 1e-3) {
+    if f.worst_drift.is_nan() || f.worst_drift >= 1e-3 {
         p.push(format!("features {} from their f64 accumulation", f.worst_drift));
     }
     (!p.is_empty()).then(|| format!("soak {}: {}; {f:?}", row.name, p.join(", ")))
