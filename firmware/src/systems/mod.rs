@@ -4,6 +4,7 @@
 //!
 //! * [`oscillator`]: the harmonic force driving a structural mode, from one ADXL355 axis;
 //! * [`rotor`]: rotor virtual sensing (disk motion and unbalance forces from four probes);
+//! * [`rotor_accel`]: the same from four accelerometer axes (28 states);
 //! * [`crank`]: slider-crank joint clearance from the crank angular acceleration;
 //! * [`uuv`]: an underwater vehicle's thruster health from its IMU, depth, compass and DVL;
 //! * [`boom`]: a telescoping boom's tip vibration from a tip gyro and a root inclinometer.
@@ -12,4 +13,5 @@ pub mod boom;
 pub mod crank;
 pub mod oscillator;
 pub mod rotor;
+pub mod rotor_accel;
 pub mod uuv;

@@ -13,7 +13,7 @@ use crate::hil::{HilError, HilImage, HilNode};
 use crate::line_feed::{ByteSource, ChannelReader};
 use crate::node::{Innovation, Node, NodeEstimator, Poll};
 use crate::source::ChannelSource;
-use edgekf::filter::{FilterHealth, LowRankKalmanFilter};
+use edgekf::filter::{FilterHealth, LowRankDesign, LowRankKalmanFilter};
 use nalgebra::{ArrayStorage, SMatrix, SVector};
 
 /// The exported model, steady state, prior and start-up term, as the host wrote them (`f64`).
@@ -81,7 +81,7 @@ pub const START_RANK: usize = 12;
 /// and `LinearModel::cast` do, so the numbers are bit-identical to a run-time conversion (a
 /// test below checks). Start-up does not convert in software `f64`, and the image carries the
 /// `f32` matrices in flash instead of the `f64` ones.
-const fn f32_matrix<const R: usize, const C: usize>(rows: &[[f64; C]; R]) -> SMatrix<f32, R, C> {
+pub(crate) const fn f32_matrix<const R: usize, const C: usize>(rows: &[[f64; C]; R]) -> SMatrix<f32, R, C> {
     // nalgebra stores column-major.
     let mut cols = [[0.0f32; R]; C];
     let mut i = 0;
@@ -96,50 +96,65 @@ const fn f32_matrix<const R: usize, const C: usize>(rows: &[[f64; C]; R]) -> SMa
     SMatrix::from_array_storage(ArrayStorage(cols))
 }
 
-/// The compiled-in filter design and output rows in `f32`.
-mod f32_constants {
-    use super::constants::*;
-    use super::{f32_matrix, SMatrix, START_RANK, STATES};
-    use edgekf::filter::LowRankDesign;
-
-    pub const DESIGN: LowRankDesign<f32, STATES, 4, START_RANK> = LowRankDesign {
-        a: f32_matrix(&ROTOR_A),
-        c: f32_matrix(&ROTOR_C),
-        closed: f32_matrix(&ROTOR_CLOSED),
-        pct: f32_matrix(&ROTOR_PCT),
-        s: f32_matrix(&ROTOR_S),
-        s_inv: f32_matrix(&ROTOR_S_INV),
-        u0: f32_matrix(&ROTOR_U0),
-        signs: f32_matrix(&ROTOR_SIGNS),
-    };
+/// A compiled-in filter design and its output rows in `f32`, built at compile time from a
+/// generated file's `f64` constants ([`rotor_design!`]).
+pub struct RotorDesign<const N: usize, const R: usize> {
+    /// The start-up filter and the steady state it retires to.
+    pub filter: LowRankDesign<f32, N, 4, R>,
     /// The disk rows then the force rows, transposed: the outputs are one product `Oᵀ x`.
-    pub const OUTPUTS_T: SMatrix<f32, STATES, 8> = outputs_t(&ROTOR_DISK, &ROTOR_FORCE);
-
-    const fn outputs_t(disk: &[[f64; STATES]; 4], force: &[[f64; STATES]; 4]) -> SMatrix<f32, STATES, 8> {
-        let mut cols = [[0.0f32; STATES]; 8];
-        let mut i = 0;
-        while i < STATES {
-            let mut j = 0;
-            while j < 4 {
-                cols[j][i] = disk[j][i] as f32;
-                cols[4 + j][i] = force[j][i] as f32;
-                j += 1;
-            }
-            i += 1;
-        }
-        SMatrix::from_array_storage(nalgebra::ArrayStorage(cols))
-    }
+    pub outputs_t: SMatrix<f32, N, 8>,
 }
 
-/// The filter with its output rows.
-pub struct RotorEstimator {
-    filter: LowRankKalmanFilter<f32, STATES, 4, START_RANK>,
+/// The disk rows then the force rows of a generated file, transposed, in `f32`.
+pub(crate) const fn outputs_t<const N: usize>(disk: &[[f64; N]; 4], force: &[[f64; N]; 4]) -> SMatrix<f32, N, 8> {
+    let mut cols = [[0.0f32; N]; 8];
+    let mut i = 0;
+    while i < N {
+        let mut j = 0;
+        while j < 4 {
+            cols[j][i] = disk[j][i] as f32;
+            cols[4 + j][i] = force[j][i] as f32;
+            j += 1;
+        }
+        i += 1;
+    }
+    SMatrix::from_array_storage(ArrayStorage(cols))
+}
+
+/// The [`RotorDesign`] of the constants module `$m` (a generated file of `edgekf rotor export`
+/// included), at compile time.
+macro_rules! rotor_design {
+    ($m:ident) => {
+        $crate::systems::rotor::RotorDesign {
+            filter: edgekf::filter::LowRankDesign {
+                a: $crate::systems::rotor::f32_matrix(&$m::ROTOR_A),
+                c: $crate::systems::rotor::f32_matrix(&$m::ROTOR_C),
+                closed: $crate::systems::rotor::f32_matrix(&$m::ROTOR_CLOSED),
+                pct: $crate::systems::rotor::f32_matrix(&$m::ROTOR_PCT),
+                s: $crate::systems::rotor::f32_matrix(&$m::ROTOR_S),
+                s_inv: $crate::systems::rotor::f32_matrix(&$m::ROTOR_S_INV),
+                u0: $crate::systems::rotor::f32_matrix(&$m::ROTOR_U0),
+                signs: $crate::systems::rotor::f32_matrix(&$m::ROTOR_SIGNS),
+            },
+            outputs_t: $crate::systems::rotor::outputs_t(&$m::ROTOR_DISK, &$m::ROTOR_FORCE),
+        }
+    };
+}
+pub(crate) use rotor_design;
+
+/// The probes' design (`generated/rotor.rs`).
+pub const DESIGN: RotorDesign<STATES, START_RANK> = rotor_design!(constants);
+
+/// The filter with its output rows: `N` states, start-up rank `R` (the probes' model by
+/// default; [`super::rotor_accel`] runs the accelerometers' 28 states).
+pub struct RotorEstimator<const N: usize = STATES, const R: usize = START_RANK> {
+    filter: LowRankKalmanFilter<f32, N, 4, R>,
     /// Samples stepped so far (saturating).
     samples: u32,
     /// Sample at which the start-up term is dropped (`None`: never).
     switch_at: Option<u32>,
     /// `[disk; force]ᵀ`.
-    outputs_t: SMatrix<f32, STATES, 8>,
+    outputs_t: SMatrix<f32, N, 8>,
 }
 
 impl Default for RotorEstimator {
@@ -174,12 +189,19 @@ impl RotorEstimator {
     /// assert!(!est.is_steady());
     /// ```
     pub fn with_switch_at(switch_at: Option<u32>) -> Self {
-        use f32_constants::*;
+        Self::from_design(&DESIGN, switch_at)
+    }
+}
+
+impl<const N: usize, const R: usize> RotorEstimator<N, R> {
+    /// The filter of `design`, starting at rest, its start-up term dropped at sample
+    /// `switch_at` (see [`RotorEstimator::with_switch_at`]).
+    pub fn from_design(design: &RotorDesign<N, R>, switch_at: Option<u32>) -> Self {
         Self {
-            filter: LowRankKalmanFilter::new(&DESIGN, SVector::zeros()),
+            filter: LowRankKalmanFilter::new(&design.filter, SVector::zeros()),
             samples: 0,
             switch_at,
-            outputs_t: OUTPUTS_T,
+            outputs_t: design.outputs_t,
         }
     }
 
@@ -202,7 +224,7 @@ impl RotorEstimator {
 
     /// The state estimate (predicted to the current sample between steps).
     #[cfg(test)]
-    fn state(&self) -> SVector<f32, STATES> {
+    pub(crate) fn state(&self) -> SVector<f32, N> {
         *self.filter.state()
     }
 
@@ -419,7 +441,7 @@ mod tests {
     /// compile.)
     #[test]
     fn start_up_matrices_are_bit_identical_to_the_f64_conversion() {
-        let d = f32_constants::DESIGN;
+        let d = DESIGN.filter;
         let f = |rows: &[[f64; STATES]; STATES]| matrix(rows).map(|v| v as f32);
         assert_eq!((d.a, d.closed), (f(&ROTOR_A), f(&ROTOR_CLOSED)));
         assert_eq!(d.c, matrix(&ROTOR_C).map(|v| v as f32));
@@ -542,7 +564,7 @@ mod tests {
         edgekf::linalg::mul_tr(&est.outputs_t, &x, &mut d, false);
         assert_eq!(r.disk, [d[0], d[1], d[2], d[3]], "no update on a missing sample");
         let mut ax = SVector::<f32, STATES>::zeros();
-        edgekf::linalg::mul_tr(&f32_constants::DESIGN.a.transpose(), &x, &mut ax, false);
+        edgekf::linalg::mul_tr(&DESIGN.filter.a.transpose(), &x, &mut ax, false);
         assert_eq!(est.state(), ax, "prediction only");
         assert_eq!(est.health(), FilterHealth::default());
         let r = est.step(Some([f32::NAN, 0.0, 0.0, 0.0]));

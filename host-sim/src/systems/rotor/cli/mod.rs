@@ -161,6 +161,10 @@ pub enum RotorCommand {
         /// Modes kept in the reduced model.
         #[arg(long, value_name = "N", default_value_t = 8)]
         modes: usize,
+        /// The robust tuning (faster force random walk, more modal process noise): the
+        /// accelerometer node's.
+        #[arg(long)]
+        robust: bool,
     },
 }
 
@@ -233,7 +237,7 @@ pub fn run(command: RotorCommand) -> anyhow::Result<()> {
         RotorCommand::Tune { config, method, seed, duration, budget, modes } => {
             estimate::tune(&config, method == TuneMethodArg::Ml, seed, duration, budget, modes)
         }
-        RotorCommand::Export { config, out, modes } => estimate::export(&config, &out, modes),
+        RotorCommand::Export { config, out, modes, robust } => estimate::export(&config, &out, modes, robust),
         RotorCommand::Modes { config, speed, count, json } => {
             let (cfg, model) = load(&config)?;
             let speed = speed.unwrap_or(cfg.operation.speed);

@@ -1,0 +1,97 @@
+//! Rotor virtual sensing from accelerometers: the paper rotor read by four ADXL355-like
+//! channels at the probes' places (`n5_ax, n5_ay, n32_ax, n32_ay`, m/s²), the sensors'
+//! 2nd-order Butterworth low-pass (250 Hz) inside the model: 28 states (8 modes, one phasor per
+//! unbalance, two states per low-pass), the robust tuning (`Tuning::robust`: it holds the disk
+//! error near 1 µm with the model's stiffness or speed a little off). Computed on the host in
+//! `f64` and compiled in (`edgekf rotor export --config host-sim/configs/rotor_paper_accel.toml
+//! --robust --out firmware/src/generated/rotor_accel.rs`; a cross-crate test checks the file is
+//! current). Outputs and schedule are the probes' node's ([`super::rotor`]): the disk nodes'
+//! displacement and the unbalance forces, the start-up term of rank [`ACCEL_START_RANK`] for
+//! [`STEADY_AFTER`] samples, then the steady-state gain.
+
+use super::rotor::{rotor_design, RotorDesign, RotorEstimator, STEADY_AFTER};
+
+/// The exported model, steady state, prior and start-up term, as the host wrote them (`f64`).
+#[allow(missing_docs, clippy::excessive_precision, clippy::unreadable_literal)]
+pub mod constants {
+    include!("../generated/rotor_accel.rs");
+}
+
+/// States of the model: the probes' 20 and two per accelerometer low-pass.
+pub const ACCEL_STATES: usize = 28;
+/// Sensor channels, in the order the filter takes them, m/s².
+pub const ACCEL_CHANNELS: [&str; 4] = ["n5_ax", "n5_ay", "n32_ax", "n32_ay"];
+/// Rank of the start-up term (the exporter's `ACCEL_START_RANK`; `ROTOR_U0`'s width, or
+/// [`ACCEL_DESIGN`] would not compile).
+pub const ACCEL_START_RANK: usize = 12;
+
+/// The accelerometers' design (`generated/rotor_accel.rs`).
+pub const ACCEL_DESIGN: RotorDesign<ACCEL_STATES, ACCEL_START_RANK> = rotor_design!(constants);
+
+/// The accelerometer rotor's estimator.
+pub type AccelEstimator = RotorEstimator<ACCEL_STATES, ACCEL_START_RANK>;
+
+impl RotorEstimator<ACCEL_STATES, ACCEL_START_RANK> {
+    /// The accelerometers' compiled-in model at rest with the exported prior: the start-up
+    /// term for the first [`STEADY_AFTER`] samples, then the steady-state gain alone.
+    ///
+    /// ```
+    /// let mut est = edgekf_firmware::systems::rotor_accel::AccelEstimator::accel();
+    /// assert!(est.step(Some([0.0; 4])).nis.is_finite());
+    /// ```
+    pub fn accel() -> Self {
+        Self::from_design(&ACCEL_DESIGN, Some(STEADY_AFTER))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::constants::*;
+    use super::*;
+    use edgekf::export::matrix;
+
+    /// The model was discretised at the probes' node's rate, so the schedule is the same.
+    #[test]
+    fn generated_header_is_the_accelerometer_model_at_the_node_rate() {
+        let mut lines = include_str!("../generated/rotor_accel.rs").lines();
+        let header = lines.next().unwrap();
+        let rate = std::format!(" {} Hz.", super::super::rotor::SAMPLE_RATE_HZ);
+        assert!(header.contains(&rate) && header.contains("--robust"), "{header}");
+        assert!(lines.next().unwrap().contains(&std::format!("Sensors: {}.", ACCEL_CHANNELS.join(", "))));
+    }
+
+    /// The compile-time `f32` design is the run-time conversion of the `f64` constants.
+    #[test]
+    fn design_is_bit_identical_to_the_f64_conversion() {
+        let d = ACCEL_DESIGN.filter;
+        let f = |rows: &[[f64; ACCEL_STATES]; ACCEL_STATES]| matrix(rows).map(|v| v as f32);
+        assert_eq!((d.a, d.closed), (f(&ROTOR_A), f(&ROTOR_CLOSED)));
+        assert_eq!((d.c, d.pct), (matrix(&ROTOR_C).map(|v| v as f32), matrix(&ROTOR_PCT).map(|v| v as f32)));
+        assert_eq!((d.s, d.s_inv), (matrix(&ROTOR_S).map(|v| v as f32), matrix(&ROTOR_S_INV).map(|v| v as f32)));
+        assert_eq!((d.u0, d.signs), (matrix(&ROTOR_U0).map(|v| v as f32), matrix(&ROTOR_SIGNS).map(|v| v as f32)));
+        let (disk, force) = (matrix(&ROTOR_DISK).map(|v| v as f32), matrix(&ROTOR_FORCE).map(|v| v as f32));
+        assert_eq!(
+            ACCEL_DESIGN.outputs_t,
+            nalgebra::SMatrix::<f32, 8, ACCEL_STATES>::from_fn(|i, j| {
+                if i < 4 {
+                    disk[(i, j)]
+                } else {
+                    force[(i - 4, j)]
+                }
+            })
+            .transpose()
+        );
+    }
+
+    /// The accelerometer node switches at the documented sample, as the probes' node does.
+    #[test]
+    fn switches_to_the_steady_gain_at_steady_after() {
+        let mut est = AccelEstimator::accel();
+        for _ in 0..STEADY_AFTER {
+            est.step(Some([0.0; 4]));
+        }
+        assert!(!est.is_steady());
+        est.step(Some([0.0; 4]));
+        assert!(est.is_steady() && est.health() == edgekf::filter::FilterHealth::default());
+    }
+}

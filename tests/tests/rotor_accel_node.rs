@@ -1,0 +1,79 @@
+//! The firmware's accelerometer rotor estimator on the host (28 states, robust tuning): its
+//! compiled-in constants are what the host computes for `rotor_paper_accel.toml`, and in `f32`
+//! it reaches the disk figures of the host's accelerometer tests (`host-sim/tests/rotor_akf_accel.rs`).
+
+use edgekf_firmware::systems::rotor::{RotorReport, STEADY_AFTER};
+use edgekf_firmware::systems::rotor_accel::{AccelEstimator, ACCEL_CHANNELS};
+use edgekf_sim::systems::rotor::estimate::{reduce, run, Estimates, FilterPrecision, Tuning};
+use edgekf_sim::systems::rotor::{RotorConfig, RotorModel, SimOptions};
+use edgekf_tests::rotor::disk_rms_error;
+use std::path::Path;
+
+const CONFIG: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../host-sim/configs/rotor_paper_accel.toml");
+
+#[test]
+fn compiled_constants_are_current() {
+    let (text, states) =
+        edgekf_sim::systems::rotor::cli::estimate::export_sized_text(Path::new(CONFIG), 8, true).unwrap();
+    assert_eq!(states, 28);
+    let committed = include_str!("../../firmware/src/generated/rotor_accel.rs");
+    assert!(
+        text == committed,
+        "firmware/src/generated/rotor_accel.rs is stale: run `cargo run -p edgekf-sim -- rotor export --config \
+         host-sim/configs/rotor_paper_accel.toml --robust --out firmware/src/generated/rotor_accel.rs`"
+    );
+}
+
+/// The host filter's disk estimates and NIS as the node's reports (forces left at 0).
+fn host_reports(est: &Estimates) -> Vec<RotorReport> {
+    (0..est.t.len())
+        .map(|k| {
+            let d = |node: usize, axis: usize| est.displacement[2 * node + axis][k] as f32;
+            RotorReport { disk: [d(12, 0), d(12, 1), d(23, 0), d(23, 1)], force: [0.0; 4], nis: est.nis[k] as f32 }
+        })
+        .collect()
+}
+
+fn nis_mean(nis: impl Iterator<Item = f64>) -> f64 {
+    let v: Vec<f64> = nis.filter(|n| n.is_finite()).collect();
+    v.iter().sum::<f64>() / v.len() as f64
+}
+
+/// The accelerometer test's record (4 s, seed 3): the node's estimator (`f32`, start-up term
+/// then the steady gain at 0.5 s) against the host's time-varying filter of the same robust
+/// tuning in `f32`, and the test's bound for the matched model (1.5 µm for t ≥ 1 s).
+#[test]
+fn node_estimator_reaches_the_accelerometer_tests_disk_figures() {
+    let cfg = RotorConfig::load(Path::new(CONFIG)).unwrap();
+    let truth = RotorModel::from_config(&cfg).unwrap();
+    let rec = truth.simulate(&SimOptions { duration: 4.0, seed: 3, ..SimOptions::default() }).unwrap();
+    let data = rec.to_data_file();
+    let columns: Vec<&[f64]> = ACCEL_CHANNELS.iter().map(|c| data.column(c).unwrap()).collect();
+    let mut est = AccelEstimator::accel();
+    let node: Vec<RotorReport> =
+        (0..data.t.len()).map(|k| est.step(Some(core::array::from_fn(|i| columns[i][k] as f32)))).collect();
+    assert_eq!(est.health(), edgekf::filter::FilterHealth::default());
+    assert!(est.is_steady() && node.len() > 2 * STEADY_AFTER as usize);
+    let host =
+        run(&reduce(&truth, cfg.operation.speed, &Tuning::robust()).unwrap(), &data, FilterPrecision::F32).unwrap();
+    assert_eq!(host.repairs, (0, 0));
+    let host = host_reports(&host);
+    let (e_node, e_host) = (disk_rms_error(&node, &rec, 1.0), disk_rms_error(&host, &rec, 1.0));
+    let upto = |t1: f64| rec.t.iter().take_while(|t| **t < t1).count();
+    let (s_node, s_host) =
+        (disk_rms_error(&node[..upto(0.5)], &rec, 0.1), disk_rms_error(&host[..upto(0.5)], &rec, 0.1));
+    let nis_node = nis_mean(node[upto(1.0)..].iter().map(|r| r.nis as f64));
+    let nis_host = nis_mean(host[upto(1.0)..].iter().map(|r| r.nis as f64));
+    eprintln!(
+        "accelerometer rotor node (f32, robust tuning): disk RMS error t ≥ 1 s {:.3} µm, host f32 time-varying \
+         {:.3} µm; 0.1–0.5 s {:.3} µm / host {:.3} µm; NIS mean t ≥ 1 s {nis_node:.2} / host {nis_host:.2}",
+        e_node * 1e6,
+        e_host * 1e6,
+        s_node * 1e6,
+        s_host * 1e6
+    );
+    assert!(e_node <= 1.5e-6, "{e_node}");
+    assert!((e_node - e_host).abs() <= 0.02 * e_host, "node {e_node} vs host {e_host}");
+    assert!(s_node <= 1.05 * s_host, "start-up {s_node} vs {s_host}");
+    assert!((nis_node - nis_host).abs() <= 0.05 * nis_host, "NIS {nis_node} vs {nis_host}");
+}
