@@ -2,8 +2,8 @@
 //! compiled-in constants are what the host computes for `rotor_paper_accel.toml`, and in `f32`
 //! it reaches the disk figures of the host's accelerometer tests (`host-sim/tests/rotor_akf_accel.rs`).
 
+use edgekf_firmware::systems::rotor::accel::{AccelEstimator, ACCEL_CHANNELS};
 use edgekf_firmware::systems::rotor::{RotorReport, STEADY_AFTER};
-use edgekf_firmware::systems::rotor_accel::{AccelEstimator, ACCEL_CHANNELS};
 use edgekf_sim::systems::rotor::estimate::{reduce, run, Estimates, FilterPrecision, Tuning};
 use edgekf_sim::systems::rotor::{RotorConfig, RotorModel, SimOptions};
 use edgekf_tests::rotor::disk_rms_error;

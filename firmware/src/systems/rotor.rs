@@ -16,6 +16,8 @@ use crate::source::ChannelSource;
 use edgekf::filter::{FilterHealth, LowRankDesign, LowRankKalmanFilter};
 use nalgebra::{ArrayStorage, SMatrix, SVector};
 
+pub mod accel;
+
 /// The exported model, steady state, prior and start-up term, as the host wrote them (`f64`).
 #[allow(missing_docs, clippy::excessive_precision, clippy::unreadable_literal)]
 pub mod constants {
@@ -146,7 +148,7 @@ pub(crate) use rotor_design;
 pub const DESIGN: RotorDesign<STATES, START_RANK> = rotor_design!(constants);
 
 /// The filter with its output rows: `N` states, start-up rank `R` (the probes' model by
-/// default; [`super::rotor_accel`] runs the accelerometers' 28 states).
+/// default; [`accel`] runs the accelerometers' 28 states).
 pub struct RotorEstimator<const N: usize = STATES, const R: usize = START_RANK> {
     filter: LowRankKalmanFilter<f32, N, 4, R>,
     /// Samples stepped so far (saturating).

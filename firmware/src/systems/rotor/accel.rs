@@ -5,16 +5,16 @@
 //! error near 1 µm with the model's stiffness or speed a little off). Computed on the host in
 //! `f64` and compiled in (`edgekf rotor export --config host-sim/configs/rotor_paper_accel.toml
 //! --robust --out firmware/src/generated/rotor_accel.rs`; a cross-crate test checks the file is
-//! current). Outputs and schedule are the probes' node's ([`super::rotor`]): the disk nodes'
+//! current). Outputs and schedule are the probes' node's ([`super`]): the disk nodes'
 //! displacement and the unbalance forces, the start-up term of rank [`ACCEL_START_RANK`] for
 //! [`STEADY_AFTER`] samples, then the steady-state gain.
 
-use super::rotor::{rotor_design, RotorDesign, RotorEstimator, STEADY_AFTER};
+use super::{rotor_design, RotorDesign, RotorEstimator, STEADY_AFTER};
 
 /// The exported model, steady state, prior and start-up term, as the host wrote them (`f64`).
 #[allow(missing_docs, clippy::excessive_precision, clippy::unreadable_literal)]
 pub mod constants {
-    include!("../generated/rotor_accel.rs");
+    include!("../../generated/rotor_accel.rs");
 }
 
 /// States of the model: the probes' 20 and two per accelerometer low-pass.
@@ -36,7 +36,7 @@ impl RotorEstimator<ACCEL_STATES, ACCEL_START_RANK> {
     /// term for the first [`STEADY_AFTER`] samples, then the steady-state gain alone.
     ///
     /// ```
-    /// let mut est = edgekf_firmware::systems::rotor_accel::AccelEstimator::accel();
+    /// let mut est = edgekf_firmware::systems::rotor::accel::AccelEstimator::accel();
     /// assert!(est.step(Some([0.0; 4])).nis.is_finite());
     /// ```
     pub fn accel() -> Self {
@@ -53,9 +53,9 @@ mod tests {
     /// The model was discretised at the probes' node's rate, so the schedule is the same.
     #[test]
     fn generated_header_is_the_accelerometer_model_at_the_node_rate() {
-        let mut lines = include_str!("../generated/rotor_accel.rs").lines();
+        let mut lines = include_str!("../../generated/rotor_accel.rs").lines();
         let header = lines.next().unwrap();
-        let rate = std::format!(" {} Hz.", super::super::rotor::SAMPLE_RATE_HZ);
+        let rate = std::format!(" {} Hz.", super::super::SAMPLE_RATE_HZ);
         assert!(header.contains(&rate) && header.contains("--robust"), "{header}");
         assert!(lines.next().unwrap().contains(&std::format!("Sensors: {}.", ACCEL_CHANNELS.join(", "))));
     }
