@@ -27,6 +27,7 @@ pub mod frame;
 pub mod hil;
 pub mod line_feed;
 pub mod node;
+pub mod pair_source;
 #[cfg(all(target_os = "none", feature = "qemu"))]
 pub mod semihost;
 pub mod soak;

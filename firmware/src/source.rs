@@ -57,23 +57,51 @@ pub enum Axis {
     Z,
 }
 
-impl Axis {
-    fn index(self) -> usize {
+/// The axes of a sample handed to the estimator: one [`Axis`] (a scalar) or an [`AxisPair`].
+pub trait Axes: Copy {
+    /// What the estimator takes from one sample.
+    type Sample: Copy;
+    /// These axes of a sample in m/s² (`x, y, z`).
+    fn pick(self, mps2: [f32; 3]) -> Self::Sample;
+}
+
+impl Axes for Axis {
+    type Sample = f32;
+
+    fn pick(self, [x, y, z]: [f32; 3]) -> f32 {
         match self {
-            Axis::X => 0,
-            Axis::Y => 1,
-            Axis::Z => 2,
+            Axis::X => x,
+            Axis::Y => y,
+            Axis::Z => z,
         }
+    }
+}
+
+/// Two axes of one part, in this order (e.g. x and y of a bearing housing).
+///
+/// ```
+/// use edgekf_firmware::source::{Axes, Axis, AxisPair};
+/// assert_eq!(AxisPair(Axis::Y, Axis::X).pick([1.0, 2.0, 3.0]), [2.0, 1.0]);
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct AxisPair(pub Axis, pub Axis);
+
+impl Axes for AxisPair {
+    type Sample = [f32; 2];
+
+    fn pick(self, mps2: [f32; 3]) -> [f32; 2] {
+        [self.0.pick(mps2), self.1.pick(mps2)]
     }
 }
 
 /// How the node drives the ADXL355.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Adxl355Settings {
+pub struct Adxl355Settings<A = Axis> {
     /// Accelerometer settings.
     pub sensor: Config,
-    /// Axis handed to the estimator.
-    pub axis: Axis,
+    /// Axes handed to the estimator.
+    pub axis: A,
     /// Attempts per bus operation before it is given up for this period (at least 1).
     pub attempts: u8,
 }
@@ -85,10 +113,18 @@ impl Default for Adxl355Settings {
     }
 }
 
-/// The ADXL355 read in FIFO blocks, one block per watermark period.
-pub struct Adxl355Source<IF> {
+impl<A> Adxl355Settings<A> {
+    /// These settings with the axes `axis` handed to the estimator.
+    pub fn with_axes<B>(self, axis: B) -> Adxl355Settings<B> {
+        Adxl355Settings { sensor: self.sensor, axis, attempts: self.attempts }
+    }
+}
+
+/// The ADXL355 read in FIFO blocks, one block per watermark period; the estimator gets the
+/// axes `A` of each sample (one [`Axis`] by default).
+pub struct Adxl355Source<IF, A = Axis> {
     sensor: Adxl355<IF>,
-    settings: Adxl355Settings,
+    settings: Adxl355Settings<A>,
     previous: Option<RawSample>,
     /// Samples due (per the timing contract) but not yet read.
     pending: u32,
@@ -102,13 +138,13 @@ pub struct Adxl355Source<IF> {
     block: [RawSample; MAX_BLOCK],
 }
 
-impl<IF: Interface> Adxl355Source<IF> {
+impl<IF: Interface, A: Axes> Adxl355Source<IF, A> {
     /// Initialises the part (with retries, counted in `health`). On failure the driver is
     /// handed back with the last error, so the caller can retry later.
     #[allow(clippy::type_complexity)]
     pub fn start(
         mut sensor: Adxl355<IF>,
-        settings: Adxl355Settings,
+        settings: Adxl355Settings<A>,
         health: &mut Health,
     ) -> Result<Self, (adxl355::Error<IF::Error>, Adxl355<IF>)> {
         match retry::<_, IF>(health, settings.attempts, || sensor.init(settings.sensor)) {
@@ -133,7 +169,7 @@ impl<IF: Interface> Adxl355Source<IF> {
     }
 
     /// The settings in use.
-    pub fn settings(&self) -> &Adxl355Settings {
+    pub fn settings(&self) -> &Adxl355Settings<A> {
         &self.settings
     }
 
@@ -153,7 +189,7 @@ impl<IF: Interface> Adxl355Source<IF> {
     }
 
     /// Checks one raw sample; `None` if it must not reach the estimator.
-    fn screen(&mut self, raw: RawSample, health: &mut Health) -> Option<f32> {
+    fn screen(&mut self, raw: RawSample, health: &mut Health) -> Option<A::Sample> {
         let frozen = self.previous == Some(raw);
         self.previous = Some(raw);
         if raw.is_saturated() {
@@ -166,12 +202,12 @@ impl<IF: Interface> Adxl355Source<IF> {
             health.stuck = health.stuck.saturating_add(1);
             return None;
         }
-        self.sensor.to_mps2(raw).get(self.settings.axis.index()).copied()
+        Some(self.settings.axis.pick(self.sensor.to_mps2(raw)))
     }
 
     /// Steps `lost` due samples as missing; `dropped`: the part never produced them (no
     /// overrun), as opposed to the FIFO overwriting them.
-    fn bridge(lost: u32, dropped: bool, health: &mut Health, each: &mut impl FnMut(Option<f32>)) {
+    fn bridge(lost: u32, dropped: bool, health: &mut Health, each: &mut impl FnMut(Option<A::Sample>)) {
         for _ in 0..lost {
             each(None);
         }
@@ -183,7 +219,7 @@ impl<IF: Interface> Adxl355Source<IF> {
 
     /// Re-initialises a part that reset. On success its FIFO starts empty, so every sample due
     /// until now is lost: they are bridged, and counted as dropped.
-    fn reconfigure(&mut self, health: &mut Health, each: &mut impl FnMut(Option<f32>)) -> u16 {
+    fn reconfigure(&mut self, health: &mut Health, each: &mut impl FnMut(Option<A::Sample>)) -> u16 {
         let (sensor, config) = (&mut self.sensor, self.settings.sensor);
         match retry::<_, IF>(health, self.settings.attempts, || sensor.init(config)) {
             Ok(()) => {
@@ -199,10 +235,10 @@ impl<IF: Interface> Adxl355Source<IF> {
     }
 }
 
-impl<IF: Interface> SampleSource for Adxl355Source<IF> {
-    type Sample = f32;
+impl<IF: Interface, A: Axes> SampleSource for Adxl355Source<IF, A> {
+    type Sample = A::Sample;
 
-    fn read(&mut self, health: &mut Health, mut each: impl FnMut(Option<f32>)) -> u16 {
+    fn read(&mut self, health: &mut Health, mut each: impl FnMut(Option<A::Sample>)) -> u16 {
         let due = self.pending.saturating_add(self.samples_per_poll());
         self.pending = due.saturating_sub(core::mem::take(&mut self.not_due));
         if self.needs_init {
@@ -275,7 +311,7 @@ impl<IF: Interface> SampleSource for Adxl355Source<IF> {
     }
 }
 
-impl<F: crate::virtual_adxl355::SampleFeed> Recorded for Adxl355Source<I2cInterface<VirtualAdxl355<F>>> {
+impl<F: crate::virtual_adxl355::SampleFeed, A> Recorded for Adxl355Source<I2cInterface<VirtualAdxl355<F>>, A> {
     /// One watermark period of the virtual device's clock; `false` once the data has run out
     /// and the FIFO is drained. Samples a period lacks because the recording ended were never
     /// due.
@@ -288,9 +324,9 @@ impl<F: crate::virtual_adxl355::SampleFeed> Recorded for Adxl355Source<I2cInterf
 }
 
 /// The virtual ADXL355 source of a HIL file.
-pub type VirtualSource<B> = Adxl355Source<I2cInterface<VirtualAdxl355<LineFeed<B>>>>;
+pub type VirtualSource<B, A = Axis> = Adxl355Source<I2cInterface<VirtualAdxl355<LineFeed<B>>>, A>;
 
-impl<B: ByteSource> VirtualSource<B> {
+impl<B: ByteSource, A> VirtualSource<B, A> {
     /// The virtual device behind the driver.
     pub fn device(&self) -> &VirtualAdxl355<LineFeed<B>> {
         self.sensor.interface().bus()
@@ -486,7 +522,7 @@ impl<B: ByteSource, const M: usize> Recorded for ChannelSource<B, M> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     #![allow(clippy::indexing_slicing, clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
     use super::*;
@@ -495,9 +531,10 @@ mod tests {
     use std::vec;
     use std::vec::Vec;
 
-    const ADDR: u8 = 0x1D;
+    pub(crate) const ADDR: u8 = 0x1D;
 
-    fn init_traffic() -> Vec<Transaction> {
+    /// The bus traffic of the default configuration's initialisation.
+    pub(crate) fn init_traffic() -> Vec<Transaction> {
         vec![
             Transaction::write_read(ADDR, vec![0x00], vec![0xAD, 0x1D, 0xED]),
             Transaction::write(ADDR, vec![0x2F, 0x52]),
