@@ -36,6 +36,7 @@ pub mod source;
 pub mod stack;
 pub mod systems;
 pub mod virtual_adxl355;
+pub mod virtual_pair;
 
 #[cfg(test)]
 extern crate std;
