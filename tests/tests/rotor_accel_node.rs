@@ -2,7 +2,7 @@
 //! compiled-in constants are what the host computes for `rotor_paper_accel.toml`, and in `f32`
 //! it reaches the disk figures of the host's accelerometer tests (`host-sim/tests/rotor_akf_accel.rs`).
 
-use edgekf_firmware::systems::rotor::accel::{AccelEstimator, ACCEL_CHANNELS};
+use edgekf_firmware::systems::rotor::accel::{AccelEstimator, RotorAccelEnd, RotorAccelImage, ACCEL_CHANNELS};
 use edgekf_firmware::systems::rotor::{RotorReport, STEADY_AFTER};
 use edgekf_sim::systems::rotor::estimate::{reduce, run, Estimates, FilterPrecision, Tuning};
 use edgekf_sim::systems::rotor::{Recording, RotorConfig, RotorModel, SimOptions};
@@ -60,6 +60,8 @@ fn node_run(samples: impl Iterator<Item = Option<[f32; 4]>>) -> Vec<RotorReport>
 /// between two virtual ADXL355s (x and y at node 5, x and y at node 32), read back through the
 /// driver in 16-sample FIFO blocks and paired in lockstep. The quantisation (3.8e-5 m/s² a code
 /// at ±2 g, against 5.5e-3 m/s² of noise) leaves the disk error within 1 % of the direct run.
+/// The image `edgekf-rotor-accel-qemu`, run on the host, reports each poll's last sample of
+/// that run bit for bit, and clean counts.
 #[test]
 fn the_two_part_driver_path_reaches_the_same_disk_figures() {
     use edgekf_firmware::line_feed::ChannelReader;
@@ -80,7 +82,17 @@ fn the_two_part_driver_path_reaches_the_same_disk_figures() {
     assert_eq!(health, Health::default(), "a clean record: no bus or sample events");
     assert_eq!(samples.len(), data.t.len());
     assert!(samples.iter().all(Option::is_some));
-    let via_parts = disk_rms_error(&node_run(samples.into_iter()), &rec, 1.0);
+    let reports = node_run(samples.into_iter());
+    let lines = edgekf_tests::host::lines::<RotorAccelImage>(csv.as_bytes()).unwrap();
+    let frames = edgekf_tests::rotor::parse_numbered(&lines).unwrap();
+    assert_eq!(frames.len(), data.t.len() / 16);
+    for (k, (n, r)) in frames.iter().enumerate() {
+        assert_eq!((*n as usize, r), (16 * k + 15, &reports[16 * k + 15]), "poll {k}");
+    }
+    let end = edgekf_tests::report::frames::<RotorAccelEnd>(&lines).unwrap();
+    let (polls, n) = (frames.len() as u32, data.t.len() as u32);
+    assert_eq!(end, [RotorAccelEnd { polls, lines: n, ..Default::default() }]);
+    let via_parts = disk_rms_error(&reports, &rec, 1.0);
     let columns: Vec<&[f64]> = ACCEL_CHANNELS.iter().map(|c| data.column(c).unwrap()).collect();
     let direct = node_run((0..data.t.len()).map(|k| Some(core::array::from_fn(|i| columns[i][k] as f32))));
     let direct = disk_rms_error(&direct, &rec, 1.0);

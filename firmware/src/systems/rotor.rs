@@ -323,27 +323,27 @@ pub fn channel_source<B: ByteSource>(reader: ChannelReader<B, 4>) -> ChannelSour
     ChannelSource::new(reader).with_clock(1.0 / f64::from(SAMPLE_RATE_HZ), max_gap as u32)
 }
 
-/// The rotor estimator as the node runs it: one sample per poll (and the missing ones before
-/// it), each poll's last reported.
-pub struct RotorNode {
-    estimator: RotorEstimator,
+/// The rotor estimator as the node runs it: the poll's samples (one line and the missing ones
+/// before it for the probes, a FIFO block for the accelerometers), each poll's last reported.
+pub struct RotorNode<const N: usize = STATES, const R: usize = START_RANK> {
+    estimator: RotorEstimator<N, R>,
     last: Option<RotorReport>,
     steps: u32,
 }
 
-impl RotorNode {
+impl<const N: usize, const R: usize> RotorNode<N, R> {
     /// Runs `estimator`.
-    pub fn new(estimator: RotorEstimator) -> Self {
+    pub fn new(estimator: RotorEstimator<N, R>) -> Self {
         Self { estimator, last: None, steps: 0 }
     }
 
     /// The estimator.
-    pub fn estimator(&self) -> &RotorEstimator {
+    pub fn estimator(&self) -> &RotorEstimator<N, R> {
         &self.estimator
     }
 }
 
-impl NodeEstimator for RotorNode {
+impl<const N: usize, const R: usize> NodeEstimator for RotorNode<N, R> {
     type Input = [f32; 4];
     type Frame = RotorFrame;
 

@@ -9,7 +9,13 @@
 //! displacement and the unbalance forces, the start-up term of rank [`ACCEL_START_RANK`] for
 //! [`STEADY_AFTER`] samples, then the steady-state gain.
 
-use super::{rotor_design, RotorDesign, RotorEstimator, STEADY_AFTER};
+use super::{rotor_design, RotorDesign, RotorEstimator, RotorNode, STEADY_AFTER};
+use crate::frame::FrameSink;
+use crate::hil::{HilError, HilImage, HilNode};
+use crate::line_feed::{ByteSource, ChannelReader};
+use crate::node::Node;
+use crate::source::{Adxl355Settings, Axis, AxisPair};
+use crate::virtual_pair::{PairStartError, VirtualPairSource};
 
 /// The exported model, steady state, prior and start-up term, as the host wrote them (`f64`).
 #[allow(missing_docs, clippy::excessive_precision, clippy::unreadable_literal)]
@@ -41,6 +47,74 @@ impl RotorEstimator<ACCEL_STATES, ACCEL_START_RANK> {
     /// ```
     pub fn accel() -> Self {
         Self::from_design(&ACCEL_DESIGN, Some(STEADY_AFTER))
+    }
+}
+
+crate::frame! {
+    /// The end of an accelerometer rotor run.
+    #[derive(Eq)]
+    pub struct RotorAccelEnd = "rotor_accel {=u32} {=u32} {=u32} {=u32} {=u32} {=u32} {=u32} {=u32} {=u32}" {
+        /// Polls (FIFO periods).
+        pub polls: u32,
+        /// Input lines read.
+        pub lines: u32,
+        /// Of those, lines that did not parse (stepped as missing).
+        pub bad_lines: u32,
+        /// Samples refused as frozen, over both parts (a bad line counts once per part).
+        pub stuck: u32,
+        /// Samples bridged by prediction (lost in a FIFO, never produced), over both parts.
+        pub bridged: u32,
+        /// Bus errors, over both parts.
+        pub bus_errors: u32,
+        /// Polls given up, over both parts.
+        pub failed_polls: u32,
+        /// Filter covariance resets (see [`RotorEstimator::health`]).
+        pub covariance_resets: u32,
+        /// Refused updates.
+        pub refused_updates: u32,
+    }
+}
+
+/// The QEMU image `edgekf-rotor-accel-qemu`: two virtual ADXL355s (x and y at node 5, x and y
+/// at node 32) fed from the HIL file's `n5_ax, n5_ay, n32_ax, n32_ay` (m/s²; other columns
+/// ignored), read through the driver in FIFO blocks and paired in lockstep
+/// ([`VirtualPairSource`]); a `rot` frame ([`super::RotorFrame`]) per poll (its last sample),
+/// then `rotor_accel`.
+pub struct RotorAccelImage;
+
+impl HilImage for RotorAccelImage {
+    const NAME: &'static str = "edgekf-rotor-accel-qemu";
+    const COLUMNS: &'static [&'static str] = &ACCEL_CHANNELS;
+    type Input = [f32; 4];
+    type Storage = ();
+    type Source<B: ByteSource> = VirtualPairSource<B>;
+    type Estimator<'s> = RotorNode<ACCEL_STATES, ACCEL_START_RANK>;
+    type StartError = PairStartError;
+
+    fn storage() {}
+
+    #[inline(never)] // start-up temporaries stay out of the caller's frame
+    fn start<B: ByteSource>(input: B, _: &mut ()) -> Result<HilNode<'_, Self, B>, HilError<Self::StartError>> {
+        let reader = ChannelReader::new(input, ACCEL_CHANNELS).map_err(HilError::Header)?;
+        let settings = Adxl355Settings::default().with_axes(AxisPair(Axis::X, Axis::Y));
+        let mut health = Default::default();
+        let source = VirtualPairSource::start(reader, settings, &mut health).map_err(HilError::Start)?;
+        Ok(Node::new(source, RotorNode::new(AccelEstimator::accel()), health))
+    }
+
+    fn finish<B: ByteSource>(node: &HilNode<'_, Self, B>, sink: &mut impl FrameSink) {
+        let (h, f) = (node.health(), node.estimator().estimator().health());
+        sink.frame(&RotorAccelEnd {
+            polls: h.blocks,
+            lines: node.source().lines(),
+            bad_lines: node.source().reader().bad_lines(),
+            stuck: h.stuck,
+            bridged: h.bridged,
+            bus_errors: h.bus_errors,
+            failed_polls: h.failed_polls,
+            covariance_resets: f.covariance_resets,
+            refused_updates: f.refused_updates,
+        });
     }
 }
 
