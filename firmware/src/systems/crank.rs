@@ -320,7 +320,8 @@ clearance_frame! {
 
 /// The crank image's source: the crank acceleration, lines missing from the file stepped as
 /// missing samples for up to [`crate::source::MAX_GAP_S`] (see
-/// [`ChannelSource::with_clock`]), so that the windows keep their length in time.
+/// [`ChannelSource::with_clock`]): the window statistics skip them, and the release detector
+/// counts their time, so a line lost before the first contact does not move it earlier.
 pub fn channel_source<B: ByteSource>(reader: ChannelReader<B, 1>) -> ChannelSource<B, 1> {
     let max_gap = crate::source::MAX_GAP_S * f64::from(SAMPLE_RATE_HZ);
     ChannelSource::new(reader).with_clock(1.0 / f64::from(SAMPLE_RATE_HZ), max_gap as u32)

@@ -6,23 +6,21 @@ use proptest::prelude::*;
 use std::format;
 use std::string::String;
 
-fn same_f64(s: &str) {
-    let ours = parse_f64(s);
-    let core = s.parse::<f64>().ok();
-    match (ours, core) {
-        (Some(a), Some(b)) => assert!(a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan()), "{s}: {a:e} vs {b:e}"),
-        (a, b) => assert_eq!(a.is_some(), b.is_some(), "{s}: {a:?} vs {b:?}"),
-    }
+/// `same_f64` and `same_f32`: the parser and `core` both refuse `s`, or give the same bits.
+macro_rules! same_as_core {
+    ($name:ident, $parse:ident, $ty:ty) => {
+        fn $name(s: &str) {
+            match ($parse(s), s.parse::<$ty>().ok()) {
+                (Some(a), Some(b)) => {
+                    assert!(a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan()), "{s}: {a:e} vs {b:e}")
+                }
+                (a, b) => assert_eq!(a.is_some(), b.is_some(), "{s}: {a:?} vs {b:?}"),
+            }
+        }
+    };
 }
-
-fn same_f32(s: &str) {
-    let ours = parse_f32(s);
-    let core = s.parse::<f32>().ok();
-    match (ours, core) {
-        (Some(a), Some(b)) => assert!(a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan()), "{s}: {a:e} vs {b:e}"),
-        (a, b) => assert_eq!(a.is_some(), b.is_some(), "{s}: {a:?} vs {b:?}"),
-    }
-}
+same_as_core!(same_f64, parse_f64, f64);
+same_as_core!(same_f32, parse_f32, f32);
 
 /// A deterministic 64-bit generator (SplitMix64).
 struct SplitMix(u64);
