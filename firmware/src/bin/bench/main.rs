@@ -117,46 +117,60 @@ fn ukf<const N: usize, const M: usize>(rng: &mut Lcg) {
 /// The rotor node's per-sample step with its disk and force outputs, in both phases: the
 /// filter with its start-up term of rank 12 (`rotor_node_step`), the sample that drops the
 /// term (`rotor_node_switch`), and the steady-state step the node runs from 0.5 s on
-/// (`rotor_node_steady`).
+/// (`rotor_node_steady`); the same for the accelerometer node's 28 states (`rotor_accel_*`).
 fn rotor() {
-    use edgekf_firmware::systems::rotor::{RotorEstimator, STEADY_AFTER};
-    let mut est = RotorEstimator::new();
-    let y = |k: u32| Some([1e-6 * k as f32, -0.5e-6 * k as f32, 2e-6, 0.25e-6 * k as f32]);
+    use edgekf_firmware::systems::rotor::accel::AccelEstimator;
+    use edgekf_firmware::systems::rotor::RotorEstimator;
+    // Displacement-like readings for the probes, acceleration-like ones for the accelerometers.
+    rotor_phases(RotorEstimator::new(), ["rotor_node_step", "rotor_node_switch", "rotor_node_steady"], 1e-6);
+    rotor_phases(AccelEstimator::accel(), ["rotor_accel_step", "rotor_accel_switch", "rotor_accel_steady"], 1e-2);
+}
+
+/// [`rotor`]'s three steps of one estimator, readings of size `scale`.
+fn rotor_phases<const N: usize, const R: usize>(
+    mut est: edgekf_firmware::systems::rotor::RotorEstimator<N, R>,
+    labels: [&str; 3],
+    scale: f32,
+) {
+    use edgekf_firmware::systems::rotor::STEADY_AFTER;
+    let [step, switch, steady] = labels;
+    let y = |k: u32| Some([scale * k as f32, -0.5 * scale * k as f32, 2.0 * scale, 0.25 * scale * k as f32]);
     let mut k = 0;
     while k < 3 {
         est.step(y(k));
         k += 1;
     }
     // Measures one step; `steady`: whether the steady-state filter must be in use after it.
-    let measured = |est: &mut RotorEstimator, label: &str, k: u32, steady: bool| {
-        bench_start();
-        core::hint::black_box(est.step(core::hint::black_box(y(k))));
-        bench_end();
-        if est.is_steady() != steady {
-            defmt::error!("bench {=str}: steady-state filter in use: {=bool}", label, est.is_steady());
-            exit(1)
-        }
-        defmt::info!(
-            "bench {=str} n={=usize} m={=usize} resets={=u32}",
-            label,
-            20usize,
-            4usize,
-            est.health().covariance_resets
-        );
-    };
-    measured(&mut est, "rotor_node_step", k, false);
+    let measured =
+        |est: &mut edgekf_firmware::systems::rotor::RotorEstimator<N, R>, label: &str, k: u32, steady: bool| {
+            bench_start();
+            core::hint::black_box(est.step(core::hint::black_box(y(k))));
+            bench_end();
+            if est.is_steady() != steady {
+                defmt::error!("bench {=str}: steady-state filter in use: {=bool}", label, est.is_steady());
+                exit(1)
+            }
+            defmt::info!(
+                "bench {=str} n={=usize} m={=usize} resets={=u32}",
+                label,
+                N,
+                4usize,
+                est.health().covariance_resets
+            );
+        };
+    measured(&mut est, step, k, false);
     k += 1;
     while k < STEADY_AFTER {
         est.step(y(k));
         k += 1;
     }
-    measured(&mut est, "rotor_node_switch", k, true);
+    measured(&mut est, switch, k, true);
     k += 1;
     for _ in 0..3 {
         est.step(y(k));
         k += 1;
     }
-    measured(&mut est, "rotor_node_steady", k, true);
+    measured(&mut est, steady, k, true);
 }
 
 /// The slider-crank clearance estimator (`edgekf_firmware::crank`, 0.25 s windows at 10 kHz):
