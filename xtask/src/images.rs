@@ -51,16 +51,6 @@ pub enum Role {
     Bench,
 }
 
-/// How an image is proven panic-free.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum PanicProof {
-    /// At link time: built with feature `no-panic-proof`, so a surviving panic path fails the
-    /// link. Every image takes it: the HIL images read `hil_input.csv` with the shared crate's
-    /// panic-free CSV fields and number parser (`edgekf::csv_header::fields`,
-    /// `edgekf::decimal`), not `core`'s.
-    Link,
-}
-
 /// One firmware image.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Image {
@@ -74,8 +64,6 @@ pub struct Image {
     pub what: &'static str,
     /// What it is for.
     pub role: Role,
-    /// How it is proven panic-free (checked by every build of `cargo xtask fw`, `bench`, `test`).
-    pub proof: PanicProof,
     /// Its instruction budgets, measured by the bench image. Why these figures: the oscillator
     /// step must leave most of a 1 kHz sample free; the rotor node's steady-state step must fit
     /// a 1 kHz sample at 84 MHz with room for the I/O and the loop (8 000 instructions, under a
@@ -106,7 +94,6 @@ pub const IMAGES: [Image; 8] = [
         features: "board",
         what: "the board image (STM32F411, ADXL355 on I2C1)",
         role: Role::Board,
-        proof: PanicProof::Link,
         budgets: &[],
         real_time: None,
     },
@@ -116,7 +103,6 @@ pub const IMAGES: [Image; 8] = [
         features: "qemu",
         what: "the QEMU image (harmonic force on a virtual ADXL355)",
         role: Role::Hil { env: "EDGEKF_FW_ELF", tests: &["hil"] },
-        proof: PanicProof::Link,
         budgets: &[
             ("harmonic_step", 4, 1, 5_000),
             ("adxl_poll", 16, 1, 10_000),
@@ -135,7 +121,6 @@ pub const IMAGES: [Image; 8] = [
         features: "qemu",
         what: "the rotor virtual-sensing QEMU image",
         role: Role::Hil { env: "EDGEKF_ROTOR_ELF", tests: &["hil"] },
-        proof: PanicProof::Link,
         budgets: &[("rotor_node_step", 20, 4, 40_000), ("rotor_node_steady", 20, 4, 8_000)],
         real_time: Some(RealTime {
             rate_hz: 1000,
@@ -149,7 +134,6 @@ pub const IMAGES: [Image; 8] = [
         features: "qemu",
         what: "the slider-crank clearance QEMU image",
         role: Role::Hil { env: "EDGEKF_CRANK_ELF", tests: &["crank_node"] },
-        proof: PanicProof::Link,
         budgets: &[
             ("crank_sample", 2500, 1, 200),
             ("crank_window", 2500, 1, 750_000),
@@ -171,7 +155,6 @@ pub const IMAGES: [Image; 8] = [
         features: "qemu",
         what: "the underwater-vehicle thruster-health QEMU image",
         role: Role::Hil { env: "EDGEKF_UUV_ELF", tests: &["uuv_node"] },
-        proof: PanicProof::Link,
         budgets: &[("uuv_step", 20, 6, 1_100_000), ("uuv_step_dvl", 20, 6, 1_200_000)],
         real_time: Some(RealTime {
             rate_hz: 50,
@@ -185,7 +168,6 @@ pub const IMAGES: [Image; 8] = [
         features: "qemu",
         what: "the boom tip-vibration QEMU image",
         role: Role::Hil { env: "EDGEKF_BOOM_ELF", tests: &["boom_node"] },
-        proof: PanicProof::Link,
         budgets: &[("boom_step", 14, 2, 65_000), ("boom_rereduce", 14, 2, 18_000_000)],
         real_time: Some(RealTime {
             rate_hz: 100,
@@ -199,7 +181,6 @@ pub const IMAGES: [Image; 8] = [
         features: "qemu",
         what: "the numerical soak image",
         role: Role::Hil { env: "EDGEKF_SOAK_ELF", tests: &["soak_qemu"] },
-        proof: PanicProof::Link,
         budgets: &[],
         real_time: None,
     },
@@ -209,7 +190,6 @@ pub const IMAGES: [Image; 8] = [
         features: "qemu",
         what: "the instruction-count image",
         role: Role::Bench,
-        proof: PanicProof::Link,
         budgets: &[("kalman_joseph", 24, 4, 150_000)],
         real_time: None,
     },

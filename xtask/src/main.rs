@@ -21,8 +21,8 @@
 //!   missing).
 //! * `cargo xtask provision` — install what a fresh Debian machine lacks (as root), or say what.
 //!
-//! Every build proves its image panic-free at link time ([`images::PanicProof`], feature
-//! `no-panic-proof`); a failed proof lists where the panic paths are ([`panics`]).
+//! Every build proves its image panic-free at link time (feature `no-panic-proof`); a failed
+//! proof lists where the panic paths are ([`panics`]).
 //!
 //! The images, their flags, HIL tests and instruction budgets are one table, [`images::IMAGES`].
 
