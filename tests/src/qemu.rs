@@ -47,6 +47,11 @@ pub fn rotor_elf() -> Result<PathBuf> {
     elf_from("EDGEKF_ROTOR_ELF")
 }
 
+/// The accelerometer rotor image: `$EDGEKF_ROTOR_ACCEL_ELF` (set by `cargo xtask test`).
+pub fn rotor_accel_elf() -> Result<PathBuf> {
+    elf_from("EDGEKF_ROTOR_ACCEL_ELF")
+}
+
 /// The slider-crank clearance image: `$EDGEKF_CRANK_ELF` (set by `cargo xtask test`).
 pub fn crank_elf() -> Result<PathBuf> {
     elf_from("EDGEKF_CRANK_ELF")

@@ -1,16 +1,21 @@
 //! Rotor virtual sensing: the firmware's rotor image run on the host over a data file, the
-//! parsing of its output (the image's or the host run's), and the accuracy measure shared by
-//! the tests.
+//! parsing of its output (the image's or the host run's), the bit-for-bit check of a rotor
+//! image's QEMU run against the host's, and the accuracy measure shared by the tests.
 
 use crate::faulty::FaultPlan;
 use crate::report::frames;
-use anyhow::{anyhow, Result};
+use anyhow::{anyhow, bail, Result};
+use edgekf_firmware::frame::Frame;
+use edgekf_firmware::hil::HilImage;
 use edgekf_firmware::line_feed::ChannelReader;
 use edgekf_firmware::node::Node;
 use edgekf_firmware::systems::rotor::{
     channel_source, RotorEnd, RotorEstimator, RotorFrame, RotorImage, RotorNode, RotorReport, CHANNELS, DISK_NODES,
 };
 use edgekf_sim::systems::rotor::Recording;
+use std::fmt::Debug;
+use std::path::Path;
+use std::time::Duration;
 
 /// Runs the firmware's rotor image over CSV text exactly as `edgekf-rotor-qemu` does.
 pub fn run_host(csv: &[u8]) -> Result<Vec<RotorReport>> {
@@ -40,6 +45,37 @@ pub fn parse_numbered(lines: &[String]) -> Result<Vec<(u32, RotorReport)>> {
 /// The run's end frame (its counts).
 pub fn end(lines: &[String]) -> Result<RotorEnd> {
     frames::<RotorEnd>(lines)?.pop().ok_or_else(|| anyhow!("no `rotor` line: the run did not finish"))
+}
+
+/// A report's numbers as bits (NaN included), for bit-for-bit comparisons.
+pub fn bits(r: &RotorReport) -> Vec<u32> {
+    r.disk.iter().chain(&r.force).chain([&r.nis]).map(|v| v.to_bits()).collect()
+}
+
+/// Runs a rotor image's ELF `elf` (of image `I`, ending with frame `E`) in QEMU on the HIL file
+/// `csv` and the same image on the host: every `rot` frame, its sample number and its report,
+/// bit for bit, and the end frame the same. Returns the firmware run's lines (its `stack` frame
+/// included).
+pub fn qemu_matches_host<I: HilImage, E: Frame + PartialEq + Debug>(elf: &Path, csv: &[u8]) -> Result<Vec<String>> {
+    let run = crate::qemu::run(elf, csv, Duration::from_secs(600))?;
+    if let Some(msg) = run.failure() {
+        bail!("{msg}");
+    }
+    let host = crate::host::lines::<I>(csv)?;
+    let (fw, reference) = (parse_numbered(&run.lines)?, parse_numbered(&host)?);
+    if fw.len() != reference.len() {
+        bail!("firmware reported {} samples, the host {}", fw.len(), reference.len());
+    }
+    for ((k, a), (kh, b)) in fw.iter().zip(&reference) {
+        if (k, bits(a)) != (kh, bits(b)) {
+            bail!("sample {k} (host {kh}): firmware {a:?} host {b:?}");
+        }
+    }
+    let (fw_end, host_end) = (frames::<E>(&run.lines)?, frames::<E>(&host)?);
+    if fw_end.len() != 1 || fw_end != host_end {
+        bail!("end frames: firmware {fw_end:?}, host {host_end:?}");
+    }
+    Ok(run.lines)
 }
 
 /// Worst RMS error over the disk nodes' x and y for samples with `t ≥ t0`, m.

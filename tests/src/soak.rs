@@ -45,7 +45,7 @@ pub fn problems(row: &SoakRow, f: &SoakFrame) -> Option<String> {
 /// One line of figures.
 pub fn line(row: &SoakRow, f: &SoakFrame) -> String {
     format!(
-        "soak {:<18} {:>9} steps, {:>4} blocks: worst block NIS mean {:.3}, worst error {:.3e} ({}), \
+        "soak {:<20} {:>9} steps, {:>4} blocks: worst block NIS mean {:.3}, worst error {:.3e} ({}), \
          asymmetry {:.1e}, drift {:.1e}, {} checks, {} resets, {} refused, {} out of bounds",
         row.name,
         f.steps,

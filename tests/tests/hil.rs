@@ -183,8 +183,8 @@ fn a_failing_firmware_run_fails_with_a_readable_message() {
     assert!(msg.contains("exit code Some(3)") && msg.contains("no usable header"), "{msg}");
 }
 
-#[test]
-fn rotor_virtual_sensing_in_qemu_matches_the_host_bit_for_bit() {
+/// Four seconds of the paper rotor (seed 7) and its HIL file.
+fn rotor_recording() -> (edgekf_sim::systems::rotor::Recording, String) {
     use edgekf_sim::systems::rotor::{RotorConfig, RotorModel, SimOptions};
     let cfg = RotorConfig::from_toml_str(include_str!("../../host-sim/configs/rotor_paper.toml")).unwrap();
     let rec = RotorModel::from_config(&cfg)
@@ -192,22 +192,20 @@ fn rotor_virtual_sensing_in_qemu_matches_the_host_bit_for_bit() {
         .simulate(&SimOptions { duration: 4.0, seed: 7, ..SimOptions::default() })
         .unwrap();
     let csv = rec.to_data_file().to_csv_string().unwrap();
+    (rec, csv)
+}
+
+#[test]
+fn rotor_virtual_sensing_in_qemu_matches_the_host_bit_for_bit() {
+    use edgekf_firmware::systems::rotor::{RotorEnd, RotorImage};
+    let (rec, csv) = rotor_recording();
     let elf = qemu::rotor_elf().unwrap_or_else(|e| panic!("{e:#}"));
-    let run = qemu::run(&elf, csv.as_bytes(), Duration::from_secs(600)).unwrap_or_else(|e| panic!("{e:#}"));
-    if let Some(msg) = run.failure() {
-        panic!("{msg}");
-    }
-    let fw = edgekf_tests::rotor::parse(&run.lines).unwrap();
-    let host = edgekf_tests::rotor::run_host(csv.as_bytes()).unwrap();
+    let lines = edgekf_tests::rotor::qemu_matches_host::<RotorImage, RotorEnd>(&elf, csv.as_bytes())
+        .unwrap_or_else(|e| panic!("{e:#}"));
+    let fw = edgekf_tests::rotor::parse(&lines).unwrap();
     assert_eq!(fw.len(), rec.t.len(), "firmware reported {} of {} samples", fw.len(), rec.t.len());
-    for (k, (a, b)) in fw.iter().zip(&host).enumerate() {
-        let bits = |r: &edgekf_firmware::systems::rotor::RotorReport| {
-            r.disk.iter().chain(&r.force).chain([&r.nis]).map(|v| v.to_bits()).collect::<Vec<_>>()
-        };
-        assert_eq!(bits(a), bits(b), "sample {k}: firmware {a:?} host {b:?}");
-    }
     let err = edgekf_tests::rotor::disk_rms_error(&fw, &rec, 1.0);
-    let stack = edgekf_tests::report::frames::<StackFrame>(&run.lines).unwrap().pop().expect("stack line");
+    let stack = edgekf_tests::report::frames::<StackFrame>(&lines).unwrap().pop().expect("stack line");
     eprintln!(
         "HIL rotor: {} samples bit-identical to the host; disk RMS error {:.3} µm for t ≥ 1 s; {stack:?}",
         fw.len(),
@@ -223,37 +221,19 @@ fn rotor_virtual_sensing_in_qemu_matches_the_host_bit_for_bit() {
 /// sample; disk error within 1 µm RMS; within 1 % of the clean run from 0.5 s after the faults).
 #[test]
 fn rotor_image_bridges_missing_and_garbage_lines() {
-    use edgekf_sim::systems::rotor::{RotorConfig, RotorModel, SimOptions};
-    use edgekf_tests::rotor::{check_faulty_run, end, faulty_csv, parse_numbered};
-    let cfg = RotorConfig::from_toml_str(include_str!("../../host-sim/configs/rotor_paper.toml")).unwrap();
-    let rec = RotorModel::from_config(&cfg)
-        .unwrap()
-        .simulate(&SimOptions { duration: 4.0, seed: 7, ..SimOptions::default() })
-        .unwrap();
-    let csv = rec.to_data_file().to_csv_string().unwrap();
+    use edgekf_firmware::systems::rotor::{RotorEnd, RotorImage};
+    use edgekf_tests::rotor::{check_faulty_run, end, faulty_csv, parse_numbered, qemu_matches_host};
+    let (rec, csv) = rotor_recording();
     let faulty = faulty_csv(&csv);
     let elf = qemu::rotor_elf().unwrap_or_else(|e| panic!("{e:#}"));
-    let run = qemu::run(&elf, faulty.as_bytes(), Duration::from_secs(600)).unwrap_or_else(|e| panic!("{e:#}"));
-    if let Some(msg) = run.failure() {
-        panic!("{msg}");
-    }
-    let host = edgekf_tests::host::lines::<edgekf_firmware::systems::rotor::RotorImage>(faulty.as_bytes()).unwrap();
-    let (fw, reference) = (parse_numbered(&run.lines).unwrap(), parse_numbered(&host).unwrap());
-    assert_eq!(fw.len(), reference.len());
-    let bits = |r: &edgekf_firmware::systems::rotor::RotorReport| {
-        r.disk.iter().chain(&r.force).chain([&r.nis]).map(|v| v.to_bits()).collect::<Vec<_>>()
-    };
-    for ((k, a), (kh, b)) in fw.iter().zip(&reference) {
-        assert_eq!((k, bits(a)), (kh, bits(b)), "sample {k}: firmware {a:?} host {b:?}");
-    }
-    assert_eq!(end(&run.lines).unwrap(), end(&host).unwrap());
-    let clean = edgekf_tests::host::lines::<edgekf_firmware::systems::rotor::RotorImage>(csv.as_bytes()).unwrap();
+    let lines = qemu_matches_host::<RotorImage, RotorEnd>(&elf, faulty.as_bytes()).unwrap_or_else(|e| panic!("{e:#}"));
+    let clean = edgekf_tests::host::lines::<RotorImage>(csv.as_bytes()).unwrap();
     let (err, mismatch) =
-        check_faulty_run(&run.lines, &parse_numbered(&clean).unwrap(), &rec).unwrap_or_else(|e| panic!("{e:#}"));
+        check_faulty_run(&lines, &parse_numbered(&clean).unwrap(), &rec).unwrap_or_else(|e| panic!("{e:#}"));
     eprintln!(
         "HIL rotor with missing and garbage lines: {:?}; bit-identical to the host; disk RMS error {:.3} µm for \
          t ≥ 1 s; from 0.5 s after the faults {:.2e} % off the clean run",
-        end(&run.lines).unwrap(),
+        end(&lines).unwrap(),
         err * 1e6,
         mismatch * 100.0
     );

@@ -59,6 +59,16 @@ fn the_rotor_node_stays_sound() {
 }
 
 #[test]
+fn the_accelerometer_rotor_filter_with_its_start_up_term_throughout_stays_sound() {
+    soak("rotor_accel_start_up");
+}
+
+#[test]
+fn the_accelerometer_rotor_node_stays_sound() {
+    soak("rotor_accel_node");
+}
+
+#[test]
 fn the_joint_ukf_stays_sound() {
     soak("joint_ukf");
 }

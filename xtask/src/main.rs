@@ -2,10 +2,12 @@
 //!
 //! * `cargo xtask test [--long]` — everything: provisioning, host tests, firmware cross-builds
 //!   (QEMU and board images) with their footprint, then the hardware-in-the-loop tests in QEMU.
-//! * `cargo xtask fw [--board | --rotor | --crank | --uuv | --boom | --soak | --bench]` — cross-build an image
-//!   (`edgekf-qemu` without a flag), prove it panic-free and print its flash/RAM use.
-//! * `cargo xtask panics [--board | --rotor | --crank | --uuv | --boom | --soak | --bench]` — build an image without the
-//!   proof and list its panic paths (source line, panic function, enclosing function).
+//! * `cargo xtask fw [--board | --rotor | --rotor-accel | --crank | --uuv | --boom | --soak |
+//!   --bench]` — cross-build an image (`edgekf-qemu` without a flag), prove it panic-free and
+//!   print its flash/RAM use.
+//! * `cargo xtask panics [--board | --rotor | --rotor-accel | --crank | --uuv | --boom | --soak |
+//!   --bench]` — build an image without the proof and list its panic paths (source line, panic
+//!   function, enclosing function).
 //! * `cargo xtask run [--data FILE.csv]` — run the QEMU image on a data file (default: the demo
 //!   scenario) and print the decoded defmt log, the stack high-water mark included.
 //! * `cargo xtask bench [--check]` — per-step instruction counts of the filters on the

@@ -1,9 +1,11 @@
 //! The soaks of the Kalman filters: the oscillator's harmonic-force filter (time-varying and
-//! steady-state), the rotor node's AKF (with its start-up term throughout, and as the node
-//! runs it) and a joint UKF of a mode's state and stiffness.
+//! steady-state), the rotor nodes' AKFs, from the probes and from the accelerometers (each with
+//! its start-up term throughout, and as the node runs it), and a joint UKF of a mode's state
+//! and stiffness.
 
 use super::{psd_root, swing, Blocks, Drift, Noise, SoakFrame, SoakRow};
-use crate::systems::rotor::{constants::*, RotorEstimator, STATES, STEADY_AFTER};
+use crate::systems::rotor::accel::{self, ACCEL_DESIGN, ACCEL_STATES};
+use crate::systems::rotor::{constants as probes, RotorEstimator, DESIGN, STATES, STEADY_AFTER};
 use edgekf::export::matrix;
 use edgekf::filter::{JointModel, MerweSigmaPoints, ParametricModel, UnscentedKalmanFilter};
 use edgekf::linalg::van_loan;
@@ -56,7 +58,7 @@ pub const ROTOR_START_UP: SoakRow = SoakRow {
     qemu_long_steps: 200_000,
     nis_limit: Some(1.3),
     error_limit: 0.05,
-    run: |n| rotor(None, n),
+    run: |n| rotor(RotorEstimator::from_design(&DESIGN, None), &PROBES, n),
 };
 
 /// The rotor node: the start-up term, then the steady-state gain alone from 0.5 s.
@@ -64,8 +66,29 @@ pub const ROTOR_NODE: SoakRow = SoakRow {
     name: "rotor_node",
     what: "rotor node (start-up term, steady-state gain from 0.5 s)",
     qemu_long_steps: 1_000_000,
-    run: |n| rotor(Some(STEADY_AFTER), n),
+    run: |n| rotor(RotorEstimator::from_design(&DESIGN, Some(STEADY_AFTER)), &PROBES, n),
     ..ROTOR_START_UP
+};
+
+/// The accelerometer rotor's AKF with its start-up term throughout (`edgekf-rotor-accel-qemu`).
+pub const ROTOR_ACCEL_START_UP: SoakRow = SoakRow {
+    name: "rotor_accel_start_up",
+    image: Some("edgekf-rotor-accel-qemu"),
+    what: "rotor AKF from accelerometers with its start-up term throughout (28 states)",
+    // About 85 000 instructions a step with the truth's: 10¹⁰ in 120 000 steps.
+    qemu_long_steps: 120_000,
+    run: |n| rotor(RotorEstimator::from_design(&ACCEL_DESIGN, None), &ACCELEROMETERS, n),
+    ..ROTOR_START_UP
+};
+
+/// The accelerometer rotor node: the start-up term, then the steady-state gain from 0.5 s.
+pub const ROTOR_ACCEL_NODE: SoakRow = SoakRow {
+    name: "rotor_accel_node",
+    what: "accelerometer rotor node (start-up term, steady-state gain from 0.5 s)",
+    // The unbalance's whole 10-minute swing, as for the probes' node (39 000 instructions a step).
+    qemu_long_steps: 1_000_000,
+    run: |n| rotor(RotorEstimator::from_design(&ACCEL_DESIGN, Some(STEADY_AFTER)), &ACCELEROMETERS, n),
+    ..ROTOR_ACCEL_START_UP
 };
 
 /// The joint UKF of a mode's state and stiffness (the shared core's UKF; no node runs it as
@@ -138,22 +161,54 @@ pub fn oscillator(gain: GainMode, n: u32) -> SoakFrame {
     blocks.finish(est.counters().filter)
 }
 
-/// The rotor node's estimator in `f32` (`switch_at`: when it drops its start-up term for the
-/// steady-state gain alone, `None` to carry the term throughout) on the paper rotor's reduced
-/// model: process noise from the model's `Q`, 1 µm probe noise, and unbalance forces whose
-/// sizes swing by ±50 % over 10 and 7 minutes while they turn with the shaft.
+/// The exported constants of a rotor model that its soak's truth is simulated from.
+pub struct RotorTruth<const N: usize> {
+    a: &'static [[f64; N]; N],
+    c: &'static [[f64; N]; 4],
+    q: &'static [[f64; N]; N],
+    r: &'static [[f64; 4]; 4],
+    disk: &'static [[f64; N]; 4],
+}
+
+/// The probes' model (`generated/rotor.rs`).
+pub const PROBES: RotorTruth<STATES> = RotorTruth {
+    a: &probes::ROTOR_A,
+    c: &probes::ROTOR_C,
+    q: &probes::ROTOR_Q,
+    r: &probes::ROTOR_R,
+    disk: &probes::ROTOR_DISK,
+};
+
+/// The accelerometers' model (`generated/rotor_accel.rs`).
+pub const ACCELEROMETERS: RotorTruth<ACCEL_STATES> = RotorTruth {
+    a: &accel::constants::ROTOR_A,
+    c: &accel::constants::ROTOR_C,
+    q: &accel::constants::ROTOR_Q,
+    r: &accel::constants::ROTOR_R,
+    disk: &accel::constants::ROTOR_DISK,
+};
+
+/// A rotor node's estimator `est` in `f32` (with its start-up term throughout, or dropping it
+/// at 0.5 s as the node does) on its own exported model `truth`: process noise from the
+/// model's `Q`, sensor noise from its `R` (1 µm on the probes, the ADXL355's on the
+/// accelerometers), and unbalance forces whose sizes swing by ±50 % over 10 and 7 minutes
+/// while they turn with the shaft (states 16–19 in both models: the modes come first, the
+/// accelerometers' low-pass last).
 #[inline(never)]
-pub fn rotor(switch_at: Option<u32>, n: u32) -> SoakFrame {
-    let a = matrix(&ROTOR_A).cast::<f32>();
-    let c = matrix(&ROTOR_C).cast::<f32>();
-    let disk = matrix(&ROTOR_DISK).cast::<f32>();
-    let q = psd_root(&matrix(&ROTOR_Q)).cast::<f32>();
+pub fn rotor<const N: usize, const R: usize>(
+    mut est: RotorEstimator<N, R>,
+    truth: &RotorTruth<N>,
+    n: u32,
+) -> SoakFrame {
+    let a = matrix(truth.a).cast::<f32>();
+    let c = matrix(truth.c).cast::<f32>();
+    let disk = matrix(truth.disk).cast::<f32>();
+    let q = psd_root(&matrix(truth.q)).cast::<f32>();
     let r_sd: [f32; 4] = core::array::from_fn(|i| {
-        let v = ROTOR_R.get(i).and_then(|row| row.get(i)).copied().unwrap_or(0.0);
+        let v = truth.r.get(i).and_then(|row| row.get(i)).copied().unwrap_or(0.0);
         libm::sqrt(v) as f32
     });
-    let mut est = RotorEstimator::with_switch_at(switch_at);
-    let mut x = SVector::<f32, STATES>::zeros();
+    let mut x = SVector::<f32, N>::zeros();
     x[16] = 2.0;
     x[19] = 1.5;
     let mut sizes = [(16, 2.0, 600.0, Drift::new(1e-3)), (18, 1.5, 420.0, Drift::new(1e-3))];
@@ -187,7 +242,7 @@ pub fn rotor(switch_at: Option<u32>, n: u32) -> SoakFrame {
             .sum();
         let truth2: f64 = d.iter().map(|v| f64::from(*v) * f64::from(*v)).sum();
         blocks.push(r.nis, err2, truth2);
-        x = a * x + q * noise.vector::<STATES>();
+        x = a * x + q * noise.vector::<N>();
         if (k + 1) % BLOCK == 0 {
             blocks.close();
         }

@@ -93,11 +93,13 @@ pub struct SoakRow {
 }
 
 /// Every soak, one row per filter; the index is the frame's `filter`.
-pub static SOAKS: [SoakRow; 8] = [
+pub static SOAKS: [SoakRow; 10] = [
     kalman::OSCILLATOR_VARYING,
     kalman::OSCILLATOR_STEADY,
     kalman::ROTOR_START_UP,
     kalman::ROTOR_NODE,
+    kalman::ROTOR_ACCEL_START_UP,
+    kalman::ROTOR_ACCEL_NODE,
     kalman::JOINT_UKF,
     crank::CRANK,
     uuv::UUV,
