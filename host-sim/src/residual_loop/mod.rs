@@ -20,6 +20,7 @@
 //! * [`impacts`]: the first stage, periodic impacts named by envelope lines and taken out;
 //! * [`filter`]: a dynamic-size Kalman filter for the host search (time-varying gain until the
 //!   covariance converges, then frozen);
+//! * [`modal_form`]: the transition in real modal form, so that a covariance step is `O(n²)`;
 //! * [`optimize`]: the one-dimensional maximum-likelihood fit of an effect's scalar.
 
 pub mod baseline;
@@ -29,6 +30,7 @@ pub mod direction;
 pub mod envelope;
 pub mod filter;
 pub mod impacts;
+pub mod modal_form;
 pub mod onset;
 pub mod optimize;
 pub mod report;

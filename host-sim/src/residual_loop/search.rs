@@ -77,11 +77,11 @@ impl Default for LoopOptions {
 /// by maximum likelihood when [`LoopSystem::scalar`] gives it a range (0 otherwise), and, for
 /// effects the system says [may start mid-run](LoopSystem::may_start_mid_run), the onset the
 /// engine fits with it.
-pub trait LoopSystem {
+pub trait LoopSystem: Sync {
     /// One augmentation at one place.
-    type Effect: Copy + PartialEq + Debug;
+    type Effect: Copy + PartialEq + Debug + Send + Sync;
     /// What a run was made with (the system reads effect values from it).
-    type Model;
+    type Model: Send;
     /// The system's name in the report.
     fn name(&self) -> &str;
     /// Runs the filter with `effects` over the whole recording; an effect with an
@@ -198,14 +198,14 @@ struct Engine<'a, S: LoopSystem> {
     /// Scalar measurements in the run (for the BIC).
     n_meas: f64,
     /// The current model's NIS per channel, at least 1 (scales the gain floor).
-    nis_scale: std::cell::Cell<f64>,
+    nis_scale: f64,
 }
 
 impl<S: LoopSystem> Engine<'_, S> {
     /// `½ p ln n` for the effect's parameters, and one more for a fitted onset, plus the
     /// baseline's [`gain_floor`](LoopOptions::gain_floor) over the run.
     fn penalty(&self, e: &S::Effect, onset: bool) -> f64 {
-        self.bic(e, onset) + self.options.gain_floor * self.nis_scale.get() * self.n_meas
+        self.bic(e, onset) + self.options.gain_floor * self.nis_scale * self.n_meas
     }
 
     /// `½ p ln n` alone.
@@ -387,13 +387,17 @@ impl<S: LoopSystem> Engine<'_, S> {
         refused: &mut Vec<Refused>,
     ) -> Vec<Fitted<S::Effect, S::Model>> {
         let total = cands.len();
-        let mut results = Vec::new();
-        for (i, cand) in cands.into_iter().enumerate() {
-            let label = self.sys.label(&cand);
+        let fits = parallel_map(&cands, |i, cand| {
+            let label = self.sys.label(cand);
             self.progress(|| {
                 format!("iteration {iteration}: candidate {}/{total}: {} at {}", i + 1, label.kind, label.location)
             });
-            match self.fit(effects, cand, base) {
+            self.fit(effects, *cand, base)
+        });
+        let mut results = Vec::new();
+        for (cand, fit) in cands.iter().zip(fits) {
+            let label = self.sys.label(cand);
+            match fit {
                 Ok(f) => results.push(f),
                 Err(e) => {
                     self.progress(|| format!("  {} at {}: {e:#}", label.kind, label.location));
@@ -493,22 +497,26 @@ impl<S: LoopSystem> Engine<'_, S> {
     fn screen(&self, effects: &[Applied<S::Effect>], run: &Run) -> Result<Vec<NotIdentifiable>> {
         let base = run.log_likelihood();
         let mut out = Vec::new();
-        for (e, thetas) in self.sys.screened() {
-            if effects.iter().any(|x| x.effect == e) {
-                continue;
-            }
-            let penalty = self.bic(&e, false);
-            let label = self.sys.label(&e);
+        let screened: Vec<_> =
+            self.sys.screened().into_iter().filter(|(e, _)| !effects.iter().any(|x| x.effect == *e)).collect();
+        let worsts = parallel_map(&screened, |_, (e, thetas)| -> Result<f64> {
+            let penalty = self.bic(e, false);
             let mut worst: f64 = 0.0;
-            for theta in thetas {
+            for &theta in thetas {
                 let mut trial = effects.to_vec();
-                trial.push(Applied::new(e, theta));
+                trial.push(Applied::new(*e, theta));
                 let (_, r) = self.sys.run(&trial)?;
                 worst = worst.max((r.log_likelihood() - base).abs());
                 if worst > penalty {
                     break;
                 }
             }
+            Ok(worst)
+        });
+        for ((e, _), worst) in screened.iter().zip(worsts) {
+            let worst = worst?;
+            let penalty = self.bic(e, false);
+            let label = self.sys.label(e);
             let what = label.detail.parameter.clone().unwrap_or_else(|| label.kind.to_string());
             self.progress(|| format!("screen: {what} of {}: |Δ log-likelihood| ≤ {worst:.2}", label.location));
             if worst <= penalty {
@@ -526,6 +534,35 @@ impl<S: LoopSystem> Engine<'_, S> {
         }
         Ok(out)
     }
+}
+
+/// `f` over `items` on every core the machine offers (each worker takes the next item left),
+/// the results in the items' order: the candidates' fits are independent runs of the filter,
+/// and the result does not depend on the number of cores.
+fn parallel_map<T: Sync, R: Send>(items: &[T], f: impl Fn(usize, &T) -> R + Sync) -> Vec<R> {
+    let workers = std::thread::available_parallelism().map_or(1, usize::from).min(items.len());
+    if workers <= 1 {
+        return items.iter().enumerate().map(|(i, item)| f(i, item)).collect();
+    }
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let mut done: Vec<(usize, R)> = std::thread::scope(|scope| {
+        let handles: Vec<_> = (0..workers)
+            .map(|_| {
+                scope.spawn(|| {
+                    let mut mine = Vec::new();
+                    loop {
+                        let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                        let Some(item) = items.get(i) else { break mine };
+                        mine.push((i, f(i, item)));
+                    }
+                })
+            })
+            .collect();
+        // A worker that panicked takes the process down as a sequential run would have.
+        handles.into_iter().flat_map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e))).collect()
+    });
+    done.sort_by_key(|(i, _)| *i);
+    done.into_iter().map(|(_, r)| r).collect()
 }
 
 /// The family of an effect for identifiability: same kind and order, different location.
@@ -599,13 +636,8 @@ pub fn search<S: LoopSystem>(sys: &mut S, options: &LoopOptions) -> Result<LoopR
         (cur_model, cur_run) = sys.run(&effects)?;
     }
     let sys = &*sys;
-    let engine = Engine {
-        sys,
-        options,
-        t: traces.t.clone(),
-        n_meas: cur_run.measurements().max(2) as f64,
-        nis_scale: std::cell::Cell::new(1.0),
-    };
+    let mut engine =
+        Engine { sys, options, t: traces.t.clone(), n_meas: cur_run.measurements().max(2) as f64, nis_scale: 1.0 };
     let mut current = sys.summarise(&cur_run);
     let mut added: Vec<Kept<S::Effect>> = Vec::new();
     let mut trials = found.trials;
@@ -624,7 +656,7 @@ pub fn search<S: LoopSystem>(sys: &mut S, options: &LoopOptions) -> Result<LoopR
             break;
         }
         iteration += 1;
-        engine.nis_scale.set(if current.nis_mean.is_finite() { current.nis_mean.max(1.0) } else { 1.0 });
+        engine.nis_scale = if current.nis_mean.is_finite() { current.nis_mean.max(1.0) } else { 1.0 };
         let mut chosen = None;
         let mut evaluated = Vec::new();
         for tier in sys.candidates(&current, &cur_run, &cur_model, &effects) {
