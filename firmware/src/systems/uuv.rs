@@ -5,7 +5,7 @@
 //!
 //! Input: the vehicle data file's 15 channels ([`CHANNELS`]); the DVL's cells are empty between
 //! its readings and are read as missing, not as bad lines. Output: a [`UuvFrame`] per sample,
-//! and a [`UuvEnd`] at the end of the run. Memory: the estimator (about 14 KB of matrices) lives
+//! and a [`UuvEnd`] at the end of the run. Memory: the estimator (about 8 KB of matrices) lives
 //! in the caller's [`Storage`], not on the stack of every call.
 
 use crate::frame::FrameSink;

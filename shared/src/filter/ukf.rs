@@ -168,13 +168,27 @@ impl<T: Real> MerweSigmaPoints<T> {
     }
 }
 
-/// Lower Cholesky factor of `spread · P`, or `None` unless the lower triangle and the factor are
-/// finite and the factor's diagonal is positive (`P` is symmetric wherever this is called on a
-/// filter's covariance: the guard symmetrises it first).
-fn sigma_factor<T: Real, const N: usize>(p: &SMatrix<T, N, N>, spread: T) -> Option<SMatrix<T, N, N>> {
-    // `cholesky` checks every pivot and entry of the factor as it forms them, which covers the
-    // (symmetric) input: no separate passes over the matrix.
-    crate::linalg::cholesky(&(p * spread))
+/// Lower Cholesky factor of `spread · P` into `l`; `false` unless the lower triangle and the
+/// factor are finite and the factor's diagonal is positive (`P` is symmetric wherever this is
+/// called on a filter's covariance: the guard symmetrises it first).
+fn sigma_factor<T: Real, const N: usize>(p: &SMatrix<T, N, N>, spread: T, l: &mut SMatrix<T, N, N>) -> bool {
+    // The factor checks every pivot and entry as it forms them, which covers the (symmetric)
+    // input: no separate passes over the matrix. In place: see `cholesky_scaled_into`.
+    crate::linalg::cholesky_scaled_into(p, spread, l)
+}
+
+/// The sigma-point factor of a filter's start into `sqrt`, or why there is none: `x0` not
+/// finite, `p0` not finite or not positive definite.
+fn start_factor<T: Real, const N: usize>(
+    weights: &SigmaWeights<T>,
+    x0: &SVector<T, N>,
+    p0: &SMatrix<T, N, N>,
+    sqrt: &mut SMatrix<T, N, N>,
+) -> Result<(), UkfError> {
+    if x0.iter().any(|v| !v.is_finite()) || !sigma_factor(p0, weights.spread, sqrt) {
+        return Err(UkfError::InitialCovariance);
+    }
+    Ok(())
 }
 
 /// Weighted mean and covariance of the `2N + 1` images of the sigma points, given as the centre
@@ -192,41 +206,44 @@ fn sigma_factor<T: Real, const N: usize>(p: &SMatrix<T, N, N>, spread: T) -> Opt
 /// sum is one by construction, not by rounding), and for `β ≥ α²` every term is positive
 /// semi-definite. What remains is the rounding of the images `ψᵢ` themselves, amplified by about
 /// `|Wm₀|` (see [`MerweSigmaPoints`]). Rank-one terms are formed as `(e eᵀ) · w`, which is exactly
-/// symmetric. Also returns the deviations from the mean `eᵢ − m` of the `+` and `−` images, for
-/// the cross-covariance.
-#[allow(clippy::type_complexity)]
+/// symmetric.
+///
+/// In place, for the stack of a small target (a 20-state `f32` filter's `plus` and `minus` are
+/// 1.6 KB each): the images become their deviations `eᵢ`, the covariance is written to `cov`,
+/// and `m` is returned (the mean is `ψ₀ + m`; the update takes `eᵢ − m` for the cross-covariance).
 fn moments<T: Real, const K: usize, const N: usize>(
     w: &SigmaWeights<T>,
     center: &SVector<T, K>,
-    plus: &SMatrix<T, K, N>,
-    minus: &SMatrix<T, K, N>,
-) -> (SVector<T, K>, SMatrix<T, K, K>, SMatrix<T, K, N>, SMatrix<T, K, N>) {
-    let mut e_plus = *plus;
-    let mut e_minus = *minus;
+    plus: &mut SMatrix<T, K, N>,
+    minus: &mut SMatrix<T, K, N>,
+    cov: &mut SMatrix<T, K, K>,
+) -> SVector<T, K> {
     // Element by element: the same subtraction without nalgebra's shape assertion.
-    for mut col in e_plus.column_iter_mut().chain(e_minus.column_iter_mut()) {
+    for mut col in plus.column_iter_mut().chain(minus.column_iter_mut()) {
         for (e, c) in col.iter_mut().zip(center.iter()) {
             *e -= *c;
         }
     }
-    // The columns as vectors from the storage: `column_iter`'s per-column assertion would be a
-    // panic path (the no-panic proof); the arithmetic is the same.
-    let columns = || e_plus.data.0.iter().chain(e_minus.data.0.iter()).map(|c| SVector::<T, K>::from(*c));
+    // The columns from the storage: `column_iter`'s per-column assertion would be a panic path
+    // (the no-panic proof); the arithmetic is the same.
+    let columns = || plus.data.0.iter().chain(minus.data.0.iter());
     let mut m = SVector::<T, K>::zeros();
     for e in columns() {
-        m += e * w.side;
+        m += SVector::<T, K>::from(*e) * w.side;
     }
-    let mut cov = (m * m.transpose()) * w.cov_shift;
+    // `cov = (m mᵀ) · (β − α²)`, element by element as nalgebra forms the expression.
+    for (col, mj) in cov.data.0.iter_mut().zip(m.iter()) {
+        for (x, mi) in col.iter_mut().zip(m.iter()) {
+            *x = (*mi * *mj) * w.cov_shift;
+        }
+    }
     // `cov += (e eᵀ) · W` for every deviation, fused into one pass over the columns' storage:
     // the same products in the same order as the matrix expression (so the same bits, exactly
     // symmetric), without its two temporaries per point (the chip's hot loop).
-    for e in e_plus.data.0.iter().chain(e_minus.data.0.iter()) {
-        add_outer(&mut cov, e, e, w.side);
+    for e in columns() {
+        add_outer(cov, e, e, w.side);
     }
-    for mut col in e_plus.column_iter_mut().chain(e_minus.column_iter_mut()) {
-        col -= m;
-    }
-    (center + m, cov, e_plus, e_minus)
+    m
 }
 
 /// `acc += (a bᵀ) · w`, element by element as nalgebra forms `(a * b.transpose()) * w`.
@@ -234,6 +251,20 @@ fn add_outer<T: Real, const R: usize, const C: usize>(acc: &mut SMatrix<T, R, C>
     for (col, bj) in acc.data.0.iter_mut().zip(b.iter()) {
         for (x, ai) in col.iter_mut().zip(a.iter()) {
             *x += (*ai * *bj) * w;
+        }
+    }
+}
+
+/// `p −= wᵀ w` in place, each entry's sum in the order nalgebra's product forms it (first term,
+/// then each next one added): the same bits as `p -= w.transpose() * w` without its `N × N`
+/// temporary and the transposed copy.
+fn sub_gram<T: Real, const K: usize, const N: usize>(p: &mut SMatrix<T, N, N>, w: &SMatrix<T, K, N>) {
+    for (p_col, wj) in p.data.0.iter_mut().zip(w.data.0.iter()) {
+        for (x, wi) in p_col.iter_mut().zip(w.data.0.iter()) {
+            let mut terms = wi.iter().zip(wj.iter()).map(|(a, b)| *a * *b);
+            if let Some(first) = terms.next() {
+                *x -= terms.fold(first, |sum, t| sum + t);
+            }
         }
     }
 }
@@ -313,8 +344,9 @@ pub struct UnscentedKalmanFilter<T: Real, const N: usize, const M: usize> {
     /// Lower Cholesky factor of `spread · p`; always valid between steps.
     sqrt: SMatrix<T, N, N>,
     x_reset: SVector<T, N>,
+    /// `P₀`. Its factor is not kept but formed again on a reset (the same bits as in `new`): a
+    /// reset is rare, and the filter is moved by value and lives on a small target's stack.
     p_reset: SMatrix<T, N, N>,
-    sqrt_reset: SMatrix<T, N, N>,
     health: FilterHealth,
 }
 
@@ -332,22 +364,62 @@ impl<T: Real, const N: usize, const M: usize> UnscentedKalmanFilter<T, N, M> {
         p0: SMatrix<T, N, N>,
     ) -> Result<Self, UkfError> {
         let weights = points.weights::<N>()?;
-        if x0.iter().any(|v| !v.is_finite()) {
-            return Err(UkfError::InitialCovariance);
-        }
-        let sqrt = sigma_factor(&p0, weights.spread).ok_or(UkfError::InitialCovariance)?;
-        Ok(Self {
-            q,
-            r,
+        let mut sqrt = SMatrix::<T, N, N>::zeros();
+        start_factor(&weights, &x0, &p0, &mut sqrt)?;
+        let health = FilterHealth::default();
+        Ok(Self { q, r, weights, x: x0, p: p0, sqrt, x_reset: x0, p_reset: p0, health })
+    }
+
+    /// [`new`](Self::new), built in `slot` in place (the same filter, the same failures, and
+    /// `slot` unchanged on one): `new` returns the filter by value, 6.6 KB at 20 `f32` states,
+    /// which a caller that stores it meets as a copy or two on its stack. A node that starts
+    /// its filter at its first sample, inside its loop, keeps the loop's stack down with this.
+    ///
+    /// ```
+    /// use edgekf::filter::{MerweSigmaPoints, UnscentedKalmanFilter};
+    /// use nalgebra::{Matrix1, Matrix2, Vector2};
+    /// let points = MerweSigmaPoints { alpha: 0.5, beta: 2.0, kappa: 1.0 };
+    /// let (q, r, x0, p0) = (Matrix2::zeros(), Matrix1::new(1.0), Vector2::new(1.0, 2.0), Matrix2::identity());
+    /// let mut slot = None;
+    /// let ukf = UnscentedKalmanFilter::<f64, 2, 1>::new_in(&mut slot, points, &q, &r, &x0, &p0).unwrap();
+    /// assert_eq!(ukf.state()[1], 2.0);
+    /// assert!(UnscentedKalmanFilter::new_in(&mut slot, points, &q, &r, &x0, &Matrix2::zeros()).is_err());
+    /// assert_eq!(slot.unwrap().state()[1], 2.0);
+    /// ```
+    pub fn new_in<'a>(
+        slot: &'a mut Option<Self>,
+        points: MerweSigmaPoints<T>,
+        q: &SMatrix<T, N, N>,
+        r: &SMatrix<T, M, M>,
+        x0: &SVector<T, N>,
+        p0: &SMatrix<T, N, N>,
+    ) -> Result<&'a mut Self, UkfError> {
+        let weights = points.weights::<N>()?;
+        let mut sqrt = SMatrix::<T, N, N>::zeros();
+        start_factor(&weights, x0, p0, &mut sqrt)?;
+        let (zero, zeros) = (SVector::zeros(), SMatrix::zeros());
+        let health = FilterHealth::default();
+        // Zeros first (a fill of `slot`, no temporary: a filter literal would be built on the
+        // stack and copied), then each field copied in.
+        let f = slot.insert(Self {
+            q: zeros,
+            r: SMatrix::zeros(),
             weights,
-            x: x0,
-            p: p0,
-            sqrt,
-            x_reset: x0,
-            p_reset: p0,
-            sqrt_reset: sqrt,
-            health: FilterHealth::default(),
-        })
+            x: zero,
+            p: zeros,
+            sqrt: zeros,
+            x_reset: zero,
+            p_reset: zeros,
+            health,
+        });
+        f.q = *q;
+        f.r = *r;
+        f.x = *x0;
+        f.p = *p0;
+        f.sqrt = sqrt;
+        f.x_reset = *x0;
+        f.p_reset = *p0;
+        Ok(f)
     }
 
     /// Current state estimate.
@@ -371,6 +443,7 @@ impl<T: Real, const N: usize, const M: usize> UnscentedKalmanFilter<T, N, M> {
     }
 
     /// Time update through `model.f`: `x⁻ = Σ Wmᵢ f(χᵢ)`, `P⁻ = Σ Wcᵢ (f(χᵢ) − x⁻)(…)ᵀ + Q`.
+    #[inline(never)] // see `update_with`
     pub fn predict<F: UkfModel<T, N, M>>(&mut self, model: &F) {
         let center = model.f(&self.x);
         let mut plus = SMatrix::<T, N, N>::zeros();
@@ -379,9 +452,9 @@ impl<T: Real, const N: usize, const M: usize> UnscentedKalmanFilter<T, N, M> {
             plus.set_column(k, &model.f(&(self.x + l)));
             minus.set_column(k, &model.f(&(self.x - l)));
         }
-        let (x, p, _, _) = moments(&self.weights, &center, &plus, &minus);
-        self.x = x;
-        self.p = p + self.q;
+        let m = moments(&self.weights, &center, &mut plus, &mut minus, &mut self.p);
+        self.x = center + m;
+        self.p += self.q;
         self.guard();
     }
 
@@ -425,6 +498,9 @@ impl<T: Real, const N: usize, const M: usize> UnscentedKalmanFilter<T, N, M> {
     /// ukf.update_with(&Log, &Vector1::new(2.0), &Matrix1::new(1e-6)).unwrap();
     /// assert!((ukf.state()[1] - 2.0).abs() < 1e-3);
     /// ```
+    // Not inlined, nor is `predict`: each keeps its sigma-point matrices in its own frame, so a
+    // caller's predict and several updates in a row take the largest of them, not their sum.
+    #[inline(never)]
     pub fn update_with<const K: usize, H: UkfMeasurement<T, N, K>>(
         &mut self,
         model: &H,
@@ -439,46 +515,53 @@ impl<T: Real, const N: usize, const M: usize> UnscentedKalmanFilter<T, N, M> {
         let center = model.h(&x);
         let mut plus = SMatrix::<T, K, N>::zeros();
         let mut minus = SMatrix::<T, K, N>::zeros();
-        // State deviations of the actual sigma points, `(x ± l) − x` as filterpy forms them.
-        let mut dx_plus = SMatrix::<T, N, N>::zeros();
-        let mut dx_minus = SMatrix::<T, N, N>::zeros();
         for (k, l) in self.sqrt.column_iter().enumerate() {
-            let (sp, sm) = (x + l, x - l);
-            plus.set_column(k, &model.h(&sp));
-            minus.set_column(k, &model.h(&sm));
-            dx_plus.set_column(k, &(sp - x));
-            dx_minus.set_column(k, &(sm - x));
+            plus.set_column(k, &model.h(&(x + l)));
+            minus.set_column(k, &model.h(&(x - l)));
         }
-        let (z_pred, pzz, dz_plus, dz_minus) = moments(&self.weights, &center, &plus, &minus);
-        let s = pzz + r;
-        // The centre point's state deviation is exactly zero: it adds nothing to `Pxz`.
-        let mut pxz = SMatrix::<T, N, K>::zeros();
+        let mut s = SMatrix::<T, K, K>::zeros();
+        let m = moments(&self.weights, &center, &mut plus, &mut minus, &mut s);
+        let z_pred = center + m;
+        s += r;
+        // `Pzx = Pxzᵀ`, accumulated transposed (the same products: the solve below takes it so).
+        // The centre point's state deviation is exactly zero: it adds nothing. The other points'
+        // deviations `(x ± l) − x` (as filterpy forms them, not `± l`) are formed again here
+        // rather than kept from the loop above: two `N × N` matrices fewer on the stack.
+        let mut pzx = SMatrix::<T, K, N>::zeros();
         let side = self.weights.side;
-        for (dx, dz) in
-            dx_plus.data.0.iter().zip(dz_plus.data.0.iter()).chain(dx_minus.data.0.iter().zip(dz_minus.data.0.iter()))
-        {
-            add_outer(&mut pxz, dx, dz, side);
+        let mut add = |point: SVector<T, N>, dz: &mut [T; K]| {
+            for (e, mi) in dz.iter_mut().zip(m.iter()) {
+                *e -= *mi;
+            }
+            let [dx] = &(point - x).data.0;
+            add_outer(&mut pzx, dz, dx, side);
+        };
+        for (l, dz) in self.sqrt.data.0.iter().zip(plus.data.0.iter_mut()) {
+            add(x + SVector::<T, N>::from(*l), dz);
+        }
+        for (l, dz) in self.sqrt.data.0.iter().zip(minus.data.0.iter_mut()) {
+            add(x - SVector::<T, N>::from(*l), dz);
         }
         let residual = y - z_pred;
         let refuse = |health: &mut FilterHealth| {
             health.refused_updates = health.refused_updates.saturating_add(1);
             Err(FilterError::InnovationCovariance)
         };
-        if s.iter().any(|v| !v.is_finite()) || pxz.iter().any(|v| !v.is_finite()) {
+        if s.iter().any(|v| !v.is_finite()) || pzx.iter().any(|v| !v.is_finite()) {
             return refuse(&mut self.health);
         }
         let Some(l) = crate::linalg::cholesky(&s) else {
             return refuse(&mut self.health);
         };
         // K = Pxz S⁻¹ = (L⁻ᵀ L⁻¹ Pxzᵀ)ᵀ;  K S Kᵀ = W Wᵀ with Wᵀ = L⁻¹ Pxzᵀ.
-        let wt = crate::linalg::solve_lower(&l, &pxz.transpose());
+        let wt = crate::linalg::solve_lower(&l, &pzx);
         let white = crate::linalg::solve_lower(&l, &residual);
         let gain = crate::linalg::solve_lower_transposed(&l, &wt).transpose();
         if wt.iter().chain(white.iter()).any(|v| !v.is_finite()) {
             return refuse(&mut self.health);
         }
         self.x = x + gain * residual;
-        self.p -= wt.transpose() * wt;
+        sub_gram(&mut self.p, &wt);
         self.guard();
         Ok(Innovation { residual, s, nis: white.norm_squared() })
     }
@@ -487,7 +570,26 @@ impl<T: Real, const N: usize, const M: usize> UnscentedKalmanFilter<T, N, M> {
     /// it had settled), through the same guard as every step: a `p` that is not positive
     /// definite resets to `P₀` and is counted.
     pub fn set_covariance(&mut self, p: SMatrix<T, N, N>) {
-        self.p = p;
+        self.edit_covariance(|q| *q = p);
+    }
+
+    /// Changes the state's covariance in place through `edit`, then the same guard as
+    /// [`set_covariance`](Self::set_covariance): for changing a few entries without a copy of
+    /// the whole matrix (1.6 KB of stack for 20 `f32` states).
+    ///
+    /// ```
+    /// use edgekf::filter::{MerweSigmaPoints, UnscentedKalmanFilter};
+    /// use nalgebra::{Matrix1, Matrix2, Vector2};
+    /// let points = MerweSigmaPoints { alpha: 0.5, beta: 2.0, kappa: 1.0 };
+    /// let mut ukf = UnscentedKalmanFilter::<f64, 2, 1>::new(points, Matrix2::zeros(), Matrix1::new(1.0),
+    ///     Vector2::zeros(), Matrix2::identity()).unwrap();
+    /// ukf.edit_covariance(|p| p[(1, 1)] = 4.0);
+    /// assert_eq!(ukf.covariance()[(1, 1)], 4.0);
+    /// ukf.edit_covariance(|p| p[(0, 0)] = -1.0); // not positive definite: reset to P₀
+    /// assert_eq!((*ukf.covariance(), ukf.health().covariance_resets), (Matrix2::identity(), 1));
+    /// ```
+    pub fn edit_covariance(&mut self, edit: impl FnOnce(&mut SMatrix<T, N, N>)) {
+        edit(&mut self.p);
         self.guard();
     }
 
@@ -509,15 +611,14 @@ impl<T: Real, const N: usize, const M: usize> UnscentedKalmanFilter<T, N, M> {
             }
         }
         let state_ok = self.x.iter().all(|v| v.is_finite());
-        match sigma_factor(&self.p, self.weights.spread) {
-            Some(l) if state_ok => self.sqrt = l,
-            _ => {
-                self.health.covariance_resets = self.health.covariance_resets.saturating_add(1);
-                self.p = self.p_reset;
-                self.sqrt = self.sqrt_reset;
-                if !state_ok {
-                    self.x = self.x_reset;
-                }
+        // Factored in place: a failed factor leaves a partial one, which the reset replaces.
+        if !(sigma_factor(&self.p, self.weights.spread, &mut self.sqrt) && state_ok) {
+            self.health.covariance_resets = self.health.covariance_resets.saturating_add(1);
+            self.p = self.p_reset;
+            // `new` factored this same `P₀`, so this cannot fail.
+            let _ = sigma_factor(&self.p, self.weights.spread, &mut self.sqrt);
+            if !state_ok {
+                self.x = self.x_reset;
             }
         }
     }

@@ -41,7 +41,7 @@ impl core::fmt::Display for LinalgError {
 
 mod cholesky;
 mod solve;
-pub use cholesky::{cholesky, solve_lower, solve_lower_transposed};
+pub use cholesky::{cholesky, cholesky_scaled_into, solve_lower, solve_lower_transposed};
 pub use solve::solve;
 
 mod jacobi;

@@ -165,16 +165,16 @@ pub fn open<T: Real, const N: usize, const M: usize>(ukf: &mut UnscentedKalmanFi
     if i >= N {
         return;
     }
-    let mut p = *ukf.covariance();
-    for k in 0..N {
-        for at in [(i, k), (k, i)] {
-            if let Some(e) = p.get_mut(at) {
-                *e = T::zero();
+    ukf.edit_covariance(|p| {
+        for k in 0..N {
+            for at in [(i, k), (k, i)] {
+                if let Some(e) = p.get_mut(at) {
+                    *e = T::zero();
+                }
             }
         }
-    }
-    if let Some(e) = p.get_mut((i, i)) {
-        *e = sd * sd;
-    }
-    ukf.set_covariance(p);
+        if let Some(e) = p.get_mut((i, i)) {
+            *e = sd * sd;
+        }
+    });
 }

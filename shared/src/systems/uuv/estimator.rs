@@ -236,7 +236,6 @@ pub struct UuvEstimator<T: Real, const N: usize> {
     dynamics: ReducedDynamics<T>,
     settings: EstimatorSettings,
     points: MerweSigmaPoints<T>,
-    q: SMatrix<T, N, N>,
     r_imu: SMatrix<T, 6, 6>,
     r_depth_heading: SMatrix<T, 2, 2>,
     r_imu_depth_heading: SMatrix<T, 8, 8>,
@@ -277,32 +276,12 @@ impl<T: Real, const N: usize> UuvEstimator<T, N> {
         if values.iter().any(|v| !(v.is_finite() && *v > 0.0)) {
             return Err(EstimatorError::Settings);
         }
-        let dt = settings.dt;
-        let mut qd = [0.0f64; N];
-        let mut set = |from: Option<usize>, count: usize, v: f64| {
-            for i in from.into_iter().flat_map(|f| f..f + count) {
-                if let Some(q) = qd.get_mut(i) {
-                    *q = v;
-                }
-            }
-        };
-        set(Some(0), 1, p.depth);
-        set(Some(1), 3, p.attitude);
-        set(Some(VELOCITY), 3, p.velocity);
-        set(Some(VELOCITY + 3), 3, p.rate);
-        set(layout.k_t(), 1, p.health);
-        set(layout.k_v(), 1, p.health);
-        set(layout.acc_bias(), 3, p.acc_bias);
-        set(layout.gyro_bias(), 3, p.gyro_bias);
-        set(layout.current(), 2, p.current);
-        let q = SMatrix::<T, N, N>::from_diagonal(&SVector::<T, N>::from(qd.map(|s| T::of_f64(s * s * dt))));
         let var = |s: f64| T::of_f64(s * s);
         let imu = [n.acc, n.acc, n.acc, n.gyro, n.gyro, n.gyro].map(var);
         Ok(Self {
             dynamics,
             settings: *settings,
             points: MerweSigmaPoints { alpha: T::of_f64(0.5), beta: T::of_f64(2.0), kappa: T::zero() },
-            q,
             r_imu: SMatrix::<T, 6, 6>::from_diagonal(&SVector::<T, 6>::from(imu)),
             r_depth_heading: SMatrix::<T, 2, 2>::from_diagonal(&SVector::<T, 2>::new(
                 T::of_f64(n.depth * n.depth),
@@ -323,7 +302,7 @@ impl<T: Real, const N: usize> UuvEstimator<T, N> {
             command: Command { n_t: T::zero(), n_v: T::zero(), rudder: T::zero(), elevator: T::zero() },
             monitors: [ThrusterMonitor::new(&settings.detector); 2],
             position: [T::zero(); 2],
-            dt: T::of_f64(dt),
+            dt: T::of_f64(settings.dt),
         })
     }
 
@@ -359,6 +338,7 @@ impl<T: Real, const N: usize> UuvEstimator<T, N> {
 
     /// Builds the filter at the first sample. A first sample without depth or heading starts at
     /// 0 with a wide spread; the guard's reset target is this start.
+    #[inline(never)] // nor `advance`: the two frames are not summed in `step`'s
     fn start(&mut self, s: &Sample<T>) {
         let layout = self.settings.layout;
         let init = &self.settings.initial;
@@ -405,23 +385,20 @@ impl<T: Real, const N: usize> UuvEstimator<T, N> {
                 *si = init.health;
             }
         }
-        let mut spread = |from: Option<usize>, count: usize, v: f64| {
-            for i in from.into_iter().flat_map(|f| f..f + count) {
-                if let Some(s) = sd.get_mut(i) {
-                    *s = v;
-                }
-            }
-        };
-        spread(layout.acc_bias(), 3, init.acc_bias);
-        spread(layout.gyro_bias(), 3, init.gyro_bias);
-        spread(layout.current(), 2, init.current);
+        fill(&mut sd, layout.acc_bias(), 3, init.acc_bias);
+        fill(&mut sd, layout.gyro_bias(), 3, init.gyro_bias);
+        fill(&mut sd, layout.current(), 2, init.current);
         let p0 = SMatrix::<T, N, N>::from_diagonal(&SVector::<T, N>::from(sd.map(|v| T::of_f64(v * v))));
         // Settings were checked and the spreads are positive: the start cannot be refused; if it
-        // were, the estimator stays unstarted and tries again at the next sample.
-        self.ukf = UnscentedKalmanFilter::new(self.points, self.q, self.r_imu, x, p0).ok();
+        // were, the estimator stays unstarted and tries again at the next sample. Built in place:
+        // `new` would put two copies of the filter (6.6 KB each at 20 `f32` states) on this frame,
+        // which runs within the loop's stack.
+        let q = process_noise(&self.settings);
+        let _ = UnscentedKalmanFilter::new_in(&mut self.ukf, self.points, &q, &self.r_imu, &x, &p0);
     }
 
     /// Predict and update; the IMU update's NIS if it was applied.
+    #[inline(never)]
     fn advance(&mut self, s: &Sample<T>) -> Option<T> {
         let layout = self.settings.layout;
         let model = StepModel { dynamics: &self.dynamics, layout, dt: self.dt, command: self.command };
@@ -470,14 +447,16 @@ impl<T: Real, const N: usize> UuvEstimator<T, N> {
 
     fn estimate(&mut self, imu_nis: Option<T>) -> Estimate<T> {
         let layout = self.settings.layout;
-        let (x, p) = match &self.ukf {
-            Some(u) => (*u.state(), *u.covariance()),
-            None => (SVector::<T, N>::repeat(T::of_f64(f64::NAN)), SMatrix::<T, N, N>::repeat(T::of_f64(f64::NAN))),
+        // The state and the variances, not the whole covariance: a copy of that would be 1.6 KB
+        // on the stack of every sample at 20 `f32` states.
+        let (x, var) = match &self.ukf {
+            Some(u) => (*u.state(), u.covariance().diagonal()),
+            None => (SVector::<T, N>::repeat(T::of_f64(f64::NAN)), SVector::<T, N>::repeat(T::of_f64(f64::NAN))),
         };
         let monitors = &mut self.monitors;
         let mut health = |j: usize, i: Option<usize>| {
             i.map(|i| {
-                let sd = p.get((i, i)).copied().unwrap_or_else(T::zero).max(T::zero()).sqrt();
+                let sd = get(&var, i).max(T::zero()).sqrt();
                 let k = get(&x, i);
                 let status = monitors[j].status(k, sd);
                 Health { k, sd, status, alarms: monitors[j].alarms() }
@@ -497,6 +476,34 @@ impl<T: Real, const N: usize> UuvEstimator<T, N> {
             acc_bias: layout.acc_bias().map(three),
             gyro_bias: layout.gyro_bias().map(three),
             imu_nis,
+        }
+    }
+}
+
+/// The process noise `Q` (diagonal: each state's density² · dt), formed when the filter starts
+/// rather than kept beside the filter's own copy (1.6 KB at 20 `f32` states).
+fn process_noise<T: Real, const N: usize>(settings: &EstimatorSettings) -> SMatrix<T, N, N> {
+    let layout = settings.layout;
+    let p = &settings.process;
+    let mut qd = [0.0f64; N];
+    fill(&mut qd, Some(0), 1, p.depth);
+    fill(&mut qd, Some(1), 3, p.attitude);
+    fill(&mut qd, Some(VELOCITY), 3, p.velocity);
+    fill(&mut qd, Some(VELOCITY + 3), 3, p.rate);
+    fill(&mut qd, layout.k_t(), 1, p.health);
+    fill(&mut qd, layout.k_v(), 1, p.health);
+    fill(&mut qd, layout.acc_bias(), 3, p.acc_bias);
+    fill(&mut qd, layout.gyro_bias(), 3, p.gyro_bias);
+    fill(&mut qd, layout.current(), 2, p.current);
+    let dt = settings.dt;
+    SMatrix::<T, N, N>::from_diagonal(&SVector::<T, N>::from(qd.map(|s| T::of_f64(s * s * dt))))
+}
+
+/// `v[from..from + count] = value`, where `from` is given and the indices exist.
+fn fill<const N: usize>(v: &mut [f64; N], from: Option<usize>, count: usize, value: f64) {
+    for i in from.into_iter().flat_map(|f| f..f + count) {
+        if let Some(e) = v.get_mut(i) {
+            *e = value;
         }
     }
 }
