@@ -200,7 +200,7 @@ fn run_in(
     let max_tv = 3000usize;
     // Work space of the covariance step: `P Cᵀ`, the gain and the dense product's.
     let (mut pct, mut gain, mut work) = (DMatrix::zeros(n, m), DMatrix::zeros(n, m), DMatrix::zeros(n, n));
-    let mut y = DVector::<f64>::zeros(m);
+    let (mut y, mut e) = (DVector::<f64>::zeros(m), DVector::<f64>::zeros(m));
     for k in 0..len {
         if models.get(segment + 1).is_some_and(|next| k >= next.from) {
             segment += 1;
@@ -215,7 +215,9 @@ fn run_in(
             y[i] = col[k];
         }
         if y.iter().all(|v| v.is_finite()) {
-            let e = &y - &seg.c * &x;
+            for (i, c_i) in seg.c_t.column_iter().enumerate() {
+                e[i] = y[i] - c_i.dot(&x);
+            }
             let (nis, logdet, sdiag) = if let Some(Frozen { gain, sdiag, s_inv, logdet }) = &frozen {
                 let nis = (e.transpose() * s_inv * &e)[(0, 0)];
                 x.gemv(1.0, gain, &e, 1.0);
@@ -279,13 +281,11 @@ fn run_in(
             run.nis.push(f64::NAN);
             run.log_det_s.push(f64::NAN);
         }
-        let o = &seg.outputs * &x;
-        for (i, out) in run.outputs.iter_mut().enumerate() {
-            out.push(o[i]);
+        for (row, out) in seg.outputs_t.column_iter().zip(run.outputs.iter_mut()) {
+            out.push(row.dot(&x));
         }
-        let t = &seg.tracked * &x;
-        for (j, out) in run.effect_states.iter_mut().enumerate() {
-            out.push(t[j]);
+        for (row, out) in seg.tracked_t.column_iter().zip(run.effect_states.iter_mut()) {
+            out.push(row.dot(&x));
         }
         seg.transition.step(&mut x);
         if frozen.is_none() {
@@ -332,10 +332,7 @@ impl Transition {
     /// `p ← B p Bᵀ` (`work`: an n×n scratch matrix).
     fn covariance(&self, p: &mut DMatrix<f64>, work: &mut DMatrix<f64>) {
         match self {
-            Transition::Modal(form) => {
-                form.rows(p);
-                form.cols_t(p);
-            }
+            Transition::Modal(form) => form.covariance(p),
             Transition::Dense { phi, phi_t } => {
                 work.gemm(1.0, phi, p, 0.0);
                 p.gemm(1.0, work, phi_t, 0.0);
@@ -357,12 +354,12 @@ struct Segment<'a> {
     transition: Transition,
     /// `(W, W⁻¹)` where the filter runs in modal coordinates.
     w: Option<(DMatrix<f64>, DMatrix<f64>)>,
-    /// Process noise, sensor rows, output rows and tracked states' rows, in the filter's coordinates.
+    /// Process noise and sensor rows (as columns), in the filter's coordinates.
     q: DMatrix<f64>,
-    c: DMatrix<f64>,
     c_t: DMatrix<f64>,
-    outputs: DMatrix<f64>,
-    tracked: DMatrix<f64>,
+    /// Output rows and tracked states' rows as columns (one dot product each a sample).
+    outputs_t: DMatrix<f64>,
+    tracked_t: DMatrix<f64>,
     r: &'a DMatrix<f64>,
 }
 
@@ -384,26 +381,22 @@ impl<'a> Segment<'a> {
             Some(form) => Transition::Modal(form),
             None => Transition::Dense { phi_t: phi.transpose(), phi: phi.clone() },
         };
+        // Rows on the plant's states read the filter's through `W`.
+        let through =
+            |rows: &DMatrix<f64>| w.as_ref().map_or_else(|| rows.transpose(), |(w, _)| (rows * w).transpose());
         let mut segment = Segment {
             from,
             plant_c: ss.c.clone(),
             transition,
             q: q.clone(),
-            c: ss.c.clone(),
-            c_t: ss.c.transpose(),
-            outputs: outputs.clone(),
-            tracked: selection,
+            c_t: through(ss.c),
+            outputs_t: through(outputs),
+            tracked_t: through(&selection),
             r: ss.r,
             phi,
             w,
         };
-        if let Some((w, _)) = &segment.w {
-            segment.c = ss.c * w;
-            segment.c_t = segment.c.transpose();
-            segment.outputs = outputs * w;
-            segment.tracked = &segment.tracked * w;
-            segment.q = segment.filter_cov(&q);
-        }
+        segment.q = segment.filter_cov(&q);
         Ok(segment)
     }
 

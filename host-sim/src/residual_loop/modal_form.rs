@@ -1,29 +1,35 @@
 //! The transition in real modal form, `Φ = W B W⁻¹` with `B` block diagonal: a 1×1 block per
-//! real eigenvalue, a 2×2 rotation–scaling block per complex pair. In those coordinates the
-//! filter's covariance step `B P Bᵀ` costs `O(n²)` instead of the `O(n³)` of a dense product,
-//! which is most of the loop's time: a reduced model with undamped effect states (an unbalance,
-//! a harmonic force) never reaches a steady gain, so every sample takes a covariance step.
+//! real eigenvalue, a 2×2 rotation–scaling block per complex pair, one block for the whole
+//! invariant subspace of a repeated eigenvalue. In those coordinates the filter's covariance
+//! step `B P Bᵀ` costs `O(n²)` instead of the `O(n³)` of a dense product, which is most of the
+//! loop's time: a reduced model with undamped effect states (an unbalance, a harmonic force)
+//! never reaches a steady gain, so every sample takes a covariance step.
 //!
-//! A transition that is defective or nearly so (a Jordan block, eigenvectors close to parallel)
-//! has no well-conditioned `W`; [`ModalForm::of`] then returns `None` and the filter keeps the
-//! dense product.
+//! A transition whose eigenvectors are close to parallel without being equal has no
+//! well-conditioned `W`; [`ModalForm::of`] then returns `None` and the filter keeps the dense
+//! product.
 
 use crate::linalg::balance;
-use faer::Mat;
+use faer::{c64, Mat};
 use nalgebra::{DMatrix, DVector};
 
 /// `W` may amplify rounding by at most this much (`‖W‖₁ ‖W⁻¹‖₁`, unit columns).
 const MAX_CONDITION: f64 = 1e6;
 /// `W B W⁻¹` must reproduce `Φ` to this relative accuracy (Frobenius norm).
 const MAX_RECONSTRUCTION: f64 = 1e-11;
+/// An eigenvalue this close to the real axis (relative to the largest) is real.
+const REAL: f64 = 1e-14;
+/// Eigenvalues this close (relative to the largest) are one repeated eigenvalue.
+const SAME: f64 = 1e-9;
+/// Blocks up to this size step through a stack buffer.
+const SCRATCH: usize = 16;
 
-/// One diagonal block of `B`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-enum Block {
-    /// A real eigenvalue.
-    One(f64),
-    /// A complex pair: `[[b00, b01], [b10, b11]]`.
-    Two([[f64; 2]; 2]),
+/// One diagonal block of `B`: its first row and its entries, row by row.
+#[derive(Debug, Clone, PartialEq)]
+struct Block {
+    at: usize,
+    size: usize,
+    b: Vec<f64>,
 }
 
 /// `Φ = W B W⁻¹` with `B` block diagonal.
@@ -63,29 +69,70 @@ impl ModalForm {
         let phi_b = DMatrix::from_fn(n, n, |i, j| balanced[(i, j)]);
         let evd = balanced.eigen().ok()?;
         let (u, values) = (evd.U(), evd.S().column_vector());
-        let scale = (0..n).map(|k| values[k].norm()).fold(0.0, f64::max).max(f64::MIN_POSITIVE);
-        let mut w = DMatrix::<f64>::zeros(n, n);
-        // The size of each block, in the order of `W`'s columns.
-        let mut sizes = Vec::new();
-        let mut conjugates = 0usize;
-        for k in 0..n {
-            let lambda = values[k];
-            let part = |re: bool| DVector::from_fn(n, |i, _| if re { u[(i, k)].re } else { u[(i, k)].im });
-            let column: usize = sizes.iter().sum();
-            if lambda.im.abs() <= 1e-14 * scale {
-                // A real eigenvalue's vector, whatever complex phase the solver gave it.
-                let (re, im) = (part(true), part(false));
-                set_unit(&mut w, column, if re.norm() >= im.norm() { &re } else { &im })?;
-                sizes.push(1);
-            } else if lambda.im > 0.0 {
-                set_unit(&mut w, column, &part(true))?;
-                set_unit(&mut w, column + 1, &part(false))?;
-                sizes.push(2);
+        let values: Vec<c64> = (0..n).map(|k| values[k]).collect();
+        let solver = |k: usize| (0..n).map(|i| u[(i, k)]).collect::<Vec<c64>>();
+        // Identical parts of a model (two channels' low-passes, an unbalance's x and y) repeat
+        // an eigenvalue. The solver's vectors usually serve, one block each; where they do not
+        // (parallel, or a defective eigenvalue), a repeated eigenvalue's invariant subspace
+        // becomes one block.
+        let mut form = Self::with_blocks(&phi_b, &values, 0.0, &solver)
+            .or_else(|| Self::with_blocks(&phi_b, &values, SAME, &solver))?;
+        // Balancing undone: `W ← D W`, `W⁻¹ ← W⁻¹ D⁻¹`.
+        for (i, di) in d.iter().enumerate() {
+            form.w.row_mut(i).scale_mut(*di);
+            form.w_inv.column_mut(i).scale_mut(1.0 / di);
+        }
+        Some(form)
+    }
+
+    /// The form of `phi` with eigenvalues within `same` (relative to the largest) of each other
+    /// as one block, their vectors from their invariant subspace; a single eigenvalue's vector
+    /// from `solver(k)`. `None` if the basis is ill-conditioned or misses `phi`.
+    fn with_blocks(phi: &DMatrix<f64>, values: &[c64], same: f64, solver: &dyn Fn(usize) -> Vec<c64>) -> Option<Self> {
+        let n = phi.nrows();
+        let scale = values.iter().map(|v| v.norm()).fold(0.0, f64::max).max(f64::MIN_POSITIVE);
+        // The eigenvalues on or above the real axis, equal ones together.
+        let mut clusters: Vec<(c64, Vec<usize>)> = Vec::new();
+        let mut below = 0usize;
+        for (k, &lambda) in values.iter().enumerate() {
+            if lambda.im < -REAL * scale {
+                below += 1;
+            } else if let Some((_, members)) =
+                clusters.iter_mut().find(|(l, _)| same > 0.0 && (l - lambda).norm() <= same * scale)
+            {
+                members.push(k);
             } else {
-                conjugates += 1;
+                clusters.push((lambda, vec![k]));
             }
         }
-        if sizes.iter().sum::<usize>() != n || 2 * conjugates != n - sizes.iter().filter(|&&s| s == 1).count() {
+        let mut w = DMatrix::<f64>::zeros(n, n);
+        let mut sizes = Vec::new();
+        let mut column = 0;
+        for (lambda, members) in &clusters {
+            let real = lambda.im.abs() <= REAL * scale;
+            let vectors: Vec<Vec<c64>> = if members.len() == 1 {
+                vec![solver(members[0])]
+            } else {
+                invariant_subspace(phi, *lambda, members.len(), real)?
+            };
+            let before = column;
+            for v in vectors {
+                let re = DVector::from_iterator(n, v.iter().map(|z| z.re));
+                let im = DVector::from_iterator(n, v.iter().map(|z| z.im));
+                if real {
+                    // A real eigenvalue's vector, whatever complex phase the solver gave it.
+                    set_unit(&mut w, column, if re.norm() >= im.norm() { &re } else { &im })?;
+                    column += 1;
+                } else {
+                    set_unit(&mut w, column, &re)?;
+                    set_unit(&mut w, column + 1, &im)?;
+                    column += 2;
+                    below = below.checked_sub(1)?;
+                }
+            }
+            sizes.push(column - before);
+        }
+        if column != n || below != 0 {
             return None;
         }
         let w_inv = w.clone().try_inverse()?;
@@ -93,29 +140,21 @@ impl ModalForm {
             return None;
         }
         // The blocks from `W⁻¹ Φ W` itself, so that `W B W⁻¹` is as close to `Φ` as rounding allows.
-        let b = &w_inv * &phi_b * &w;
-        let mut i = 0;
+        let b = &w_inv * phi * &w;
+        let mut at = 0;
         let blocks = sizes
             .iter()
             .map(|&size| {
-                let block = match size {
-                    1 => Block::One(b[(i, i)]),
-                    _ => Block::Two([[b[(i, i)], b[(i, i + 1)]], [b[(i + 1, i)], b[(i + 1, i + 1)]]]),
-                };
-                i += size;
+                let block =
+                    Block { at, size, b: (0..size * size).map(|k| b[(at + k / size, at + k % size)]).collect() };
+                at += size;
                 block
             })
             .collect();
         let form = ModalForm { w, w_inv, blocks };
         let rebuilt = &form.w * form.block_matrix() * &form.w_inv;
-        let error = (&rebuilt - &phi_b).norm() / phi_b.norm().max(f64::MIN_POSITIVE);
-        // Balancing undone: `W ← D W`, `W⁻¹ ← W⁻¹ D⁻¹`.
-        let mut form = form;
-        for (i, di) in d.iter().enumerate() {
-            form.w.row_mut(i).scale_mut(*di);
-            form.w_inv.column_mut(i).scale_mut(1.0 / di);
-        }
-        (error <= MAX_RECONSTRUCTION).then_some(form)
+        let accurate = (&rebuilt - phi).norm() <= MAX_RECONSTRUCTION * phi.norm().max(f64::MIN_POSITIVE);
+        accurate.then_some(form)
     }
 
     /// `B` as a dense matrix.
@@ -128,64 +167,108 @@ impl ModalForm {
 
     /// `v ← B v`.
     pub fn step(&self, v: &mut DVector<f64>) {
-        let mut i = 0;
-        for block in &self.blocks {
-            match *block {
-                Block::One(a) => {
-                    v[i] *= a;
-                    i += 1;
+        let mut x = [0.0; SCRATCH];
+        for Block { at, size, b } in &self.blocks {
+            let (at, size) = (*at, *size);
+            match size {
+                1 => v[at] *= b[0],
+                2 => {
+                    let (p, q) = (v[at], v[at + 1]);
+                    v[at] = b[0] * p + b[1] * q;
+                    v[at + 1] = b[2] * p + b[3] * q;
                 }
-                Block::Two(b) => {
-                    let (p, q) = (v[i], v[i + 1]);
-                    v[i] = b[0][0] * p + b[0][1] * q;
-                    v[i + 1] = b[1][0] * p + b[1][1] * q;
-                    i += 2;
+                _ if size <= SCRATCH => {
+                    x[..size].copy_from_slice(&v.as_slice()[at..at + size]);
+                    for r in 0..size {
+                        v[at + r] = dot(&b[r * size..(r + 1) * size], &x[..size]);
+                    }
+                }
+                _ => {
+                    let new = DMatrix::from_row_slice(size, size, b) * v.rows(at, size);
+                    v.rows_mut(at, size).copy_from(&new);
                 }
             }
         }
     }
 
-    /// `m ← B m`.
+    /// `p ← B p Bᵀ` for a symmetric `p`: each pair of blocks once, mirrored.
+    pub fn covariance(&self, p: &mut DMatrix<f64>) {
+        let largest = self.blocks.iter().map(|b| b.size).max().unwrap_or(0);
+        // `X` (the pair's part of `p`, row by row), `T = B_i X` and `Y = T B_jᵀ`.
+        let (mut x, mut t) = (vec![0.0; largest * largest], vec![0.0; largest * largest]);
+        for (k, bi) in self.blocks.iter().enumerate() {
+            for bj in &self.blocks[k..] {
+                let (i, j, a, c) = (bi.at, bj.at, &bi.b, &bj.b);
+                if bi.size == 2 && bj.size == 2 {
+                    // The common case, unrolled: two rotation–scaling blocks.
+                    let (x00, x01, x10, x11) = (p[(i, j)], p[(i, j + 1)], p[(i + 1, j)], p[(i + 1, j + 1)]);
+                    let (t00, t01) = (a[0] * x00 + a[1] * x10, a[0] * x01 + a[1] * x11);
+                    let (t10, t11) = (a[2] * x00 + a[3] * x10, a[2] * x01 + a[3] * x11);
+                    let y00 = t00 * c[0] + t01 * c[1];
+                    let y01 = t00 * c[2] + t01 * c[3];
+                    let y10 = t10 * c[0] + t11 * c[1];
+                    let y11 = t10 * c[2] + t11 * c[3];
+                    for (r, s, v) in [(i, j, y00), (i, j + 1, y01), (i + 1, j, y10), (i + 1, j + 1, y11)] {
+                        p[(r, s)] = v;
+                        p[(s, r)] = v;
+                    }
+                    continue;
+                }
+                let (si, sj) = (bi.size, bj.size);
+                for r in 0..si {
+                    for q in 0..sj {
+                        x[r * sj + q] = p[(i + r, j + q)];
+                    }
+                }
+                for r in 0..si {
+                    for q in 0..sj {
+                        t[r * sj + q] = (0..si).fold(0.0, |acc, l| acc + a[r * si + l] * x[l * sj + q]);
+                    }
+                }
+                for r in 0..si {
+                    for q in 0..sj {
+                        let v = dot(&t[r * sj..(r + 1) * sj], &c[q * sj..(q + 1) * sj]);
+                        p[(i + r, j + q)] = v;
+                        p[(j + q, i + r)] = v;
+                    }
+                }
+            }
+        }
+    }
+
+    /// `m ← B m`, any `m`.
     pub fn rows(&self, m: &mut DMatrix<f64>) {
-        let mut i = 0;
-        for block in &self.blocks {
-            match *block {
-                Block::One(a) => {
-                    m.row_mut(i).scale_mut(a);
-                    i += 1;
-                }
-                Block::Two(b) => {
-                    for j in 0..m.ncols() {
-                        let (p, q) = (m[(i, j)], m[(i + 1, j)]);
-                        m[(i, j)] = b[0][0] * p + b[0][1] * q;
-                        m[(i + 1, j)] = b[1][0] * p + b[1][1] * q;
-                    }
-                    i += 2;
-                }
-            }
+        for Block { at, size, b } in &self.blocks {
+            let new = DMatrix::from_row_slice(*size, *size, b) * m.rows(*at, *size);
+            m.rows_mut(*at, *size).copy_from(&new);
         }
     }
+}
 
-    /// `m ← m Bᵀ`.
-    pub fn cols_t(&self, m: &mut DMatrix<f64>) {
-        let mut i = 0;
-        for block in &self.blocks {
-            match *block {
-                Block::One(a) => {
-                    m.column_mut(i).scale_mut(a);
-                    i += 1;
-                }
-                Block::Two(b) => {
-                    for r in 0..m.nrows() {
-                        let (p, q) = (m[(r, i)], m[(r, i + 1)]);
-                        m[(r, i)] = b[0][0] * p + b[0][1] * q;
-                        m[(r, i + 1)] = b[1][0] * p + b[1][1] * q;
-                    }
-                    i += 2;
-                }
-            }
-        }
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).fold(0.0, |acc, (p, q)| acc + p * q)
+}
+
+/// `count` vectors spanning the invariant subspace of `phi` at a `count`-fold eigenvalue `λ`:
+/// the null space of `(phi − λI)^count` (which holds a defective eigenvalue's generalised
+/// vectors too), from the right singular vectors of its smallest singular values; real ones
+/// for a `real` λ. `None` if the solver fails.
+fn invariant_subspace(phi: &DMatrix<f64>, lambda: c64, count: usize, real: bool) -> Option<Vec<Vec<c64>>> {
+    let n = phi.nrows();
+    let power = |shifted: Mat<c64>| (1..count).fold(shifted.clone(), |p, _| &p * &shifted);
+    if real {
+        // A real eigenvalue's subspace has a real basis: the real solver gives it.
+        let shifted = Mat::<f64>::from_fn(n, n, |i, j| phi[(i, j)] - if i == j { lambda.re } else { 0.0 });
+        let p = (1..count).fold(shifted.clone(), |p, _| &p * &shifted);
+        let svd = p.svd().ok()?;
+        let v = svd.V();
+        return Some((n - count..n).map(|k| (0..n).map(|i| c64::new(v[(i, k)], 0.0)).collect()).collect());
     }
+    let shifted =
+        Mat::<c64>::from_fn(n, n, |i, j| c64::new(phi[(i, j)], 0.0) - if i == j { lambda } else { c64::new(0.0, 0.0) });
+    let svd = power(shifted).svd().ok()?;
+    let v = svd.V();
+    Some((n - count..n).map(|k| (0..n).map(|i| v[(i, k)]).collect()).collect())
 }
 
 /// Column `at` of `w` set to `v / ‖v‖` (`None` for a zero or non-finite vector).
@@ -203,10 +286,36 @@ mod tests {
     use super::*;
 
     #[test]
-    fn a_defective_transition_has_no_modal_form() {
-        // A double integrator over one step: a Jordan block, no basis of eigenvectors.
-        let phi = DMatrix::from_row_slice(2, 2, &[1.0, 1e-3, 0.0, 1.0]);
-        assert!(ModalForm::of(&phi).is_none());
+    fn a_repeated_eigenvalue_keeps_its_subspace_as_one_block() {
+        // A double integrator over one step (a Jordan block: no basis of eigenvectors) beside
+        // two identical damped rotations (one eigenvalue pair twice, as two channels' equal
+        // low-passes give): each repeated eigenvalue becomes one block of its whole subspace.
+        let (c, s) = (0.9 * 0.4f64.cos(), 0.9 * 0.4f64.sin());
+        let phi = DMatrix::from_row_slice(
+            6,
+            6,
+            &[
+                1.0, 1e-3, 0.5, 0.0, 0.2, 0.0, //
+                0.0, 1.0, 0.0, 0.1, 0.0, 0.3, //
+                0.0, 0.0, c, -s, 0.0, 0.0, //
+                0.0, 0.0, s, c, 0.0, 0.0, //
+                0.0, 0.0, 0.0, 0.0, c, -s, //
+                0.0, 0.0, 0.0, 0.0, s, c,
+            ],
+        );
+        let form = ModalForm::of(&phi).expect("a modal form");
+        // The Jordan block as one 2×2 block, the repeated pair as one 4×4.
+        let sizes: Vec<usize> = form.blocks.iter().map(|b| b.size).collect();
+        assert_eq!(sizes, [2, 4]);
+        // The symmetric step against the dense product, through the 4×4 block.
+        let x = DMatrix::from_fn(6, 6, |i, j| ((i * 5 + j) as f64).cos());
+        let mut p = &x * x.transpose();
+        let b = form.block_matrix();
+        let expected = &b * &p * b.transpose();
+        form.covariance(&mut p);
+        assert!((p - &expected).norm() < 1e-14 * expected.norm());
+        let rebuilt = &form.w * form.block_matrix() * &form.w_inv;
+        assert!((rebuilt - &phi).norm() < 1e-13);
         assert!(ModalForm::of(&DMatrix::from_row_slice(1, 1, &[f64::NAN])).is_none());
     }
 
@@ -238,11 +347,12 @@ mod tests {
                 assert!((rebuilt[(i, j)] - phi[(i, j)]).abs() < 1e-13 * scale, "({i}, {j})");
             }
         }
-        // `m Bᵀ` is the transpose of `B mᵀ`.
-        let mut a = DMatrix::from_fn(6, 6, |i, j| (i * 7 + j) as f64);
-        let mut b = a.transpose();
-        form.cols_t(&mut a);
-        form.rows(&mut b);
-        assert_eq!(a, b.transpose());
+        // The symmetric step against the dense product.
+        let x = DMatrix::from_fn(6, 6, |i, j| ((i * 7 + j) as f64).sin());
+        let mut p = &x * x.transpose();
+        let b = form.block_matrix();
+        let expected = &b * &p * b.transpose();
+        form.covariance(&mut p);
+        assert!((p - &expected).norm() < 1e-14 * expected.norm());
     }
 }
