@@ -425,7 +425,7 @@ impl<'a> Segment<'a> {
 mod tests {
     use super::*;
 
-    /// A rotor-like model: five lightly damped modes (displacements in µm, velocities in mm/s)
+    /// A model like a machine's: five lightly damped modes (displacements in µm, velocities in mm/s)
     /// and an undamped force pair at one speed (two equal eigenvalue pairs, newtons), read by
     /// three channels; a second segment moves a sensor.
     /// `A`, `Q_c`, `C`, `R`, `P_0`.
