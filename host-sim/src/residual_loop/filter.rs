@@ -1,6 +1,10 @@
 //! A dynamic-size Kalman filter for the host search: exact discretisation (Van Loan), the
 //! time-varying gain until the covariance has converged, then that gain frozen (the model is
 //! time-invariant, so this is the steady-state filter and costs `O(n²)` per sample).
+//!
+//! It runs in the transition's real modal form ([`ModalForm`]) where there is one, so that a
+//! time-varying step costs `O(n²)` too: a model with undamped, noise-free states (an
+//! unbalance) never converges and takes that step at every sample of every evaluation.
 
 use super::modal_form::ModalForm;
 use anyhow::{anyhow, Result};
