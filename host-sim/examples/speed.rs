@@ -10,9 +10,12 @@
 use edgekf::filter::{KalmanFilter, LinearModel, MerweSigmaPoints, UkfModel, UnscentedKalmanFilter};
 use edgekf::models::synthetic::{dense_model, Lcg};
 use edgekf_sim::residual_loop::LoopOptions;
+use edgekf_sim::systems::rotor::bearing_geometry::BearingLine;
 use edgekf_sim::systems::rotor::estimate::{reduce, run, FilterPrecision, Tuning};
+use edgekf_sim::systems::rotor::loop_system::baseline::{learn, BaselineOptions};
 use edgekf_sim::systems::rotor::loop_system::cases::Case;
-use edgekf_sim::systems::rotor::loop_system::close_loop;
+use edgekf_sim::systems::rotor::loop_system::twin::{self, Twin};
+use edgekf_sim::systems::rotor::loop_system::{close_loop, close_loop_from, RotorLoopOptions};
 use edgekf_sim::systems::rotor::simulate::Progress;
 use edgekf_sim::systems::rotor::{RotorConfig, RotorModel, SimOptions};
 use nalgebra::{SMatrix, SVector};
@@ -138,6 +141,19 @@ fn main() -> anyhow::Result<()> {
     let (loop_s, report) = best(1, || close_loop(&declared, &data, &LoopOptions::default(), &Default::default()));
     let added: Vec<String> = report?.effects_added.iter().map(|e| format!("{} at {}", e.kind, e.location)).collect();
 
+    eprintln!("the loop on 10 s at 12 kHz from two housings with an outer-race defect, against a healthy baseline");
+    let rig = twin::rig()?;
+    let healthy = Twin::default().record(&rig, 1)?;
+    let (baseline_s, baseline) = best(1, || {
+        learn(&rig, &healthy, &LoopOptions::default(), &RotorLoopOptions::default(), &BaselineOptions::default())
+    });
+    let baseline = baseline?;
+    let defect = Twin { duration: 10.0, defect: Some(BearingLine::Bpfo), ..Twin::default() }.record(&rig, 3)?;
+    let (housing_s, report) =
+        best(1, || close_loop_from(&rig, &defect, &LoopOptions::default(), &RotorLoopOptions::default(), &baseline));
+    let housing_added: Vec<String> =
+        report?.effects_added.iter().map(|e| format!("{} at {}", e.kind, e.location)).collect();
+
     let out = serde_json::json!({
         "rotor_build_s": build_s,
         "response_4s_s": response_4s_s,
@@ -154,6 +170,9 @@ fn main() -> anyhow::Result<()> {
         "estimate_samples_per_s": noisy.t.len() as f64 / estimate_s,
         "loop_4s_twox_s": loop_s,
         "loop_4s_twox_added": added,
+        "baseline_2s_12khz_s": baseline_s,
+        "loop_10s_12khz_s": housing_s,
+        "loop_10s_12khz_added": housing_added,
     });
     println!("{out}");
     Ok(())

@@ -1,6 +1,6 @@
 //! Dense host linear algebra beyond what [`faer`] offers directly: balancing, the matrix
-//! exponential of large systems (the rotor's ~300 states), and solves that report failure
-//! instead of producing NaN.
+//! exponential of large systems (the rotor's ~300 states), their free response in modal form
+//! ([`free_response`]), and solves that report failure instead of producing NaN.
 //!
 //! This is the reference simulator's own linear algebra, used only by the full finite-element
 //! rotor (`systems::rotor::{simulate, modal, response}` and `loop_system::inject`, which drives
@@ -17,6 +17,8 @@
 //! row and column norms together without any rounding, which lets the eigen solver resolve the
 //! low modes to near machine precision and cuts the number of squarings of the matrix
 //! exponential from ~40 to ~15.
+
+pub mod free_response;
 
 use faer::linalg::solvers::Solve;
 use faer::{Accum, Mat, MatRef, Par};

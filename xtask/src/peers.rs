@@ -122,6 +122,13 @@ fn table(ours: Value, peers: Value) -> Value {
         seconds(f(&ours, "loop_4s_twox_s")),
         ours.get("loop_4s_twox_added").map_or("?".into(), Value::to_string)
     );
+    println!(
+        "edgekf: the loop on 10 s at 12 kHz from two housings with an outer-race defect, against a baseline \
+         learnt from 2 s of the healthy twin in {}: {} (adds {})",
+        seconds(f(&ours, "baseline_2s_12khz_s")),
+        seconds(f(&ours, "loop_10s_12khz_s")),
+        ours.get("loop_10s_12khz_added").map_or("?".into(), Value::to_string)
+    );
     json!({ "machine": machine(), "edgekf": ours, "peers": peers, "ratios": ratios })
 }
 
