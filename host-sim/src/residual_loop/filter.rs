@@ -205,6 +205,8 @@ fn run_in(
     // Work space of the covariance step: `P Cᵀ`, the gain and the dense product's.
     let (mut pct, mut gain, mut work) = (DMatrix::zeros(n, m), DMatrix::zeros(n, m), DMatrix::zeros(n, n));
     let (mut y, mut e) = (DVector::<f64>::zeros(m), DVector::<f64>::zeros(m));
+    // The innovations' variances this sample (the diagonal of `S`).
+    let mut sdiag = vec![0.0; m];
     for k in 0..len {
         if models.get(segment + 1).is_some_and(|next| k >= next.from) {
             segment += 1;
@@ -222,10 +224,11 @@ fn run_in(
             for (i, c_i) in seg.c_t.column_iter().enumerate() {
                 e[i] = y[i] - c_i.dot(&x);
             }
-            let (nis, logdet, sdiag) = if let Some(Frozen { gain, sdiag, s_inv, logdet }) = &frozen {
-                let nis = (e.transpose() * s_inv * &e)[(0, 0)];
+            let (nis, logdet) = if let Some(Frozen { gain, sdiag: steady, s_inv, logdet }) = &frozen {
+                let nis = quadratic(s_inv, &e);
                 x.gemv(1.0, gain, &e, 1.0);
-                (nis, *logdet, sdiag.clone())
+                sdiag.copy_from_slice(steady);
+                (nis, *logdet)
             } else {
                 // `P Cᵀ` by columns (`P` symmetric: row k of `P` is its column k).
                 for (i, c_i) in seg.c_t.column_iter().enumerate() {
@@ -244,7 +247,7 @@ fn run_in(
                 let logdet = 2.0 * chol.l().diagonal().iter().map(|v| v.ln()).sum::<f64>();
                 let s_inv = chol.inverse();
                 gain.gemm(1.0, &pct, &s_inv, 0.0);
-                let nis = (e.transpose() * &s_inv * &e)[(0, 0)];
+                let nis = quadratic(&s_inv, &e);
                 x.gemv(1.0, &gain, &e, 1.0);
                 // `P ← P − K (P Cᵀ)ᵀ`, column by column.
                 for (j, mut p_j) in p.column_iter_mut().enumerate() {
@@ -253,7 +256,7 @@ fn run_in(
                     }
                 }
                 symmetrise(&mut p);
-                let sdiag: Vec<f64> = (0..m).map(|i| s[(i, i)]).collect();
+                sdiag.iter_mut().enumerate().for_each(|(i, v)| *v = s[(i, i)]);
                 let diag = p.diagonal();
                 if let Some(prev) = &prev_diag {
                     let change = diag
@@ -269,7 +272,7 @@ fn run_in(
                 }
                 prev_diag = Some(diag);
                 updated = true;
-                (nis, logdet, sdiag)
+                (nis, logdet)
             };
             for i in 0..m {
                 run.innovation[i].push(e[i]);
@@ -304,6 +307,11 @@ fn run_in(
         c: seg.plant_c.clone(),
     });
     Ok(run)
+}
+
+/// `eᵀ S⁻¹ e`, without a temporary.
+fn quadratic(s_inv: &DMatrix<f64>, e: &DVector<f64>) -> f64 {
+    s_inv.column_iter().zip(e.iter()).map(|(column, ej)| ej * column.dot(e)).sum()
 }
 
 /// `p ← (p + pᵀ) / 2`, in place.

@@ -10,7 +10,7 @@
 //! product.
 
 use crate::linalg::balance;
-use faer::{c64, Mat};
+use faer::{c64, Mat, MatRef};
 use nalgebra::{DMatrix, DVector};
 
 /// `W` may amplify rounding by at most this much (`‖W‖₁ ‖W⁻¹‖₁`, unit columns).
@@ -236,8 +236,8 @@ impl ModalForm {
         }
     }
 
-    /// `m ← B m`, any `m`.
-    pub fn rows(&self, m: &mut DMatrix<f64>) {
+    /// `m ← B m`, any `m` (the dense form, for checks).
+    fn rows(&self, m: &mut DMatrix<f64>) {
         for Block { at, size, b } in &self.blocks {
             let new = DMatrix::from_row_slice(*size, *size, b) * m.rows(*at, *size);
             m.rows_mut(*at, *size).copy_from(&new);
@@ -255,20 +255,26 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 /// for a `real` λ. `None` if the solver fails.
 fn invariant_subspace(phi: &DMatrix<f64>, lambda: c64, count: usize, real: bool) -> Option<Vec<Vec<c64>>> {
     let n = phi.nrows();
-    let power = |shifted: Mat<c64>| (1..count).fold(shifted.clone(), |p, _| &p * &shifted);
+    let last = |v: MatRef<'_, c64>| (n - count..n).map(|k| (0..n).map(|i| v[(i, k)]).collect()).collect();
     if real {
         // A real eigenvalue's subspace has a real basis: the real solver gives it.
         let shifted = Mat::<f64>::from_fn(n, n, |i, j| phi[(i, j)] - if i == j { lambda.re } else { 0.0 });
-        let p = (1..count).fold(shifted.clone(), |p, _| &p * &shifted);
-        let svd = p.svd().ok()?;
-        let v = svd.V();
-        return Some((n - count..n).map(|k| (0..n).map(|i| c64::new(v[(i, k)], 0.0)).collect()).collect());
+        let svd = power(&shifted, count).svd().ok()?;
+        return Some(last(Mat::<c64>::from_fn(n, n, |i, k| c64::new(svd.V()[(i, k)], 0.0)).as_ref()));
     }
     let shifted =
-        Mat::<c64>::from_fn(n, n, |i, j| c64::new(phi[(i, j)], 0.0) - if i == j { lambda } else { c64::new(0.0, 0.0) });
-    let svd = power(shifted).svd().ok()?;
-    let v = svd.V();
-    Some((n - count..n).map(|k| (0..n).map(|i| v[(i, k)]).collect()).collect())
+        Mat::<c64>::from_fn(n, n, |i, j| c64::new(phi[(i, j)], 0.0) - if i == j { lambda } else { c64::ZERO });
+    let svd = power(&shifted, count).svd().ok()?;
+    Some(last(svd.V()))
+}
+
+/// `m^k` for `k ≥ 1`, real or complex.
+fn power<T>(m: &Mat<T>, k: usize) -> Mat<T>
+where
+    Mat<T>: Clone,
+    for<'a> &'a Mat<T>: std::ops::Mul<&'a Mat<T>, Output = Mat<T>>,
+{
+    (1..k).fold(m.clone(), |p, _| &p * m)
 }
 
 /// Column `at` of `w` set to `v / ‖v‖` (`None` for a zero or non-finite vector).
@@ -308,12 +314,7 @@ mod tests {
         let sizes: Vec<usize> = form.blocks.iter().map(|b| b.size).collect();
         assert_eq!(sizes, [2, 4]);
         // The symmetric step against the dense product, through the 4×4 block.
-        let x = DMatrix::from_fn(6, 6, |i, j| ((i * 5 + j) as f64).cos());
-        let mut p = &x * x.transpose();
-        let b = form.block_matrix();
-        let expected = &b * &p * b.transpose();
-        form.covariance(&mut p);
-        assert!((p - &expected).norm() < 1e-14 * expected.norm());
+        assert_covariance_step(&form, DMatrix::from_fn(6, 6, |i, j| ((i * 5 + j) as f64).cos()));
         let rebuilt = &form.w * form.block_matrix() * &form.w_inv;
         assert!((rebuilt - &phi).norm() < 1e-13);
         assert!(ModalForm::of(&DMatrix::from_row_slice(1, 1, &[f64::NAN])).is_none());
@@ -348,7 +349,11 @@ mod tests {
             }
         }
         // The symmetric step against the dense product.
-        let x = DMatrix::from_fn(6, 6, |i, j| ((i * 7 + j) as f64).sin());
+        assert_covariance_step(&form, DMatrix::from_fn(6, 6, |i, j| ((i * 7 + j) as f64).sin()));
+    }
+
+    /// `B P Bᵀ` by blocks equals the dense product for `P = X Xᵀ`.
+    fn assert_covariance_step(form: &ModalForm, x: DMatrix<f64>) {
         let mut p = &x * x.transpose();
         let b = form.block_matrix();
         let expected = &b * &p * b.transpose();
