@@ -173,6 +173,9 @@ impl ModalExponential {
 
     /// `rows · z_k` for `k < samples`, `z_k = e^{F kΔt} z0`, as a `samples × rows` matrix (column
     /// `r` is output `r` over time). `progress` hears the samples done after each product.
+    ///
+    /// # Panics
+    /// If `z0` or the rows are not as long as `F` is wide (a caller's error, not the data's).
     pub fn outputs(
         &self,
         z0: &[f64],
@@ -181,6 +184,12 @@ impl ModalExponential {
         progress: &mut dyn FnMut(usize),
     ) -> Mat<f64> {
         let n = self.w.nrows();
+        assert!(
+            z0.len() == n && rows.ncols() == n,
+            "free response: {n} states, z0 of {} and rows of {}",
+            z0.len(),
+            rows.ncols()
+        );
         let r = super::mul(rows, self.w.as_ref());
         // `ξ₀ = W⁻¹ z₀ = W_b⁻¹ D⁻¹ z₀`.
         let scaled = Mat::<f64>::from_fn(n, 1, |i, _| z0[i] / self.d[i]);
