@@ -209,6 +209,19 @@ impl ModalExponential {
             done += len;
             progress(done);
         }
+        // Sample 0 is `z0` itself, exactly (a start from rest reads zero, not rounding).
+        if samples > 0 {
+            let start = Mat::<f64>::from_fn(n, 1, |i, _| z0[i]);
+            let mut first = out.as_mut().subrows_mut(0, 1);
+            faer::linalg::matmul::matmul(
+                &mut first,
+                Accum::Replace,
+                start.transpose(),
+                rows.transpose(),
+                1.0,
+                Par::Seq,
+            );
+        }
         out
     }
 
