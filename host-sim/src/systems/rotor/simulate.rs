@@ -217,6 +217,21 @@ struct Augmented {
     outputs: Vec<Vec<(usize, f64)>>,
 }
 
+impl Augmented {
+    /// What the recording keeps of `z` as rows over it (every node's x and y, then each
+    /// sensor's clean output), and the start: at rest, the force's oscillator at `cos 0 = 1`.
+    fn recorded(&self, n_nodes: usize) -> (Mat<f64>, Vec<f64>) {
+        let (nodes, size) = (2 * n_nodes, self.f.nrows());
+        let rows = Mat::<f64>::from_fn(nodes + self.outputs.len(), size, |r, j| match r.checked_sub(nodes) {
+            None => f64::from(u8::from(j == dof(r / 2, r % 2))),
+            Some(c) => self.outputs[c].iter().filter(|&&(i, _)| i == j).map(|&(_, v)| v).sum(),
+        });
+        let mut z0 = vec![0.0; size];
+        z0[self.exo] = 1.0;
+        (rows, z0)
+    }
+}
+
 impl RotorModel {
     /// Builds `F` for speed `speed` and the configured sensors at `sample_rate`.
     fn augmented(&self, speed: f64, sample_rate: f64) -> Result<Augmented, RotorError> {
@@ -408,16 +423,7 @@ impl RotorModel {
         let aug = self.augmented(speed, fs)?;
         let size = aug.f.nrows();
         let n_nodes = self.n_nodes();
-        // What the recording keeps of z: every node's x and y, then each sensor's clean output.
-        let rows = Mat::<f64>::from_fn(2 * n_nodes + aug.outputs.len(), size, |r, j| {
-            if r < 2 * n_nodes {
-                f64::from(u8::from(j == dof(r / 2, r % 2)))
-            } else {
-                aug.outputs[r - 2 * n_nodes].iter().filter(|&&(i, _)| i == j).map(|&(_, c)| c).sum()
-            }
-        });
-        let mut z0 = vec![0.0; size];
-        z0[aug.exo] = 1.0;
+        let (rows, z0) = aug.recorded(n_nodes);
         let modal = match opts.method {
             Method::Exact => ModalExponential::of(aug.f.as_ref(), 1.0 / fs),
             Method::Trapezoidal { .. } => None,
@@ -479,9 +485,10 @@ impl RotorModel {
                 } else {
                     0.0
                 };
+                // A channel in volts: `offset + sensitivity · a`.
                 let (offset, sens) = match ch.sensor.kind {
-                    SensorKind::Acceleration(a) if a.sensitivity.is_some() => (a.offset, a.sensitivity.unwrap_or(1.0)),
-                    _ => (0.0, 1.0),
+                    SensorKind::Acceleration(a) => a.sensitivity.map_or((0.0, 1.0), |s| (a.offset, s)),
+                    SensorKind::Displacement { .. } => (0.0, 1.0),
                 };
                 ch.clean.push(offset + sens * value);
                 ch.measured.push(offset + sens * value + noise);
@@ -546,14 +553,8 @@ mod tests {
         let model = RotorModel::from_config(&RotorConfig::from_toml_str(text).unwrap()).unwrap();
         let (speed, dt, samples) = (model.config().operation.speed, 1e-3, 1000);
         let aug = model.augmented(speed, 1.0 / dt).unwrap();
-        let size = aug.f.nrows();
         let nodes = 2 * model.n_nodes();
-        let rows = Mat::<f64>::from_fn(nodes + aug.outputs.len(), size, |r, j| match r.checked_sub(nodes) {
-            None => f64::from(u8::from(j == dof(r / 2, r % 2))),
-            Some(c) => aug.outputs[c].iter().filter(|&&(i, _)| i == j).map(|&(_, v)| v).sum(),
-        });
-        let mut z0 = vec![0.0; size];
-        z0[aug.exo] = 1.0;
+        let (rows, z0) = aug.recorded(model.n_nodes());
         let modal = ModalExponential::of(aug.f.as_ref(), dt).expect("the paper rotor has a modal form");
         let fast = modal.outputs(&z0, rows.as_ref(), samples, &mut |_| {});
         let phi = model.transition(&aug, dt, speed, Method::Exact).unwrap();
