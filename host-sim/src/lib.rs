@@ -3,11 +3,13 @@
 //! `edgekf` runs Kalman filters on an edge vibration sensor (an ADXL355 read by a Cortex-M4F).
 //! This crate is everything around the chip that runs on a workstation:
 //!
-//! * [`systems`]: one folder per system (`oscillator`, `rotor`, `crank`), each with its
+//! * [`systems`]: one folder per system (`oscillator`, `rotor`, `crank`, `uuv`, `boom`), each with its
 //!   reference simulator (`f64`, formulated independently of the reduced model it checks), its
 //!   estimators, its residual-loop system, its command line, demo part and configuration;
 //! * [`residual_loop`]: the engine that closes the loop with measured data, written against the
 //!   `LoopSystem` trait and knowing no system;
+//! * [`diagnostics`]: toolkits a system may use beside the engine (bearing diagnosis by envelope
+//!   analysis, locating an input from the innovations);
 //! * [`report`]: what the loop writes for people and scripts (`report.json`, `report.html`
 //!   with its plots, the printed table);
 //! * [`io`]: the data contract of every CSV a user gives or gets (time column `t`, SI channels,
@@ -29,6 +31,7 @@
 #![forbid(unsafe_code)]
 
 pub mod cli;
+pub mod diagnostics;
 pub mod io;
 pub mod linalg;
 pub mod report;

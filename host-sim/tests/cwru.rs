@@ -16,8 +16,8 @@
 //! 105, 169 and 130 it adds only the bearing defect. 106 and 131 (1 hp) would need 098, the
 //! 1 hp healthy record, which the mirror does not hold; a 0 hp baseline is not theirs.
 
-use edgekf_sim::cli::registry::read_data;
 use edgekf_sim::io::data::DataFile;
+use edgekf_sim::io::recording::read_data;
 use edgekf_sim::residual_loop::{LoopOptions, LoopReport};
 use edgekf_sim::systems::rotor::loop_system::baseline::{learn, BaselineOptions, RotorBaseline};
 use edgekf_sim::systems::rotor::loop_system::{close_loop, close_loop_from, RotorLoopOptions};

@@ -5,9 +5,9 @@
 use edgekf_sim::residual_loop::filter::{discretise, run_state_space, Run, StateSpace};
 use edgekf_sim::residual_loop::onset::settled_mean;
 use edgekf_sim::residual_loop::optimize::ScalarRange;
-use edgekf_sim::residual_loop::search::{Applied, EffectDetail, EffectKind};
 use edgekf_sim::residual_loop::signature::{summarise, Channel, ReferenceLines, SummaryContext};
-use edgekf_sim::residual_loop::{search, EffectLabel, LoopOptions, LoopSystem, RunSummary, Traces};
+use edgekf_sim::residual_loop::{search, EffectLabel, Fitting, LoopOptions, LoopSystem, RunSummary, Traces};
+use edgekf_sim::residual_loop::{Applied, EffectDetail, EffectKind};
 use nalgebra::{DMatrix, DVector};
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
@@ -64,6 +64,9 @@ enum Effect {
     Bias,
     /// The stiffness is off by `exp θ`.
     Stiffness,
+    /// A parameter the probe cannot see (a mount's stiffness far stiffer than the spring's):
+    /// the model's response does not change with it.
+    Mount,
 }
 
 struct Oscillator {
@@ -139,24 +142,28 @@ impl LoopSystem for Oscillator {
         let (kind, parameter, unit) = match e {
             Effect::Bias => (EffectKind::SensorBias, None, "m"),
             Effect::Stiffness => (EffectKind::Parameter, Some("stiffness".to_string()), "1"),
+            Effect::Mount => (EffectKind::Parameter, Some("mount".to_string()), "1"),
         };
         let detail = EffectDetail { parameter, ..EffectDetail::default() };
         EffectLabel { kind, location: "q".into(), detail, unit: unit.into() }
     }
 
-    fn parameters(&self, _: &Effect) -> usize {
-        1
+    fn fitting(&self, e: &Effect) -> Fitting {
+        let factor = ScalarRange { low: 0.5f64.ln(), high: 2f64.ln(), neutral: 0.0, log: true, tolerance: 1e-5 };
+        match e {
+            Effect::Bias => Fitting::states(1),
+            Effect::Stiffness | Effect::Mount => Fitting::scalar(1, factor, 6),
+        }
     }
 
-    fn scalar(&self, e: &Effect) -> Option<(ScalarRange, usize)> {
-        (*e == Effect::Stiffness)
-            .then_some((ScalarRange { low: 0.5f64.ln(), high: 2f64.ln(), neutral: 0.0, log: true, tolerance: 1e-5 }, 6))
+    fn declared(&self) -> Vec<Effect> {
+        vec![Effect::Stiffness, Effect::Mount, Effect::Bias]
     }
 
     fn value(&self, _: &usize, run: &Run, e: &Applied<Effect>) -> f64 {
         match e.effect {
             Effect::Bias => settled_mean(&run.effect_states[0], 0),
-            Effect::Stiffness => e.theta.exp(),
+            Effect::Stiffness | Effect::Mount => e.theta.exp(),
         }
     }
 
@@ -167,9 +174,26 @@ impl LoopSystem for Oscillator {
 }
 
 fn close(factor: f64, bias: f64, seed: u64) -> edgekf_sim::residual_loop::LoopReport {
+    close_with(factor, bias, seed, LoopOptions { screen_parameters: false, ..LoopOptions::default() })
+}
+
+fn close_with(factor: f64, bias: f64, seed: u64, options: LoopOptions) -> edgekf_sim::residual_loop::LoopReport {
     let (t, y, truth) = record(factor, bias, 4.0, seed);
-    let options = LoopOptions { screen_parameters: false, ..LoopOptions::default() };
     search(&mut Oscillator { t, y, truth }, &options).unwrap()
+}
+
+#[test]
+fn the_engine_screens_every_declared_parameter_for_what_the_data_cannot_see() {
+    let r = close_with(1.1, 0.0, 4, LoopOptions::default());
+    // The stiffness was added; the mount, which changes nothing the probe reads, is reported,
+    // and the bias (not a component parameter) is not screened.
+    let unseen: Vec<_> = r.not_identifiable.iter().map(|n| n.parameter.as_deref()).collect();
+    assert_eq!(unseen, vec![Some("mount")], "{:?}", r.not_identifiable);
+    assert_eq!(r.not_identifiable[0].value, 0.0);
+    // Without the stiffness error nothing is added, and the stiffness is seen all the same.
+    let clean = close_with(1.0, 0.0, 4, LoopOptions::default());
+    let unseen: Vec<_> = clean.not_identifiable.iter().map(|n| n.parameter.as_deref()).collect();
+    assert_eq!(unseen, vec![Some("mount")], "{:?}", clean.not_identifiable);
 }
 
 #[test]
@@ -209,16 +233,18 @@ fn engine_adds_nothing_to_clean_data_of_another_system() {
 /// `edgekf loop toy`: the toy's configuration declares nothing the test varies (the model is
 /// fixed above); its data are the probe `q` and the truth `truth_q`.
 fn toy_loop(
-    request: &edgekf_sim::cli::looping::LoopRequest,
+    request: &edgekf_sim::cli::request::LoopRequest,
     _: &clap::ArgMatches,
 ) -> anyhow::Result<edgekf_sim::residual_loop::LoopReport> {
     let text = std::fs::read_to_string(&request.config)?;
     let cfg: toml::Table = text.parse()?;
     anyhow::ensure!(cfg.get("frequency_hz").and_then(|v| v.as_float()) == Some(FREQ_HZ), "a 20 Hz toy only");
-    let data = edgekf_sim::cli::registry::read_data(&request.data, &["q"], RATE, &Default::default())?;
+    let data = edgekf_sim::io::recording::read_data(&request.data, &["q"], RATE, &Default::default())?;
     let column = |name: &str| data.column(name).map(<[f64]>::to_vec).ok_or_else(|| anyhow::anyhow!("no {name}"));
     let mut sys = Oscillator { t: data.t.clone(), y: column("q")?, truth: column("truth_q")? };
-    search(&mut sys, &request.options)
+    let mut report = search(&mut sys, &request.options)?;
+    report.source.data_sha256 = data.sha256.clone();
+    Ok(report)
 }
 
 /// A new system joins through one registry row: `edgekf loop toy` runs end to end through the

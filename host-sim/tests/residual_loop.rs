@@ -169,7 +169,7 @@ fn a_delayed_probe_is_found() {
 /// default ±30 % of a parameter); with `[bounds] force = 1.0` a 1.5 N 2× force is beyond its bound.
 #[test]
 fn fits_beyond_the_bounds_are_refused() {
-    use edgekf_sim::residual_loop::bounds::OUTSIDE;
+    use edgekf_sim::residual_loop::OUTSIDE;
     use edgekf_sim::systems::rotor::loop_system::effects::Parameter;
     use edgekf_sim::systems::rotor::{RotorModel, SimOptions};
     let declared = Case::declared().unwrap();

@@ -69,6 +69,7 @@ fn read_all(path: &Path) -> DataFile {
 /// The rows `keep` of `f`.
 fn rows_of(f: &DataFile, keep: &[usize]) -> DataFile {
     DataFile {
+        sha256: None,
         names: f.names.clone(),
         t: keep.iter().map(|&k| f.t[k]).collect(),
         columns: f.columns.iter().map(|c| keep.iter().map(|&k| c[k]).collect()).collect(),

@@ -3,48 +3,13 @@
 //! --baseline`. The flags, the file's safety (never over an input, written only when
 //! complete) and its `source` are common; what a baseline holds is the system's.
 
-use super::looping::hex_sha256;
 use super::registry::SystemEntry;
+use super::request::{BaselineArgs, BaselineRequest};
 use crate::io::output::{check, write_atomic};
 use crate::residual_loop::baseline::BaselineSource;
 use crate::residual_loop::LoopOptions;
 use anyhow::{Context, Result};
 use clap::{ArgMatches, Args, FromArgMatches};
-use std::path::PathBuf;
-
-/// The flags of every `edgekf baseline <system>`.
-#[derive(Debug, Clone, Args)]
-pub struct BaselineArgs {
-    /// The system's configuration (the same the loop will use).
-    #[arg(long, value_name = "TOML")]
-    pub config: PathBuf,
-    /// A recording of the healthy machine (channels named like the configured sensors).
-    #[arg(long, value_name = "CSV")]
-    pub data: PathBuf,
-    /// The baseline to write (TOML).
-    #[arg(long, value_name = "TOML")]
-    pub out: PathBuf,
-    /// The operating condition it belongs to (e.g. "0 hp"), written into the baseline.
-    #[arg(long, value_name = "TEXT")]
-    pub condition: Option<String>,
-    /// At most this many resonances and synchronous forces.
-    #[arg(long, value_name = "N", default_value_t = 12)]
-    pub max_parts: usize,
-    /// Do not print each part as it is tried.
-    #[arg(long)]
-    pub quiet: bool,
-}
-
-/// What a system's baseline is asked to learn from.
-#[derive(Debug, Clone)]
-pub struct BaselineRequest {
-    /// The flags.
-    pub args: BaselineArgs,
-    /// The engine's options (progress, signatures, acceptance).
-    pub options: LoopOptions,
-    /// Where it is learned, for the file's `[source]`.
-    pub source: BaselineSource,
-}
 
 /// `edgekf baseline` with one subcommand per system that has baselines.
 pub fn command(registry: &[SystemEntry]) -> clap::Command {
@@ -77,10 +42,10 @@ pub fn run(registry: &[SystemEntry], m: &ArgMatches, command_line: &str) -> Resu
         .expect("clap only accepts systems with baselines");
     let args = BaselineArgs::from_arg_matches(sub).map_err(|e| anyhow::anyhow!("{e}"))?;
     check(&[Some(&args.out)], &[Some(&args.data), Some(&args.config)])?;
-    let bytes = std::fs::read(&args.data).with_context(|| format!("{}: cannot read", args.data.display()))?;
     let source = BaselineSource {
         data: args.data.display().to_string(),
-        data_sha256: hex_sha256(&bytes),
+        // The system's baseline fills it from its one read of the data.
+        data_sha256: String::new(),
         config: args.config.display().to_string(),
         command: command_line.to_string(),
         version: env!("CARGO_PKG_VERSION").to_string(),

@@ -2,23 +2,9 @@
 //! what it simulated and what the estimators or the loop found.
 
 use super::registry::SystemEntry;
+use super::request::DemoArgs;
 use anyhow::Result;
 use clap::{ArgMatches, Args, FromArgMatches};
-use std::path::PathBuf;
-
-/// The flags of `edgekf demo`.
-#[derive(Debug, Clone, Default, Args)]
-pub struct DemoArgs {
-    /// Also write each part's data and estimates into this directory.
-    #[arg(long, value_name = "DIR")]
-    pub out: Option<PathBuf>,
-    /// Use this oscillator scenario instead of the built-in demo.
-    #[arg(long, value_name = "TOML")]
-    pub config: Option<PathBuf>,
-    /// Skip the parts that close a residual loop (about half a minute).
-    #[arg(long)]
-    pub skip_loop: bool,
-}
 
 /// The `demo` subcommand.
 pub fn command(registry: &[SystemEntry]) -> clap::Command {

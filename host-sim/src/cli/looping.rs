@@ -3,12 +3,12 @@
 //! the report files, with where the report came from (`source`).
 
 use super::registry::SystemEntry;
+use super::request::LoopRequest;
 use crate::io::output::check_folder;
 use crate::report::text::{summary_table, write_report, REPORT_FILES};
 use crate::residual_loop::{LoopOptions, LoopReport};
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::{ArgMatches, Args, FromArgMatches};
-use sha2::{Digest, Sha256};
 use std::path::{Path, PathBuf};
 
 /// The flags of every `edgekf loop <system>`.
@@ -32,19 +32,6 @@ pub struct LoopArgs {
     /// Do not print each candidate as it is tried.
     #[arg(long)]
     pub quiet: bool,
-}
-
-/// What a system's loop is asked to do.
-#[derive(Debug, Clone)]
-pub struct LoopRequest {
-    /// `--config`.
-    pub config: PathBuf,
-    /// `--data`.
-    pub data: PathBuf,
-    /// `--baseline`.
-    pub baseline: Option<PathBuf>,
-    /// The engine's options from the common flags.
-    pub options: LoopOptions,
 }
 
 /// `edgekf loop` with one subcommand per system that has a loop.
@@ -82,7 +69,7 @@ pub fn run(registry: &[SystemEntry], m: &ArgMatches, command_line: &str) -> Resu
         options: LoopOptions { max_effects: args.max_effects, progress: !args.quiet, ..LoopOptions::default() },
     };
     let mut report = (entry.run)(&request, sub)?;
-    fill_source(&mut report, &args.data, &args.config, command_line)?;
+    fill_source(&mut report, &args.data, &args.config, command_line);
     report.source.baseline = args.baseline.as_ref().map(|b| b.display().to_string());
     print!("{}", summary_table(&report));
     write_report(&report, &args.report)?;
@@ -90,17 +77,10 @@ pub fn run(registry: &[SystemEntry], m: &ArgMatches, command_line: &str) -> Resu
     Ok(())
 }
 
-/// Fills the report's `source`: the files, the data's SHA-256, the command line.
-pub fn fill_source(report: &mut LoopReport, data: &Path, config: &Path, command_line: &str) -> Result<()> {
-    let bytes = std::fs::read(data).with_context(|| format!("{}: cannot read", data.display()))?;
+/// Fills the report's `source`: the files and the command line (the system's run gave the
+/// data's SHA-256, taken in the one read of the data).
+pub fn fill_source(report: &mut LoopReport, data: &Path, config: &Path, command_line: &str) {
     report.source.data = Some(data.display().to_string());
-    report.source.data_sha256 = Some(hex_sha256(&bytes));
     report.source.config = Some(config.display().to_string());
     report.source.command = Some(command_line.to_string());
-    Ok(())
-}
-
-/// SHA-256 of `bytes`, lower-case hex.
-pub fn hex_sha256(bytes: &[u8]) -> String {
-    Sha256::digest(bytes).iter().map(|b| format!("{b:02x}")).collect()
 }

@@ -4,6 +4,8 @@
 //!
 //! * [`registry`]: the row type ([`SystemEntry`]) and the helpers that turn a system's clap
 //!   `Subcommand` into one;
+//! * [`request`]: what a row's functions are asked to do (the loop's, the baseline's, the
+//!   demo's requests);
 //! * [`looping`]: `edgekf loop <system>`: the flags every loop shares, the run, the report files;
 //! * [`baseline`]: `edgekf baseline <system>`: a healthy baseline learned from a recording;
 //! * [`demo`]: `edgekf demo`: every system's demo part in the registry's order.
@@ -19,6 +21,7 @@ pub mod baseline;
 pub mod demo;
 pub mod looping;
 pub mod registry;
+pub mod request;
 
 pub use registry::{DemoPart, LoopEntry, SystemEntry};
 

@@ -3,4 +3,5 @@
 pub mod config;
 pub mod data;
 pub mod output;
+pub mod recording;
 pub mod timeline;

@@ -151,7 +151,7 @@ pub const MAX_FILL: usize = 100_000;
 /// ```
 /// use edgekf_sim::io::data::{DataFile, TimingReport};
 /// use edgekf_sim::io::timeline::{bridge, TimelineOptions};
-/// let data = DataFile { names: vec!["ax".into()], t: vec![0.0, 0.001, 0.004, 0.005], columns: vec![vec![1.0, 2.0, 5.0, 6.0]] };
+/// let data = DataFile { sha256: None, names: vec!["ax".into()], t: vec![0.0, 0.001, 0.004, 0.005], columns: vec![vec![1.0, 2.0, 5.0, 6.0]] };
 /// let (b, what) = bridge(&data, &TimingReport::of(&data.t), &TimelineOptions::default());
 /// assert_eq!(what.inserted, 2);
 /// assert_eq!(b.t.len(), 6);
@@ -162,7 +162,12 @@ pub fn bridge(data: &DataFile, timing: &TimingReport, options: &TimelineOptions)
     if timing.gaps.is_empty() {
         return (data.clone(), what);
     }
-    let mut out = DataFile { names: data.names.clone(), t: Vec::new(), columns: vec![Vec::new(); data.columns.len()] };
+    let mut out = DataFile {
+        sha256: data.sha256.clone(),
+        names: data.names.clone(),
+        t: Vec::new(),
+        columns: vec![Vec::new(); data.columns.len()],
+    };
     let mut gaps = timing.gaps.iter().peekable();
     for k in 0..data.t.len() {
         if let Some(gap) = gaps.next_if(|g| g.index == k) {
@@ -223,7 +228,7 @@ mod tests {
 
     fn file(t: Vec<f64>) -> DataFile {
         let x = t.iter().map(|v| v * 10.0).collect();
-        DataFile { names: vec!["x".into()], t, columns: vec![x] }
+        DataFile { sha256: None, names: vec!["x".into()], t, columns: vec![x] }
     }
 
     #[test]
@@ -273,7 +278,7 @@ mod tests {
         let t: Vec<f64> = (0..500).map(|k| k as f64 * 0.02).collect();
         let imu: Vec<f64> = t.clone();
         let dvl: Vec<f64> = (0..500).map(|k| if k % 10 == 0 { 1.0 } else { f64::NAN }).collect();
-        let data = DataFile { names: vec!["imu".into(), "dvl".into()], t, columns: vec![imu, dvl] };
+        let data = DataFile { sha256: None, names: vec!["imu".into(), "dvl".into()], t, columns: vec![imu, dvl] };
         let (_, what) = bridge(&data, &TimingReport::of(&data.t), &TimelineOptions::default());
         assert_eq!(what.slow_channels.len(), 1, "{:?}", what.slow_channels);
         let dvl = &what.slow_channels[0];

@@ -2,7 +2,7 @@
 //! files (`report.json`, `report.html`) of a report directory.
 
 use crate::io::output::write_atomic;
-use crate::residual_loop::search::{Channel, LoopReport, RunSummary};
+use crate::residual_loop::{Channel, LoopReport, RunSummary};
 use anyhow::{Context, Result};
 use std::path::Path;
 

@@ -114,7 +114,7 @@ pub struct EffectLabel {
 /// An effect in a model: what and where, its fitted scalar, and when it began.
 ///
 /// ```
-/// use edgekf_sim::residual_loop::search::Applied;
+/// use edgekf_sim::residual_loop::Applied;
 /// let bias = Applied { onset_s: Some(2.0), ..Applied::new("bias", 0.0) };
 /// let t = [0.0, 1.0, 2.0, 3.0];
 /// assert!(!bias.active_at(1.0) && bias.active_at(2.0));

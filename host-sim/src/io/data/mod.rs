@@ -50,6 +50,9 @@ pub struct DataFile {
     pub t: Vec<f64>,
     /// One vector per name, each as long as `t`; NaN marks a missing value.
     pub columns: Vec<Vec<f64>>,
+    /// SHA-256 of the bytes it was read from, lower-case hex: which recording a report or a
+    /// baseline was made from, taken in the one read (`None` for data made in memory).
+    pub sha256: Option<String>,
 }
 
 impl DataFile {
@@ -196,6 +199,7 @@ pub fn read_from_required<R: Read>(
     let layout = Layout::from_header(&header, header_line, path, required, known)?;
 
     let mut data = DataFile {
+        sha256: Some(hex_sha256(&bytes)),
         names: layout.kept.iter().map(|(_, n)| n.clone()).collect(),
         t: Vec::new(),
         columns: vec![Vec::new(); layout.kept.len()],
@@ -429,3 +433,16 @@ pub fn write(path: &Path, names: &[&str], t: &[f64], columns: &[&[f64]]) -> Resu
 
 #[cfg(test)]
 mod tests;
+
+/// SHA-256 of `bytes`, lower-case hex.
+///
+/// ```
+/// assert_eq!(
+///     edgekf_sim::io::data::hex_sha256(b"abc"),
+///     "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
+/// );
+/// ```
+pub fn hex_sha256(bytes: &[u8]) -> String {
+    use sha2::{Digest, Sha256};
+    Sha256::digest(bytes).iter().map(|b| format!("{b:02x}")).collect()
+}

@@ -8,8 +8,8 @@ use super::{h2, para};
 use crate::report::escape::escape as esc;
 use crate::report::plot::{min_max, min_max_points, Axis, Figure, Line, Marker, Markers, Panel, RGBColor, Shape};
 use crate::residual_loop::filter::Run;
-use crate::residual_loop::search::LoopReport;
 use crate::residual_loop::signature::ChannelSignature;
+use crate::residual_loop::LoopReport;
 use anyhow::Result;
 
 /// Colour of the base model's series ("before").

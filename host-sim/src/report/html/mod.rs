@@ -22,7 +22,7 @@ mod format;
 mod tables;
 
 use crate::report::escape::escape as esc;
-use crate::residual_loop::search::{LoopReport, RunSummary};
+use crate::residual_loop::{LoopReport, RunSummary};
 use anyhow::Result;
 use figures::plots;
 use format::capitalised;
@@ -125,8 +125,8 @@ mod tests {
     use super::*;
 
     use crate::residual_loop::filter::Run;
-    use crate::residual_loop::search::{AddedEffect, Channel, EffectKind, Traces};
     use crate::residual_loop::signature::{ChannelSignature, PeakSignature, Signature};
+    use crate::residual_loop::{AddedEffect, Channel, EffectKind, Traces};
     use std::collections::BTreeMap;
 
     /// A run of `n` samples on two channels and one row, with gaps (NaN).
@@ -182,7 +182,7 @@ mod tests {
     fn synthetic() -> LoopReport {
         let n = 3000;
         LoopReport {
-            schema_version: crate::residual_loop::search::SCHEMA_VERSION,
+            schema_version: crate::residual_loop::SCHEMA_VERSION,
             system: "rotor <test>".into(),
             source: Default::default(),
             effects_added: vec![AddedEffect {
@@ -190,7 +190,7 @@ mod tests {
                 location: "n5_x".into(),
                 value: 1.05,
                 unit: "1".into(),
-                detail: crate::residual_loop::search::EffectDetail { onset_s: Some(2.4), ..Default::default() },
+                detail: crate::residual_loop::EffectDetail { onset_s: Some(2.4), ..Default::default() },
                 explains: vec![14.0],
                 delta_log_likelihood: 100.0,
                 bic_penalty: 4.7,

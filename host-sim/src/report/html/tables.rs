@@ -7,8 +7,8 @@ use super::format::{fixed, num, order, p_value, value_with_unit};
 use super::{h2, para};
 use crate::report::escape::escape as esc;
 use crate::report::text::shown;
-use crate::residual_loop::search::{AddedEffect, LoopReport, NotIdentifiable, RunSummary, Traces, Trial};
 use crate::residual_loop::signature::{ChannelSignature, Signature};
+use crate::residual_loop::{AddedEffect, LoopReport, NotIdentifiable, RunSummary, Traces, Trial};
 
 /// A table cell: text (escaped when written) and a class.
 struct Cell {

@@ -154,7 +154,7 @@ fn estimate_command(args: EstimateArgs) -> anyhow::Result<()> {
         Method::Paper => &MEASURED[..3],
     };
     let (file, restarts) =
-        crate::cli::registry::read_estimator_data(&args.data, required, &known, config.gyro.sample_rate)?;
+        crate::io::recording::read_estimator_data(&args.data, required, &known, config.gyro.sample_rate)?;
     let (statics, notes) =
         crate::io::data::read_required(&args.static_data, &["gyro_rate"], &["gyro_rate", "incl_angle"])?;
     eprintln!("{}: {notes}", args.static_data.display());
@@ -218,7 +218,7 @@ pub struct BoomLoopArgs {
 
 /// `edgekf loop boom --config C --data data.csv --static static.csv --report DIR`.
 pub fn close_loop(
-    request: &crate::cli::looping::LoopRequest,
+    request: &crate::cli::request::LoopRequest,
     m: &clap::ArgMatches,
 ) -> anyhow::Result<crate::residual_loop::LoopReport> {
     use clap::FromArgMatches;
@@ -226,7 +226,7 @@ pub fn close_loop(
     let config = BoomConfig::load(&request.config)?;
     let known: Vec<&str> = MEASURED.iter().chain(TRUTH.iter()).copied().collect();
     let file =
-        crate::cli::registry::read_data(&request.data, &known, config.gyro.sample_rate, &TimelineOptions::default())?;
+        crate::io::recording::read_data(&request.data, &known, config.gyro.sample_rate, &TimelineOptions::default())?;
     for name in MEASURED {
         if file.column(name).is_none() {
             anyhow::bail!(
@@ -241,5 +241,7 @@ pub fn close_loop(
     eprintln!("{}: {notes}", args.static_data.display());
     let ar = gyro_model(&config, statics.column("gyro_rate").unwrap_or_default())?;
     let incl_noise = statics.column("incl_angle").and_then(spread).unwrap_or(INCLINOMETER_NOISE);
-    super::loop_system::close_loop(&config, &file, ar, incl_noise, &request.options)
+    let mut report = super::loop_system::close_loop(&config, &file, ar, incl_noise, &request.options)?;
+    report.source.data_sha256 = file.sha256.clone();
+    Ok(report)
 }

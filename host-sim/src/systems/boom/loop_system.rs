@@ -27,11 +27,11 @@ use super::simulate::MEASURED;
 use crate::io::data::DataFile;
 use crate::residual_loop::filter::Run;
 use crate::residual_loop::optimize::ScalarRange;
-use crate::residual_loop::search::{
-    search, Applied, Channel, EffectDetail, EffectKind, EffectLabel, LoopOptions, LoopReport, LoopSystem, RunSummary,
-    SystemSection, Traces,
-};
 use crate::residual_loop::signature::{summarise, ReferenceLines, SummaryContext, SEGMENT};
+use crate::residual_loop::{
+    search, Applied, Channel, EffectDetail, EffectKind, EffectLabel, Fitting, LoopOptions, LoopReport, LoopSystem,
+    RunSummary, SystemSection, Traces,
+};
 use anyhow::{anyhow, Context, Result};
 use edgekf::systems::boom::{Ar2, ExtraMode, ModelEstimator, ModelSettings};
 
@@ -162,6 +162,43 @@ impl<'a> BoomSystem<'a> {
 
     fn truth(&self) -> Vec<Option<&[f64]>> {
         vec![self.data.column("truth_tip_vibration")]
+    }
+
+    /// Each effect's scalar range and grid: factors within what a boom's settings can be off
+    /// by, a lag up to `[bounds] lag`, an extra mode within two bins of its line.
+    fn scalar(&self, e: &Effect) -> (ScalarRange, usize) {
+        let factor = |low: f64, high: f64| ScalarRange {
+            low: low.ln(),
+            high: high.ln(),
+            neutral: 0.0,
+            log: true,
+            tolerance: 1e-4,
+        };
+        match e {
+            Effect::InclinometerLag => (
+                ScalarRange {
+                    low: 0.0,
+                    high: self.config.bounds.lag,
+                    neutral: self.settings.inclinometer.0,
+                    log: false,
+                    tolerance: 1e-3,
+                },
+                6,
+            ),
+            Effect::InclinometerOffset => {
+                (ScalarRange { low: -MAX_OFFSET, high: MAX_OFFSET, neutral: 0.0, log: false, tolerance: 1e-5 }, 5)
+            }
+            Effect::GyroScale => (factor(0.95, 1.05), 5),
+            Effect::Stiffness => (factor(0.8, 1.25), 5),
+            Effect::PlatformMass => (factor(0.5, 2.5), 5),
+            Effect::ExtraMode { seed_mhz, .. } => {
+                let (f, w) = (*seed_mhz as f64 * 1e-3, 2.0 * self.bin_width_hz());
+                (ScalarRange { low: (f - w).max(0.05), high: f + w, neutral: f, log: false, tolerance: 1e-3 }, 5)
+            }
+            Effect::GyroDrift => {
+                (ScalarRange { low: -MAX_DRIFT, high: MAX_DRIFT, neutral: 0.0, log: false, tolerance: 1e-8 }, 5)
+            }
+        }
     }
 }
 
@@ -304,47 +341,19 @@ impl LoopSystem for BoomSystem<'_> {
         EffectLabel { kind, location: location.into(), detail, unit: unit.into() }
     }
 
-    /// One for a setting; an extra mode's frequency and its two states' start.
-    fn parameters(&self, e: &Effect) -> usize {
-        match e {
+    /// One parameter for a setting; an extra mode's frequency and its two states' start.
+    fn fitting(&self, e: &Effect) -> Fitting {
+        let parameters = match e {
             Effect::ExtraMode { .. } => 3,
             _ => 1,
-        }
+        };
+        let (range, grid) = self.scalar(e);
+        Fitting::scalar(parameters, range, grid)
     }
 
-    fn scalar(&self, e: &Effect) -> Option<(ScalarRange, usize)> {
-        let factor = |low: f64, high: f64| ScalarRange {
-            low: low.ln(),
-            high: high.ln(),
-            neutral: 0.0,
-            log: true,
-            tolerance: 1e-4,
-        };
-        Some(match e {
-            Effect::InclinometerLag => (
-                ScalarRange {
-                    low: 0.0,
-                    high: self.config.bounds.lag,
-                    neutral: self.settings.inclinometer.0,
-                    log: false,
-                    tolerance: 1e-3,
-                },
-                6,
-            ),
-            Effect::InclinometerOffset => {
-                (ScalarRange { low: -MAX_OFFSET, high: MAX_OFFSET, neutral: 0.0, log: false, tolerance: 1e-5 }, 5)
-            }
-            Effect::GyroScale => (factor(0.95, 1.05), 5),
-            Effect::Stiffness => (factor(0.8, 1.25), 5),
-            Effect::PlatformMass => (factor(0.5, 2.5), 5),
-            Effect::ExtraMode { seed_mhz, .. } => {
-                let (f, w) = (*seed_mhz as f64 * 1e-3, 2.0 * self.bin_width_hz());
-                (ScalarRange { low: (f - w).max(0.05), high: f + w, neutral: f, log: false, tolerance: 1e-3 }, 5)
-            }
-            Effect::GyroDrift => {
-                (ScalarRange { low: -MAX_DRIFT, high: MAX_DRIFT, neutral: 0.0, log: false, tolerance: 1e-8 }, 5)
-            }
-        })
+    /// The stiffness and the platform's mass, the configuration's component parameters.
+    fn declared(&self) -> Vec<Effect> {
+        vec![Effect::Stiffness, Effect::PlatformMass]
     }
 
     /// The fitted lag (s) or offset (rad), or the factor.

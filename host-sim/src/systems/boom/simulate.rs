@@ -83,6 +83,7 @@ impl BoomRecording {
     /// As a data file (what a reader of the CSV would get).
     pub fn to_data_file(&self) -> DataFile {
         DataFile {
+            sha256: None,
             names: Self::names().into_iter().map(String::from).collect(),
             t: self.t.clone(),
             columns: self.columns.clone(),

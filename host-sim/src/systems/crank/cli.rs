@@ -635,7 +635,7 @@ fn train(args: TrainArgs) -> anyhow::Result<()> {
 
 /// The crank's part of `edgekf demo`: a loose joint named and sized by the node's estimator;
 /// `--out DIR` writes `crank/data.csv` and `crank/est.csv`.
-pub fn demo(args: &crate::cli::demo::DemoArgs) -> anyhow::Result<()> {
+pub fn demo(args: &crate::cli::request::DemoArgs) -> anyhow::Result<()> {
     use super::demo::CrankDemo;
     println!("{}", CrankDemo::describe());
     if let Some(dir) = &args.out {

@@ -191,7 +191,12 @@ impl CrankRecording {
             self.truth_dissipated.clone(),
             self.balance(),
         ];
-        DataFile { names: Self::CHANNELS.iter().map(|s| s.to_string()).collect(), t: self.t.clone(), columns }
+        DataFile {
+            sha256: None,
+            names: Self::CHANNELS.iter().map(|s| s.to_string()).collect(),
+            t: self.t.clone(),
+            columns,
+        }
     }
 
     /// Writes the recording as a data CSV (see [`crate::io::data`]).

@@ -6,7 +6,7 @@ use super::estimate::{self, EstimateOptions, KNOWN_CHANNELS};
 use super::export::harmonic_constants;
 use super::report::{steady_windows, Summary};
 use super::scenario::{Fault, Scenario};
-use crate::cli::demo::DemoArgs;
+use crate::cli::request::DemoArgs;
 use crate::io::data;
 use crate::io::output::{check, check_folder};
 use anyhow::Context as _;
@@ -166,10 +166,12 @@ pub fn demo(args: &DemoArgs) -> anyhow::Result<()> {
 /// `edgekf loop oscillator`: the scenario file's model (mode, drive, sensor, filter tuning) on
 /// the data's `ax` channel.
 pub fn close_loop(
-    request: &crate::cli::looping::LoopRequest,
+    request: &crate::cli::request::LoopRequest,
     _: &clap::ArgMatches,
 ) -> anyhow::Result<crate::residual_loop::LoopReport> {
     let s = Scenario::load(&request.config)?;
-    let file = crate::cli::registry::read_data(&request.data, &KNOWN_CHANNELS, s.sensor.odr_hz, &s.timeline)?;
-    super::loop_system::close_loop(&s, &file, &request.options)
+    let file = crate::io::recording::read_data(&request.data, &KNOWN_CHANNELS, s.sensor.odr_hz, &s.timeline)?;
+    let mut report = super::loop_system::close_loop(&s, &file, &request.options)?;
+    report.source.data_sha256 = file.sha256.clone();
+    Ok(report)
 }

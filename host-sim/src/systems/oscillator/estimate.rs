@@ -168,7 +168,12 @@ impl Estimates {
             self.innovation.clone(),
             self.nis.clone(),
         ];
-        DataFile { names: Self::COLUMNS.iter().map(|s| s.to_string()).collect(), t: self.t.clone(), columns }
+        DataFile {
+            sha256: None,
+            names: Self::COLUMNS.iter().map(|s| s.to_string()).collect(),
+            t: self.t.clone(),
+            columns,
+        }
     }
 
     /// Writes `t,force_amplitude,force_cos,force_sin,displacement,velocity,innovation,nis`.

@@ -18,11 +18,11 @@ use crate::io::data::DataFile;
 use crate::residual_loop::filter::{run_segments, Run, StateSpace};
 use crate::residual_loop::onset::settled_mean;
 use crate::residual_loop::optimize::ScalarRange;
-use crate::residual_loop::search::{
-    search, Applied, Channel, EffectDetail, EffectKind, EffectLabel, LoopOptions, LoopReport, LoopSystem, RunSummary,
-    Traces,
-};
 use crate::residual_loop::signature::{summarise, ReferenceLines, SummaryContext};
+use crate::residual_loop::{
+    search, Applied, Channel, EffectDetail, EffectKind, EffectLabel, Fitting, LoopOptions, LoopReport, LoopSystem,
+    RunSummary, Traces,
+};
 use anyhow::{anyhow, Result};
 use edgekf::systems::oscillator::HarmonicForceParams;
 use nalgebra::DMatrix;
@@ -301,14 +301,13 @@ impl LoopSystem for OscillatorSystem<'_> {
         EffectLabel { kind, location: location.into(), detail, unit: unit.into() }
     }
 
-    fn parameters(&self, e: &Effect) -> usize {
-        match e {
+    /// Every effect may begin mid-run: a knock that shifts the sensor's offset or gain, a rub
+    /// that adds a harmonic, a crack or a loosening that changes the mode.
+    fn fitting(&self, e: &Effect) -> Fitting {
+        let parameters = match e {
             Effect::HarmonicForce { .. } => 2,
             _ => 1,
-        }
-    }
-
-    fn scalar(&self, e: &Effect) -> Option<(ScalarRange, usize)> {
+        };
         let factor = |low: f64, high: f64| ScalarRange {
             low: low.ln(),
             high: high.ln(),
@@ -316,12 +315,18 @@ impl LoopSystem for OscillatorSystem<'_> {
             log: true,
             tolerance: 1e-5,
         };
-        match e {
+        let scalar = match e {
             Effect::SensorScale => Some((factor(0.5, 2.0), 4)),
             Effect::Frequency => Some((factor(0.8, 1.25), 6)),
             Effect::Damping => Some((factor(0.25, 4.0), 4)),
             Effect::SensorBias | Effect::HarmonicForce { .. } => None,
-        }
+        };
+        Fitting { parameters, scalar, limit: None, may_start_mid_run: true }
+    }
+
+    /// The mode's frequency and damping, the scenario's component parameters.
+    fn declared(&self) -> Vec<Effect> {
+        vec![Effect::Frequency, Effect::Damping]
     }
 
     /// A bias's mean, a force's amplitude (times the modal mass) once settled, or the fitted
@@ -338,12 +343,6 @@ impl LoopSystem for OscillatorSystem<'_> {
             }
             Effect::SensorScale | Effect::Frequency | Effect::Damping => effect.theta.exp(),
         }
-    }
-
-    /// Every effect may begin mid-run: a knock that shifts the sensor's offset or gain, a rub
-    /// that adds a harmonic, a crack or a loosening that changes the mode.
-    fn may_start_mid_run(&self, _: &Effect) -> bool {
-        true
     }
 
     fn traces(&self) -> Traces {

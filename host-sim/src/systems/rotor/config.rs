@@ -75,7 +75,7 @@ pub struct RotorConfig {
     /// What the residual loop allows an effect to be (`[bounds]`; the force's default is the
     /// rotor's [`weight`](RotorConfig::weight)).
     #[serde(default)]
-    pub bounds: crate::residual_loop::bounds::Bounds,
+    pub bounds: crate::systems::rotor::bounds::Bounds,
 }
 
 /// The virtual-sensing filter's noise levels for a machine (`[filter]`), e.g. from `edgekf

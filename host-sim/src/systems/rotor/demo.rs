@@ -10,7 +10,7 @@
 use super::loop_system::close_loop;
 use super::loop_system::effects::Parameter;
 use crate::io::data::DataFile;
-use crate::residual_loop::search::{LoopOptions, LoopReport};
+use crate::residual_loop::{LoopOptions, LoopReport};
 use crate::systems::rotor::{RotorConfig, RotorModel, SimOptions};
 use anyhow::Result;
 

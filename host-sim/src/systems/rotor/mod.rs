@@ -50,6 +50,7 @@
 
 pub mod assembly;
 pub mod bearing_geometry;
+pub mod bounds;
 pub mod cli;
 pub mod config;
 pub mod demo;

@@ -197,7 +197,7 @@ impl Recording {
     /// The run as a data file in memory.
     pub fn to_data_file(&self) -> DataFile {
         let (names, cols) = self.columns();
-        DataFile { names, t: self.t.clone(), columns: cols.into_iter().map(<[f64]>::to_vec).collect() }
+        DataFile { sha256: None, names, t: self.t.clone(), columns: cols.into_iter().map(<[f64]>::to_vec).collect() }
     }
 
     /// Writes the run as CSV with [`crate::io::data::write`].

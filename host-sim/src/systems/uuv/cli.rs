@@ -119,7 +119,7 @@ fn estimate_command(args: EstimateArgs) -> anyhow::Result<()> {
     let config = load(args.config.as_deref())?;
     let known: Vec<&str> = REQUIRED.iter().chain(TRUTH.iter()).copied().collect();
     let (file, restarts) =
-        crate::cli::registry::read_estimator_data(&args.data, &REQUIRED, &known, config.sensors.rate)?;
+        crate::io::recording::read_estimator_data(&args.data, &REQUIRED, &known, config.sensors.rate)?;
     let table = estimate(&config, &file, &restarts)?;
     let figure = match &args.plot {
         Some(_) => super::plot::health_figure(&table, [file.column("truth_k_t"), file.column("truth_k_v")])?,
@@ -177,10 +177,12 @@ fn summarise(table: &EstimateTable, data: &crate::io::data::DataFile) {
 }
 
 /// `edgekf loop uuv`: the vehicle's configuration and data, the loop closed on them.
-pub fn close_loop(request: &crate::cli::looping::LoopRequest, _: &clap::ArgMatches) -> anyhow::Result<LoopReport> {
+pub fn close_loop(request: &crate::cli::request::LoopRequest, _: &clap::ArgMatches) -> anyhow::Result<LoopReport> {
     let config = UuvConfig::load(&request.config)?;
     let known: Vec<&str> = REQUIRED.iter().chain(TRUTH.iter()).copied().collect();
     let file =
-        crate::cli::registry::read_data(&request.data, &known, config.sensors.rate, &TimelineOptions::default())?;
-    super::loop_system::close_loop(&config, &file, &request.options)
+        crate::io::recording::read_data(&request.data, &known, config.sensors.rate, &TimelineOptions::default())?;
+    let mut report = super::loop_system::close_loop(&config, &file, &request.options)?;
+    report.source.data_sha256 = file.sha256.clone();
+    Ok(report)
 }

@@ -79,6 +79,7 @@ impl UuvRecording {
     /// As a data file in memory, as `edgekf uuv estimate` would read it back.
     pub fn to_data_file(&self) -> crate::io::data::DataFile {
         crate::io::data::DataFile {
+            sha256: None,
             names: Self::names().iter().map(|n| n.to_string()).collect(),
             t: self.t.clone(),
             columns: self.columns.clone(),

@@ -155,10 +155,10 @@ fn wrong_rate_or_missing_channel_is_an_error() {
     let p = HarmonicForceParams { sample_rate_hz: 500.0, ..s.estimator_params() };
     let msg = run::<f64>(&d, &p, &EstimateOptions::default()).unwrap_err().to_string();
     assert!(msg.contains("sampled at 1000.000000 Hz but the filter is built for 500 Hz"), "{msg}");
-    let no_ax = DataFile { names: vec!["ay".into()], t: vec![0.0, 0.001], columns: vec![vec![0.0, 0.0]] };
+    let no_ax = DataFile { sha256: None, names: vec!["ay".into()], t: vec![0.0, 0.001], columns: vec![vec![0.0, 0.0]] };
     let msg = run::<f64>(&no_ax, &s.estimator_params(), &EstimateOptions::default()).unwrap_err().to_string();
     assert_eq!(msg, "the data have no `ax` column (columns: t, ay)");
-    let empty = DataFile { names: vec!["ax".into()], t: vec![], columns: vec![vec![]] };
+    let empty = DataFile { sha256: None, names: vec!["ax".into()], t: vec![], columns: vec![vec![]] };
     assert!(run::<f64>(&empty, &s.estimator_params(), &EstimateOptions::default()).is_err());
 }
 

@@ -91,7 +91,12 @@ impl Recording {
             self.truth_force_amplitude.clone(),
             self.truth_accel.clone(),
         ];
-        DataFile { names: Self::CHANNELS.iter().map(|s| s.to_string()).collect(), t: self.t.clone(), columns }
+        DataFile {
+            sha256: None,
+            names: Self::CHANNELS.iter().map(|s| s.to_string()).collect(),
+            t: self.t.clone(),
+            columns,
+        }
     }
 
     /// The CSV text: `t,ax,ay,az,fault_nack,fault_timeout,fault_garbage,fault_stuck,fault_drop,

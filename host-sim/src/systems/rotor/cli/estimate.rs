@@ -95,6 +95,7 @@ fn run_stretches(
     let mut all: Option<Estimates> = None;
     for r in stretches {
         let part = DataFile {
+            sha256: None,
             names: file.names.clone(),
             t: file.t[r.clone()].to_vec(),
             columns: file.columns.iter().map(|c| c[r.clone()].to_vec()).collect(),

@@ -390,7 +390,7 @@ pub struct RotorLoopArgs {
 
 /// `edgekf loop rotor`: the rotor's configuration and data, the loop closed on them.
 pub fn close_loop(
-    request: &crate::cli::looping::LoopRequest,
+    request: &crate::cli::request::LoopRequest,
     m: &clap::ArgMatches,
 ) -> anyhow::Result<crate::residual_loop::LoopReport> {
     use clap::FromArgMatches as _;
@@ -400,20 +400,22 @@ pub fn close_loop(
     let model = RotorModel::from_config(&cfg)?;
     let channels: Vec<String> = cfg.sensors.iter().map(|s| s.channel_name()).collect();
     let known: Vec<&str> = channels.iter().map(String::as_str).collect();
-    let file = crate::cli::registry::read_data(&request.data, &known, cfg.operation.sample_rate, &cfg.timeline)?;
+    let file = crate::io::recording::read_data(&request.data, &known, cfg.operation.sample_rate, &cfg.timeline)?;
     let rotor = super::loop_system::RotorLoopOptions { speed_band: args.estimate_speed, ..Default::default() };
-    match &request.baseline {
+    let mut report = match &request.baseline {
         Some(path) => {
             let baseline = super::loop_system::baseline::RotorBaseline::load(path)?;
-            super::loop_system::close_loop_from(&model, &file, &request.options, &rotor, &baseline)
+            super::loop_system::close_loop_from(&model, &file, &request.options, &rotor, &baseline)?
         }
-        None => super::loop_system::close_loop(&model, &file, &request.options, &rotor),
-    }
+        None => super::loop_system::close_loop(&model, &file, &request.options, &rotor)?,
+    };
+    report.source.data_sha256 = file.sha256.clone();
+    Ok(report)
 }
 
 /// `edgekf baseline rotor`: the configuration and the healthy recording, the baseline learned
 /// from them (the running speed read from the data within ±10 % of the configured one).
-pub fn baseline(request: &crate::cli::baseline::BaselineRequest) -> anyhow::Result<String> {
+pub fn baseline(request: &crate::cli::request::BaselineRequest) -> anyhow::Result<String> {
     use super::loop_system::baseline::{learn, BaselineOptions};
     let args = &request.args;
     let cfg =
@@ -421,17 +423,18 @@ pub fn baseline(request: &crate::cli::baseline::BaselineRequest) -> anyhow::Resu
     let model = RotorModel::from_config(&cfg)?;
     let channels: Vec<String> = cfg.sensors.iter().map(|s| s.channel_name()).collect();
     let known: Vec<&str> = channels.iter().map(String::as_str).collect();
-    let file = crate::cli::registry::read_data(&args.data, &known, cfg.operation.sample_rate, &cfg.timeline)?;
+    let file = crate::io::recording::read_data(&args.data, &known, cfg.operation.sample_rate, &cfg.timeline)?;
     let options =
         BaselineOptions { max_parts: args.max_parts, condition: args.condition.clone(), ..Default::default() };
     let mut b = learn(&model, &file, &request.options, &Default::default(), &options)?;
     b.source = request.source.clone();
+    b.source.data_sha256 = file.sha256.clone().unwrap_or_default();
     b.to_toml()
 }
 
 /// The rotor's part of `edgekf demo`: the paper rotor with an undeclared heavier disk, the loop
 /// closed on the declared model; `--out DIR` writes `loop/data.csv` and the report there.
-pub fn demo(args: &crate::cli::demo::DemoArgs) -> anyhow::Result<()> {
+pub fn demo(args: &crate::cli::request::DemoArgs) -> anyhow::Result<()> {
     use super::demo::LoopDemo;
     use crate::report::text::{summary_table, write_report};
     if let Some(dir) = &args.out {

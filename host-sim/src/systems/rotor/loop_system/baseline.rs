@@ -22,7 +22,7 @@ use crate::residual_loop::baseline::{BaselineSource, Comparison};
 use crate::residual_loop::filter::Run;
 use crate::residual_loop::onset::halves;
 use crate::residual_loop::optimize::maximise;
-use crate::residual_loop::search::{search, Applied, LoopOptions, LoopSystem};
+use crate::residual_loop::{search, Applied, LoopOptions, LoopSystem};
 use crate::systems::rotor::RotorModel;
 use anyhow::{anyhow, bail, Context, Result};
 use serde::{Deserialize, Serialize};

@@ -7,10 +7,10 @@
 //! signatures point to it ([`Effect::signature`]).
 
 use super::healthy::{oscillator, ModeSpec, ModeTarget};
-use crate::residual_loop::bounds::Bounds;
 pub use crate::residual_loop::optimize::ScalarRange;
-use crate::residual_loop::search::EffectKind;
+use crate::residual_loop::EffectKind;
 use crate::systems::rotor::bearing_geometry::BearingLine;
+use crate::systems::rotor::bounds::Bounds;
 use crate::systems::rotor::config::PointMassConfig;
 use crate::systems::rotor::estimate::ReducedRotor;
 use crate::systems::rotor::{dof, RotorConfig, RotorModel, SensorKind};

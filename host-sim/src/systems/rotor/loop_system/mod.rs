@@ -26,16 +26,17 @@ use self::effects::{
 };
 use self::healthy::Healthy;
 use self::speed::{estimate_speed, RunningSpeed};
+use crate::diagnostics::bearings::envelope::LineSearch;
+use crate::diagnostics::bearings::impacts::{self, ImpactLine};
+use crate::diagnostics::locate::{self, open_loop, C64};
 use crate::io::data::DataFile;
-use crate::residual_loop::direction::{self, open_loop, C64};
 use crate::residual_loop::filter::{run_state_space, Run, StateSpace};
-use crate::residual_loop::impacts::ImpactLine;
 use crate::residual_loop::onset::settled_mean;
-use crate::residual_loop::optimize::ScalarRange;
-use crate::residual_loop::search::{
-    search, Applied, EffectDetail, EffectLabel, LoopOptions, LoopReport, LoopSystem, RunSummary, SystemSection, Traces,
-};
 use crate::residual_loop::signature::{summarise, Channel, NamedLine, ReferenceLines, SummaryContext};
+use crate::residual_loop::{
+    search, Applied, EffectDetail, EffectKind, EffectLabel, Fitting, LoopOptions, LoopReport, LoopSystem, PreStage,
+    RunSummary, SystemSection, Traces,
+};
 use crate::systems::rotor::bearing_geometry::BearingLine;
 use crate::systems::rotor::estimate::Tuning;
 use crate::systems::rotor::estimate::{reduce, ReducedRotor};
@@ -74,6 +75,9 @@ pub struct RotorLoopOptions {
     /// Estimate the running speed from the data within this fraction of the configured
     /// (nominal) speed, instead of taking the configured speed as exact.
     pub speed_band: Option<f64>,
+    /// How the bearings' defect lines are looked for in the innovations' envelope (the first
+    /// stage, [`impacts`]).
+    pub envelope: LineSearch,
 }
 
 /// A rotor, its data and the loop's options: what [`close_loop`] searches.
@@ -369,7 +373,7 @@ impl<'a> RotorSystem<'a> {
                 Input::Inertial => y,
             })
         };
-        let ranked = direction::rank(run, hz, self.red.sample_rate, (0..columns.len()).collect(), response);
+        let ranked = locate::rank(run, hz, self.red.sample_rate, (0..columns.len()).collect(), response);
         if ranked.is_empty() {
             return self.force_sites.clone();
         }
@@ -377,7 +381,7 @@ impl<'a> RotorSystem<'a> {
         // overhang) are all fitted, so that the fits list them as rivals; a mass's fits cost
         // dozens of runs each, so it keeps to the best few.
         let best = ranked[0].explained;
-        let tied = |i: usize, p: &direction::Placement<usize>| {
+        let tied = |i: usize, p: &locate::Placement<usize>| {
             i < PLACES || (matches!(input, Input::Rotating) && i < MAX_PLACES && p.explained >= best - TIED_SHARE)
         };
         ranked.iter().enumerate().take_while(|(i, p)| tied(*i, p)).map(|(_, p)| columns[p.location].0).collect()
@@ -404,6 +408,43 @@ impl<'a> RotorSystem<'a> {
                 (node, settled_mean(&size, 0) / w2)
             })
             .collect()
+    }
+
+    /// Every defect line of every bearing with a geometry, at the running speed: an inner-race
+    /// defect turns with the shaft through the load zone (modulated at the shaft's rate), a
+    /// rolling element with the cage (at the cage's, FTF). A line found on an integer order of
+    /// the shaft speed is refused by the stage (a synchronous modulation looks the same).
+    fn impact_lines(&self) -> Vec<ImpactLine<Effect>> {
+        let shaft_hz = self.red.speed / TAU;
+        self.lines
+            .iter()
+            .map(|&(bearing, line, order)| {
+                let cage = self.lines.iter().find(|(b, l, _)| *b == bearing && *l == BearingLine::Ftf).map(|x| x.2);
+                let modulation_hz = match line {
+                    BearingLine::Bpfi => Some(shaft_hz),
+                    BearingLine::Bsf => cage.map(|c| c * shaft_hz),
+                    BearingLine::Bpfo | BearingLine::Ftf => None,
+                };
+                let order_milli = (order * 1e3).round() as u32;
+                ImpactLine {
+                    effect: Effect::BearingDefect { bearing, line, order_milli },
+                    hz: order * shaft_hz,
+                    modulation_hz,
+                    synchronous_hz: Some(shaft_hz),
+                }
+            })
+            .collect()
+    }
+
+    /// Takes `signal` (in the channel's unit) out of channel `channel` of the data: the
+    /// vibration of the impacts the first stage found, so that later runs do not see it.
+    fn subtract(&mut self, channel: usize, signal: &[f64]) -> Result<()> {
+        let col = self.columns.get_mut(channel).ok_or_else(|| anyhow!("no channel #{channel}"))?;
+        if col.len() != signal.len() {
+            return Err(anyhow!("a signal of {} samples for a channel of {}", signal.len(), col.len()));
+        }
+        col.iter_mut().zip(signal).for_each(|(v, s)| *v -= s);
+        Ok(())
     }
 }
 
@@ -440,7 +481,7 @@ impl LoopSystem for RotorSystem<'_> {
     /// innovations carry lines or colour; the catch-all (`unknown_input` at each force site) in
     /// a tier of its own. A force at an order and a point mass may act at any node: they are
     /// tried at the [`PLACES`] nodes whose inputs explain most of the innovations at their
-    /// lines ([`direction`]).
+    /// lines ([`locate`]).
     fn candidates(
         &self,
         s: &RunSummary,
@@ -548,22 +589,19 @@ impl LoopSystem for RotorSystem<'_> {
         }
     }
 
-    fn parameters(&self, e: &Effect) -> usize {
-        e.parameters(self.channels())
-    }
-
     /// Parameters and point masses get a finer grid: a stiffness factor's log-likelihood has
-    /// side lobes where a natural frequency crosses a line.
-    fn scalar(&self, e: &Effect) -> Option<(ScalarRange, usize)> {
+    /// side lobes where a natural frequency crosses a line. A force (harmonic or unknown) may
+    /// not exceed `[bounds] force`, by default the rotor's weight: a larger one is the force
+    /// standing in for something else.
+    fn fitting(&self, e: &Effect) -> Fitting {
         let grid = if e.changes_structure() { 7 } else { 4 };
-        e.scalar(self.red.sample_rate, &self.cfg.bounds, self.cfg.mass()).map(|r| (r, grid))
-    }
-
-    /// A force (harmonic or unknown) may not exceed `[bounds] force`, by default the rotor's
-    /// weight: a larger one is the force standing in for something else.
-    fn limit(&self, e: &Effect) -> Option<f64> {
-        matches!(e, Effect::HarmonicForce { .. } | Effect::UnknownInput { .. })
-            .then(|| self.cfg.bounds.force_n(self.cfg.weight()))
+        Fitting {
+            parameters: e.parameters(self.channels()),
+            scalar: e.scalar(self.red.sample_rate, &self.cfg.bounds, self.cfg.mass()).map(|r| (r, grid)),
+            limit: matches!(e, Effect::HarmonicForce { .. } | Effect::UnknownInput { .. })
+                .then(|| self.cfg.bounds.force_n(self.cfg.weight())),
+            may_start_mid_run: false,
+        }
     }
 
     /// The fitted scalar (a factor as `exp θ`), or the effect states' size once settled.
@@ -588,44 +626,49 @@ impl LoopSystem for RotorSystem<'_> {
         }
     }
 
-    /// Every component parameter, halved and doubled.
-    fn screened(&self) -> Vec<(Effect, Vec<f64>)> {
-        Parameter::all(self.cfg).into_iter().map(|p| (Effect::Parameter(p), vec![0.5f64.ln(), 2f64.ln()])).collect()
+    /// Every component parameter (the engine screens them for what the data cannot see).
+    fn declared(&self) -> Vec<Effect> {
+        Parameter::all(self.cfg).into_iter().map(Effect::Parameter).collect()
     }
 
-    /// Every defect line of every bearing with a geometry, at the running speed: an inner-race
-    /// defect turns with the shaft through the load zone (modulated at the shaft's rate), a
-    /// rolling element with the cage (at the cage's, FTF). A line found on an integer order of
-    /// the shaft speed is refused by the engine (a synchronous modulation looks the same).
-    fn impact_lines(&self) -> Vec<ImpactLine<Effect>> {
-        let shaft_hz = self.red.speed / TAU;
-        self.lines
-            .iter()
-            .map(|&(bearing, line, order)| {
-                let cage = self.lines.iter().find(|(b, l, _)| *b == bearing && *l == BearingLine::Ftf).map(|x| x.2);
-                let modulation_hz = match line {
-                    BearingLine::Bpfi => Some(shaft_hz),
-                    BearingLine::Bsf => cage.map(|c| c * shaft_hz),
-                    BearingLine::Bpfo | BearingLine::Ftf => None,
-                };
-                let order_milli = (order * 1e3).round() as u32;
-                ImpactLine {
-                    effect: Effect::BearingDefect { bearing, line, order_milli },
-                    hz: order * shaft_hz,
-                    modulation_hz,
-                    synchronous_hz: Some(shaft_hz),
-                }
-            })
-            .collect()
-    }
-
-    fn subtract(&mut self, channel: usize, signal: &[f64]) -> Result<()> {
-        let col = self.columns.get_mut(channel).ok_or_else(|| anyhow!("no channel #{channel}"))?;
-        if col.len() != signal.len() {
-            return Err(anyhow!("a signal of {} samples for a channel of {}", signal.len(), col.len()));
+    /// The bearings' defects named by their envelope lines ([`impacts`]) and their vibration
+    /// taken out of the data; after a defect is named, a broadband stand-in (a mode the model
+    /// lacks, a catch-all input) is not fitted: the impacts ring every lightly damped mode.
+    fn prestage(&mut self, run: &Run, options: &LoopOptions) -> Result<PreStage<Effect>> {
+        let lines = self.impact_lines();
+        let traces = self.traces();
+        let found = impacts::stage(&lines, |e| self.label(e), run, &traces, &self.rotor.envelope, options.half_gain);
+        for (channel, signal) in &found.signals {
+            self.subtract(*channel, signal)?;
         }
-        col.iter_mut().zip(signal).for_each(|(v, s)| *v -= s);
-        Ok(())
+        if options.progress {
+            for (_, a) in &found.added {
+                eprintln!(
+                    "loop: impacts {} at {}: Δ log-likelihood {:.1}, BIC cost {:.1}",
+                    a.kind, a.location, a.delta_log_likelihood, a.bic_penalty
+                );
+            }
+        }
+        let excludes = match found.added.first() {
+            Some((_, defect)) => [EffectKind::ExtraMode, EffectKind::UnknownInput]
+                .map(|kind| {
+                    let why = format!(
+                        "not fitted: the impacts of the {} at {} ring every lightly damped mode, and a broadband \
+                         stand-in fitted after them is their ringing",
+                        defect.kind, defect.location
+                    );
+                    (kind, why)
+                })
+                .to_vec(),
+            None => Vec::new(),
+        };
+        Ok(PreStage {
+            data_changed: !found.signals.is_empty(),
+            added: found.added,
+            trials: found.trials,
+            refused: found.refused,
+            excludes,
+        })
     }
 
     fn traces(&self) -> Traces {

@@ -12,7 +12,7 @@
 use super::{RotorLoopOptions, RotorSystem};
 use crate::io::data::DataFile;
 use crate::residual_loop::optimize::maximise;
-use crate::residual_loop::search::LoopOptions;
+use crate::residual_loop::LoopOptions;
 use crate::systems::rotor::RotorModel;
 use anyhow::{bail, Result};
 use serde::Serialize;

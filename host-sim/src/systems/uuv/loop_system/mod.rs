@@ -20,11 +20,11 @@ use crate::io::data::DataFile;
 use crate::residual_loop::filter::Run;
 use crate::residual_loop::onset::settled_mean;
 use crate::residual_loop::optimize::ScalarRange;
-use crate::residual_loop::search::{
-    search, Applied, Channel, EffectDetail, EffectKind, EffectLabel, LoopOptions, LoopReport, LoopSystem, RunSummary,
-    SystemSection, Traces,
-};
 use crate::residual_loop::signature::{summarise, ReferenceLines, SummaryContext};
+use crate::residual_loop::{
+    search, Applied, Channel, EffectDetail, EffectKind, EffectLabel, Fitting, LoopOptions, LoopReport, LoopSystem,
+    RunSummary, SystemSection, Traces,
+};
 use anyhow::Result;
 use edgekf::systems::uuv::{EstimatorSettings, Sample, Vehicle};
 use effect::{Effect, Parameter, Sensor, Thruster, CHANNELS};
@@ -210,11 +210,9 @@ impl LoopSystem for UuvSystem<'_> {
         EffectLabel { kind, location, detail, unit: unit.into() }
     }
 
-    fn parameters(&self, e: &Effect) -> usize {
-        e.states().len().max(1)
-    }
-
-    fn scalar(&self, e: &Effect) -> Option<(ScalarRange, usize)> {
+    /// A thruster's health changes mid-run (a fouled propeller, a failing motor); the rest are
+    /// properties of the vehicle and its sensors.
+    fn fitting(&self, e: &Effect) -> Fitting {
         let factor = |low: f64, high: f64| ScalarRange {
             low: low.ln(),
             high: high.ln(),
@@ -222,11 +220,22 @@ impl LoopSystem for UuvSystem<'_> {
             log: true,
             tolerance: 1e-3,
         };
-        match e {
+        let scalar = match e {
             Effect::Parameter(Parameter::Mass) => Some((factor(0.8, 1.25), 4)),
             Effect::Parameter(Parameter::SurgeDrag) => Some((factor(0.7, 1.43), 4)),
             _ => None,
+        };
+        Fitting {
+            parameters: e.states().len().max(1),
+            scalar,
+            limit: None,
+            may_start_mid_run: matches!(e, Effect::Health(_)),
         }
+    }
+
+    /// The vehicle's mass and surge drag, the configuration's component parameters.
+    fn declared(&self) -> Vec<Effect> {
+        vec![Effect::Parameter(Parameter::Mass), Effect::Parameter(Parameter::SurgeDrag)]
     }
 
     /// A health factor or an offset once settled after its onset, a current's speed, or the
@@ -243,12 +252,6 @@ impl LoopSystem for UuvSystem<'_> {
             }
             Effect::Parameter(_) => effect.theta.exp(),
         }
-    }
-
-    /// A thruster's health changes mid-run (a fouled propeller, a failing motor); the rest are
-    /// properties of the vehicle and its sensors.
-    fn may_start_mid_run(&self, e: &Effect) -> bool {
-        matches!(e, Effect::Health(_))
     }
 
     fn traces(&self) -> Traces {

@@ -1,6 +1,8 @@
-//! What the model allows an effect to be (`[bounds]` of a system's configuration): a fit that
+//! What the model allows an effect to be (`[bounds]` of the rotor's configuration): a fit that
 //! lands at or beyond a bound is not an estimate of that effect but the effect standing in for
-//! something the library lacks, so the engine refuses it with [`OUTSIDE`] instead of keeping it.
+//! something the library lacks, so the engine refuses it with
+//! [`OUTSIDE`](crate::residual_loop::OUTSIDE) instead of keeping it (the rotor gives the engine
+//! each effect's [`limit`](crate::residual_loop::Fitting::limit) from here).
 //!
 //! The defaults (the README's table) are wide enough for any real fault and narrow enough to
 //! refuse what the CWRU records once drew out of the loop: a disk mass ×1.95, Young's modulus
@@ -8,13 +10,10 @@
 
 use serde::Deserialize;
 
-/// The reason of every refusal at a bound, as `report.json` writes it.
-pub const OUTSIDE: &str = "outside what the model allows";
-
 /// `[bounds]`: the physical range of each effect kind.
 ///
 /// ```
-/// use edgekf_sim::residual_loop::bounds::Bounds;
+/// use edgekf_sim::systems::rotor::bounds::Bounds;
 /// let b: Bounds = toml::from_str("parameter = 0.5\ndelay = 1e-3").unwrap();
 /// assert_eq!(b.factor_range(), (0.5, 1.5));
 /// assert_eq!(b.delay_s(12_000.0), 1e-3);

@@ -10,7 +10,7 @@
 //! run (or dozens) per location, so a system can search every node and fit only the few the
 //! innovations point to.
 
-use super::filter::{FinalFilter, Run};
+use crate::residual_loop::filter::{FinalFilter, Run};
 use nalgebra::{Complex, DMatrix, DVector};
 use std::f64::consts::TAU;
 
@@ -38,7 +38,7 @@ fn settled(run: &Run) -> std::ops::Range<usize> {
 /// standard deviation there (channels in different units weigh alike).
 ///
 /// ```
-/// use edgekf_sim::residual_loop::direction::phasor;
+/// use edgekf_sim::diagnostics::locate::phasor;
 /// use edgekf_sim::residual_loop::filter::Run;
 /// let fs = 1000.0;
 /// let e: Vec<f64> = (0..4000).map(|k| 0.3 * (std::f64::consts::TAU * 50.0 * k as f64 / fs + 0.5).cos()).collect();
@@ -147,7 +147,7 @@ fn explained_energy(e: &DVector<C64>, t: &DMatrix<C64>) -> f64 {
 /// ranked.
 ///
 /// ```
-/// use edgekf_sim::residual_loop::direction::{rank, C64};
+/// use edgekf_sim::diagnostics::locate::{rank, C64};
 /// use edgekf_sim::residual_loop::filter::{FinalFilter, Run};
 /// use nalgebra::DMatrix;
 /// // Two channels, no states: the innovations are the data, and an input at "b" reads (1, 2).

@@ -16,7 +16,7 @@
 //! Kalman filter gives its exact likelihood. The fault is the gain of the impacts model over
 //! both the innovations as they are (`r` alone) and the resonance without impacts (`σ_d = 0`).
 
-use super::optimize::maximise;
+use crate::residual_loop::optimize::maximise;
 use rustfft::num_complex::Complex;
 use rustfft::FftPlanner;
 use std::f64::consts::TAU;
@@ -51,7 +51,7 @@ pub struct Fit {
 /// likelihood), whole run and halves.
 ///
 /// ```
-/// use edgekf_sim::residual_loop::cyclic::white;
+/// use edgekf_sim::diagnostics::bearings::cyclic::white;
 /// let (ll, halves) = white(&[1.0, -1.0, 1.0, -1.0]);
 /// assert_eq!(ll, -2.0);
 /// assert_eq!(halves, [-1.0, -1.0]);
@@ -224,7 +224,7 @@ pub fn fit_impacts(u: &[f64], fs: f64, band: (f64, f64), g: &[f64], from: &Fit) 
 /// amplitude the fit took from the data).
 ///
 /// ```
-/// use edgekf_sim::residual_loop::cyclic::intensity;
+/// use edgekf_sim::diagnostics::bearings::cyclic::intensity;
 /// // An envelope pulsing at 100 Hz (and noise-free): rebuilt from its line (3 bins), it pulses
 /// // too, from 0.05 (the floor) to 2 (a hair under: the floor lifts the mean a little).
 /// let fs = 2000.0;
@@ -290,7 +290,7 @@ pub fn intensity(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::residual_loop::envelope::{squared_envelope, Band};
+    use crate::diagnostics::bearings::envelope::{squared_envelope, Band};
     use rand::SeedableRng;
     use rand_distr::{Distribution, Normal};
 

@@ -1,6 +1,7 @@
-//! The engine's first stage: periodic impacts the system can name (a bearing defect's lines),
-//! found by envelope analysis of the base model's innovations and fitted there by likelihood
-//! ([`cyclic`](super::cyclic)), before the search for the model's own effects.
+//! A machine's first stage of the loop ([`LoopSystem::prestage`](crate::residual_loop::LoopSystem::prestage)):
+//! periodic impacts it can name (a bearing defect's lines), found by envelope analysis of the
+//! base model's innovations and fitted there by likelihood ([`cyclic`](super::cyclic)), before
+//! the search for the model's own effects.
 //!
 //! Per channel: the most impulsive band ([`kurtogram`]) of the normalised innovations, its
 //! squared envelope, and each of the system's [`ImpactLine`]s looked for in the envelope's
@@ -12,10 +13,8 @@
 
 use super::cyclic::{fit_background, fit_impacts, intensity, predictions, white, Fit};
 use super::envelope::{find_line, kurtogram_bands, spectrum, squared_envelope, Band, LineEvidence, LineSearch};
-use super::filter::Run;
-use super::report::{AddedEffect, Refused, Trial};
-use super::search::{LoopSystem, Traces};
-use super::vocabulary::EffectLabel;
+use crate::residual_loop::filter::Run;
+use crate::residual_loop::{AddedEffect, EffectLabel, Refused, Traces, Trial};
 
 /// Periodic impacts a system can name when the innovations' envelope shows their line.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -85,37 +84,39 @@ fn impact_parameters(bins: usize) -> usize {
     4 + 2 * bins
 }
 
-/// Runs the stage on the base model's `run` of `sys`, whose data the `traces` describe.
-pub fn stage<S: LoopSystem>(
-    sys: &S,
+/// Runs the stage for the machine's `lines` (each reported as `label` says) on its base
+/// model's `run`, whose data the `traces` describe; a fit must gain `half_gain` of its cost in
+/// each half of the run.
+pub fn stage<E: Copy + PartialEq>(
+    lines: &[ImpactLine<E>],
+    label_of: impl Fn(&E) -> EffectLabel,
     run: &Run,
     traces: &Traces,
     search: &LineSearch,
     half_gain: f64,
-) -> Outcome<S::Effect> {
-    let lines = sys.impact_lines();
+) -> Outcome<E> {
     let mut out = Outcome::default();
     let Some(highest) = lines.iter().map(|l| l.hz).max_by(f64::total_cmp) else { return out };
     let Some(fs) = sample_rate(&traces.t) else { return out };
     let n_meas = run.measurements().max(2) as f64;
     let cost = |p: usize| 0.5 * p as f64 * n_meas.ln();
-    let mut per_channel: Vec<ChannelFits<S::Effect>> = Vec::new();
+    let mut per_channel: Vec<ChannelFits<E>> = Vec::new();
     for (ch, (innovation, variance)) in run.innovation.iter().zip(&run.variance).enumerate() {
         let u: Vec<f64> = innovation.iter().zip(variance).map(|(e, s)| e / s.sqrt()).collect();
         // The band must lie above the lines and be wide enough to carry their harmonics; the
         // most impulsive bands are each tried (the most impulsive may carry little energy).
         let (min_hz, min_width) = (3.0 * highest, (search.harmonics as f64 + 0.2) * highest);
-        let mut cands: Vec<Candidate<S::Effect>> = Vec::new();
+        let mut cands: Vec<Candidate<E>> = Vec::new();
         let (null, null_halves) = white(&u);
         for band in kurtogram_bands(&u, fs, min_hz, min_width, BANDS) {
             let env = squared_envelope(&u, fs, &band);
             let spec = spectrum(&env, fs);
-            let mut seen: Vec<(ImpactLine<S::Effect>, LineEvidence)> = Vec::new();
-            for line in &lines {
+            let mut seen: Vec<(ImpactLine<E>, LineEvidence)> = Vec::new();
+            for line in lines {
                 let Some(evidence) = find_line(&spec, line.hz, search) else { continue };
                 match synchronous(line, &evidence, spec.df) {
                     Some(order) => {
-                        let label = sys.label(&line.effect);
+                        let label = label_of(&line.effect);
                         if !out
                             .refused
                             .iter()
@@ -168,23 +169,22 @@ pub fn stage<S: LoopSystem>(
         }
         per_channel.push(ChannelFits { channel: ch, u, cands });
     }
-    let pays = |c: &Candidate<S::Effect>| c.delta > c.penalty && c.halves[0].min(c.halves[1]) >= half_gain * c.penalty;
-    let score = |c: &Candidate<S::Effect>| c.delta - c.penalty;
+    let pays = |c: &Candidate<E>| c.delta > c.penalty && c.halves[0].min(c.halves[1]) >= half_gain * c.penalty;
+    let score = |c: &Candidate<E>| c.delta - c.penalty;
     // The channel with the strongest evidence decides first; on the others the same defect is
     // preferred, and another is kept only if its line is not one of the first's combination
     // lines (an inner race's BPFI − 3× sits near BSF).
     per_channel.sort_by(|a, b| {
-        let best =
-            |cs: &[Candidate<S::Effect>]| cs.iter().filter(|c| pays(c)).map(score).fold(f64::NEG_INFINITY, f64::max);
+        let best = |cs: &[Candidate<E>]| cs.iter().filter(|c| pays(c)).map(score).fold(f64::NEG_INFINITY, f64::max);
         best(&b.cands).total_cmp(&best(&a.cands))
     });
-    let mut accepted: Vec<(ImpactLine<S::Effect>, f64)> = Vec::new();
+    let mut accepted: Vec<(ImpactLine<E>, f64)> = Vec::new();
     for ChannelFits { channel: ch, u, cands } in per_channel {
         let variance = &run.variance[ch];
         // A line is shadowed by a defect kept on another channel whose combination line it is,
         // or by a stronger line on this one whose combination line it is (105's BSF at
         // 71.8 Hz is its BPFI's 161.7 − 3 × 30.0 Hz).
-        let shadows: Vec<Option<(ImpactLine<S::Effect>, f64)>> = cands
+        let shadows: Vec<Option<(ImpactLine<E>, f64)>> = cands
             .iter()
             .map(|c| {
                 let stronger = cands
@@ -208,7 +208,7 @@ pub fn stage<S: LoopSystem>(
         };
         let best = pool.into_iter().max_by(|&a, &b| score(&cands[a]).total_cmp(&score(&cands[b])));
         for (i, c) in cands.iter().enumerate() {
-            let label = sys.label(&c.line.effect);
+            let label = label_of(&c.line.effect);
             let unit = traces.channels.get(ch).map_or_else(String::new, |c| c.unit.clone());
             let signal: Vec<f64> =
                 predictions(&u, fs, &c.fit, Some(&c.g)).iter().zip(variance).map(|(z, s)| z * s.sqrt()).collect();
@@ -246,7 +246,7 @@ pub fn stage<S: LoopSystem>(
                     c.penalty
                 )
             } else if let Some((a, hz)) = shadows[i] {
-                let first = sys.label(&a.effect);
+                let first = label_of(&a.effect);
                 format!(
                     "its line at {:.2} Hz is a combination line of the {} at {} ({hz:.2} Hz), a stronger line",
                     c.evidence.hz,
@@ -262,7 +262,7 @@ pub fn stage<S: LoopSystem>(
         }
     }
     // One effect per defect: where several channels show it, their gains and costs add up.
-    let mut merged: Vec<(S::Effect, AddedEffect)> = Vec::new();
+    let mut merged: Vec<(E, AddedEffect)> = Vec::new();
     for (e, a) in out.added.drain(..) {
         match merged.iter_mut().find(|(x, _)| *x == e) {
             Some((_, m)) => {

@@ -48,7 +48,7 @@ const MIN_FRAMES: usize = 32;
 /// read as 0. `None` if `x` is too short for any window.
 ///
 /// ```
-/// use edgekf_sim::residual_loop::envelope::kurtogram;
+/// use edgekf_sim::diagnostics::bearings::envelope::kurtogram;
 /// // Gaussian-like noise with impacts ringing at 3 kHz every 10 ms, at 12 kHz.
 /// let fs = 12_000.0;
 /// let mut x: Vec<f64> = (0..24_000u64).map(|k| ((k * 7919 % 1000) as f64 / 500.0 - 1.0) * 0.3).collect();
@@ -131,7 +131,7 @@ pub fn kurtogram_bands(x: &[f64], fs: f64, min_hz: f64, min_width_hz: f64, count
 /// read as 0.
 ///
 /// ```
-/// use edgekf_sim::residual_loop::envelope::{squared_envelope, Band};
+/// use edgekf_sim::diagnostics::bearings::envelope::{squared_envelope, Band};
 /// // A 2 kHz carrier, amplitude-modulated at 50 Hz: the envelope is the modulation.
 /// let fs = 10_000.0;
 /// let x: Vec<f64> = (0..10_000)
@@ -226,7 +226,7 @@ pub struct LineEvidence {
 /// (at least 20 bins), its search window left out.
 ///
 /// ```
-/// use edgekf_sim::residual_loop::envelope::{find_line, LineSearch, Spectrum};
+/// use edgekf_sim::diagnostics::bearings::envelope::{find_line, LineSearch, Spectrum};
 /// // A flat floor with lines at 101 Hz and 202 Hz (bins of 0.5 Hz).
 /// let mut amplitude = vec![1.0; 2000];
 /// amplitude[202] = 10.0;

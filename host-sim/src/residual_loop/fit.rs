@@ -1,0 +1,330 @@
+//! Fitting one candidate effect on top of the current model: its scalar by maximum likelihood
+//! (and its onset, for an effect that may start mid-run), its states by the filter, and the
+//! gains and costs the acceptance rule reads (the whole run, its halves, the BIC cost).
+
+use super::filter::Run;
+use super::onset;
+use super::optimize::maximise;
+use super::report::{Refused, Trial};
+use super::search::LoopOptions;
+use super::signature::Signature;
+use super::system::LoopSystem;
+use super::vocabulary::{Applied, EffectLabel};
+use anyhow::{anyhow, Result};
+use rayon::prelude::*;
+
+/// The reason of every refusal at a bound, as `report.json` writes it.
+pub const OUTSIDE: &str = "outside what the model allows";
+
+/// A fit at or beyond what the model allows (the edge of its scalar's range, its
+/// [`limit`](super::Fitting::limit)): refused, with the value it reached.
+#[derive(Debug)]
+struct OutOfBounds {
+    value: f64,
+    why: String,
+}
+
+impl std::fmt::Display for OutOfBounds {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}: {}", OUTSIDE, self.why)
+    }
+}
+
+impl std::error::Error for OutOfBounds {}
+
+/// A candidate fitted to the data.
+pub(super) struct Fitted<E, M> {
+    pub(super) applied: Applied<E>,
+    pub(super) model: M,
+    pub(super) run: Run,
+    pub(super) delta: f64,
+    pub(super) halves: [f64; 2],
+    pub(super) penalty: f64,
+    pub(super) label: EffectLabel,
+}
+
+/// The engine's view of a system during one search.
+pub(super) struct Engine<'a, S: LoopSystem> {
+    pub(super) sys: &'a S,
+    pub(super) options: &'a LoopOptions,
+    /// Sample times of the data, s.
+    pub(super) t: Vec<f64>,
+    /// Scalar measurements in the run (for the BIC).
+    pub(super) n_meas: f64,
+    /// The current model's NIS per channel, at least 1 (scales the gain floor).
+    pub(super) nis_scale: f64,
+}
+
+impl<S: LoopSystem> Engine<'_, S> {
+    /// `½ p ln n` for the effect's parameters, and one more for a fitted onset, plus the
+    /// baseline's [`gain_floor`](LoopOptions::gain_floor) over the run.
+    pub(super) fn penalty(&self, e: &S::Effect, onset: bool) -> f64 {
+        self.bic(e, onset) + self.options.gain_floor * self.nis_scale * self.n_meas
+    }
+
+    /// `½ p ln n` alone.
+    pub(super) fn bic(&self, e: &S::Effect, onset: bool) -> f64 {
+        0.5 * (self.sys.fitting(e).parameters + usize::from(onset)) as f64 * self.n_meas.ln()
+    }
+
+    /// Fits `cand` on top of `effects`: present from the start and, if it may start mid-run,
+    /// with a fitted onset; the better of the two (one that pays for itself first).
+    pub(super) fn fit(
+        &self,
+        effects: &[Applied<S::Effect>],
+        cand: S::Effect,
+        base: &Run,
+    ) -> Result<Fitted<S::Effect, S::Model>> {
+        let whole = self.fit_from(effects, cand, None, base);
+        if !self.sys.fitting(&cand).may_start_mid_run {
+            return whole;
+        }
+        let late = self.fit_onset(effects, cand, base, whole.as_ref().ok());
+        let rank = |f: &Fitted<S::Effect, S::Model>| (self.pays(f), f.delta - f.penalty);
+        match (whole, late) {
+            (Ok(w), Ok(l)) => Ok(if rank(&l) > rank(&w) { l } else { w }),
+            (Ok(f), Err(_)) | (Err(_), Ok(f)) => Ok(f),
+            (Err(e), Err(_)) => Err(e),
+        }
+    }
+
+    /// Fits `cand` acting from `onset_s` (from the start if `None`): its scalar by maximum
+    /// likelihood, its states by the filter.
+    fn fit_from(
+        &self,
+        effects: &[Applied<S::Effect>],
+        cand: S::Effect,
+        onset_s: Option<f64>,
+        base: &Run,
+    ) -> Result<Fitted<S::Effect, S::Model>> {
+        let with = |theta: f64| {
+            let mut e = effects.to_vec();
+            e.push(Applied { effect: cand, theta, onset_s });
+            e
+        };
+        let fitting = self.sys.fitting(&cand);
+        let theta = match fitting.scalar {
+            Some((range, grid)) => {
+                let x = maximise(
+                    |th| self.sys.run(&with(th)).ok().map(|(_, r)| r.log_likelihood()),
+                    range.low,
+                    range.high,
+                    grid,
+                    range.tolerance,
+                )
+                .ok_or_else(|| anyhow!("no value of the scalar gives a usable model"))?
+                .x;
+                // A likelihood still rising at the edge of the range has no maximum there: the
+                // effect is standing in for something else, and its value would be the range's.
+                // (An edge where the effect is neutral is a legitimate answer.)
+                let edge = (10.0 * range.tolerance).max(0.01 * (range.high - range.low));
+                let at = |bound: f64| (x - bound).abs() <= edge && bound != range.neutral;
+                if at(range.low) || at(range.high) {
+                    let shown = |v: f64| if range.log { v.exp() } else { v };
+                    return Err(OutOfBounds {
+                        value: shown(x),
+                        why: format!(
+                            "the likelihood still rises at the edge of the range it may take ({:.4} … {:.4})",
+                            shown(range.low),
+                            shown(range.high)
+                        ),
+                    }
+                    .into());
+                }
+                x
+            }
+            None => 0.0,
+        };
+        let applied = Applied { effect: cand, theta, onset_s };
+        let (model, run) = self.sys.run(&with(theta))?;
+        if let Some(limit) = fitting.limit {
+            let value = self.sys.value(&model, &run, &applied);
+            if value.abs() > limit {
+                let unit = self.sys.label(&cand).unit;
+                return Err(OutOfBounds {
+                    value,
+                    why: format!("{value:.4} {unit} beyond the bound of {limit:.4} {unit}"),
+                }
+                .into());
+            }
+        }
+        let delta = run.log_likelihood() - base.log_likelihood();
+        let halves = onset::halves(&run, base, applied.first_sample(&self.t));
+        let mut label = self.sys.label(&cand);
+        label.detail.onset_s = onset_s;
+        let penalty = self.penalty(&cand, onset_s.is_some());
+        Ok(Fitted { applied, model, run, delta, halves, penalty, label })
+    }
+
+    /// Fits `cand` with an onset: placed where the gain of the whole-run fit `whole` starts to
+    /// accumulate (or on a coarse grid when there is none), refined with the scalar held, and
+    /// the scalar refitted there.
+    fn fit_onset(
+        &self,
+        effects: &[Applied<S::Effect>],
+        cand: S::Effect,
+        base: &Run,
+        whole: Option<&Fitted<S::Effect, S::Model>>,
+    ) -> Result<Fitted<S::Effect, S::Model>> {
+        let n = base.nis.len().min(self.t.len());
+        let (lo, hi) = onset::window(n).ok_or_else(|| anyhow!("the run is too short to place an onset in"))?;
+        let (k0, first) = match whole {
+            Some(w) => {
+                let k = onset::change_point(&w.run, base, lo, hi);
+                (k, self.fit_from(effects, cand, Some(self.t[k]), base)?)
+            }
+            None => onset::grid(lo, hi)
+                .filter_map(|k| self.fit_from(effects, cand, Some(self.t[k]), base).ok().map(|f| (k, f)))
+                .max_by(|a, b| a.1.delta.total_cmp(&b.1.delta))
+                .ok_or_else(|| anyhow!("no onset gives a usable model"))?,
+        };
+        let theta = first.applied.theta;
+        let sample = |k: f64| (k.round().max(0.0) as usize).clamp(lo, hi);
+        let reach = ((hi - lo) / 10).max(2);
+        let refined = maximise(
+            |k| {
+                let mut e = effects.to_vec();
+                e.push(Applied { effect: cand, theta, onset_s: Some(self.t[sample(k)]) });
+                self.sys.run(&e).ok().map(|(_, r)| r.log_likelihood())
+            },
+            k0.saturating_sub(reach).max(lo) as f64,
+            (k0 + reach).min(hi) as f64,
+            6,
+            0.5,
+        );
+        let k1 = refined.map_or(k0, |m| sample(m.x));
+        if k1 == k0 {
+            return Ok(first);
+        }
+        let second = self.fit_from(effects, cand, Some(self.t[k1]), base)?;
+        Ok(if second.delta >= first.delta { second } else { first })
+    }
+
+    pub(super) fn reported_value(&self, f: &Fitted<S::Effect, S::Model>) -> Option<f64> {
+        let scalar_or_late = self.sys.fitting(&f.applied.effect).scalar.is_some() || f.applied.onset_s.is_some();
+        scalar_or_late.then(|| self.sys.value(&f.model, &f.run, &f.applied))
+    }
+
+    pub(super) fn trial(&self, iteration: usize, f: &Fitted<S::Effect, S::Model>, accepted: bool) -> Trial {
+        Trial {
+            iteration,
+            kind: f.label.kind,
+            location: f.label.location.clone(),
+            order: f.label.detail.order,
+            parameter: f.label.detail.parameter.clone(),
+            onset_s: f.applied.onset_s,
+            unit: f.label.unit.clone(),
+            value: self.reported_value(f),
+            delta_log_likelihood: f.delta,
+            delta_halves: f.halves,
+            bic_penalty: f.penalty,
+            accepted,
+        }
+    }
+
+    /// `kind at location [from t s]: Δ log-likelihood, BIC cost, halves`.
+    pub(super) fn describe(&self, f: &Fitted<S::Effect, S::Model>) -> String {
+        let from = f.applied.onset_s.map(|o| format!(" from {o:.3} s")).unwrap_or_default();
+        format!(
+            "{} at {}{from}: Δ log-likelihood {:.1}, BIC cost {:.1}, halves {:.1} / {:.1}",
+            f.label.kind, f.label.location, f.delta, f.penalty, f.halves[0], f.halves[1]
+        )
+    }
+
+    pub(super) fn progress(&self, msg: impl FnOnce() -> String) {
+        if self.options.progress {
+            eprintln!("loop: {}", msg());
+        }
+    }
+
+    /// Fits every candidate of `cands` on top of `effects`.
+    pub(super) fn fit_all(
+        &self,
+        iteration: usize,
+        effects: &[Applied<S::Effect>],
+        cands: Vec<S::Effect>,
+        base: &Run,
+        refused: &mut Vec<Refused>,
+    ) -> Vec<Fitted<S::Effect, S::Model>> {
+        let total = cands.len();
+        let fits: Vec<_> = cands
+            .par_iter()
+            .enumerate()
+            .map(|(i, cand)| {
+                let label = self.sys.label(cand);
+                self.progress(|| {
+                    format!("iteration {iteration}: candidate {}/{total}: {} at {}", i + 1, label.kind, label.location)
+                });
+                self.fit(effects, *cand, base)
+            })
+            .collect();
+        let mut results = Vec::new();
+        for (cand, fit) in cands.iter().zip(fits) {
+            let label = self.sys.label(cand);
+            match fit {
+                Ok(f) => results.push(f),
+                Err(e) => {
+                    self.progress(|| format!("  {} at {}: {e:#}", label.kind, label.location));
+                    refused.push(Refused {
+                        kind: label.kind,
+                        location: label.location.clone(),
+                        value: e.downcast_ref::<OutOfBounds>().map(|o| o.value),
+                        reason: format!("{e:#}"),
+                    });
+                }
+            }
+        }
+        results
+    }
+
+    /// Pays for itself: the whole run gains more than the BIC cost, and each half (of the
+    /// stretch after the onset, for a change-point effect) at least `half_gain` of it.
+    pub(super) fn pays(&self, f: &Fitted<S::Effect, S::Model>) -> bool {
+        f.delta > f.penalty && self.pays_in_halves(f)
+    }
+
+    pub(super) fn pays_in_halves(&self, f: &Fitted<S::Effect, S::Model>) -> bool {
+        f.halves[0].min(f.halves[1]) >= self.options.half_gain * f.penalty
+    }
+
+    /// What the halves are of, in words.
+    fn stretch(f: &Fitted<S::Effect, S::Model>) -> String {
+        match f.applied.onset_s {
+            Some(o) => format!("both halves of the stretch after its onset at {o:.3} s"),
+            None => "both halves of the run".into(),
+        }
+    }
+
+    /// An effect that pays over the whole run but not in both halves: helping only part of the
+    /// run, it is not a constant property of the system.
+    pub(super) fn partial(&self, f: &Fitted<S::Effect, S::Model>) -> Signature {
+        Signature {
+            channel: f.label.location.clone(),
+            frequency_hz: None,
+            statistic: "delta_log_likelihood_halves".into(),
+            value: f.halves[0].min(f.halves[1]),
+            description: format!(
+                "{}: it helps only part of the run (not {}), so it is not a lasting property",
+                self.describe(f),
+                Self::stretch(f)
+            ),
+        }
+    }
+
+    /// The refusal of an effect that pays over the whole run but not in both halves.
+    pub(super) fn refused_in_halves(&self, f: &Fitted<S::Effect, S::Model>) -> Refused {
+        Refused {
+            kind: f.label.kind,
+            location: f.label.location.clone(),
+            value: self.reported_value(f),
+            reason: format!(
+                "pays over the whole run (Δ log-likelihood {:.1} against a BIC cost of {:.1}) but not in {} ({:.1} / {:.1}): it helps only part of the run",
+                f.delta,
+                f.penalty,
+                Self::stretch(f),
+                f.halves[0],
+                f.halves[1]
+            ),
+        }
+    }
+}

@@ -1,0 +1,101 @@
+//! What the data cannot tell, decided by the engine for every system: rivals a winner cannot
+//! be told from (same family, another place, a log-likelihood within the margin), and the
+//! component parameters a system declares that the data cannot see at all.
+
+use super::filter::Run;
+use super::fit::{Engine, Fitted};
+use super::report::NotIdentifiable;
+use super::system::LoopSystem;
+use super::vocabulary::{Applied, EffectKind, EffectLabel};
+use rayon::prelude::*;
+
+impl<S: LoopSystem> Engine<'_, S> {
+    /// Rivals of `winner` among `results`: same family, another location, a log-likelihood
+    /// within the identifiability margin.
+    pub(super) fn rivals(
+        &self,
+        winner: &Fitted<S::Effect, S::Model>,
+        results: &[Fitted<S::Effect, S::Model>],
+    ) -> Vec<NotIdentifiable> {
+        results
+            .iter()
+            .filter(|f| {
+                family(&f.label) == family(&winner.label)
+                    && f.label.location != winner.label.location
+                    && (winner.delta - f.delta).abs() < self.options.identifiable_margin
+            })
+            .map(|r| NotIdentifiable {
+                kind: winner.label.kind,
+                location: r.label.location.clone(),
+                parameter: r.label.detail.parameter.clone(),
+                statistic: "delta_log_likelihood_gap".into(),
+                value: winner.delta - r.delta,
+                reason: format!(
+                    "fits the data as well as {} (log-likelihoods {:.2} apart): the sensors cannot tell the two apart",
+                    winner.label.location,
+                    winner.delta - r.delta
+                ),
+            })
+            .collect()
+    }
+
+    /// Effects of [`LoopSystem::screened`] the data cannot see from the final model.
+    /// The component parameters the system declares ([`LoopSystem::declared`], kind
+    /// [`EffectKind::Parameter`]) that the data cannot see from the final model: halving and
+    /// doubling each changes the log-likelihood by less than its BIC cost. A trial whose
+    /// filter fails (diverges, cannot be built) counts as seen: the data reject it.
+    pub(super) fn screen(&self, effects: &[Applied<S::Effect>], run: &Run) -> Vec<NotIdentifiable> {
+        let base = run.log_likelihood();
+        let mut out = Vec::new();
+        let screened: Vec<S::Effect> = self
+            .sys
+            .declared()
+            .into_iter()
+            .filter(|e| self.sys.label(e).kind == EffectKind::Parameter && !effects.iter().any(|x| x.effect == *e))
+            .collect();
+        let worsts: Vec<f64> = screened
+            .par_iter()
+            .map(|e| {
+                let penalty = self.bic(e, false);
+                let mut worst: f64 = 0.0;
+                for theta in PROBES.map(f64::ln) {
+                    let mut trial = effects.to_vec();
+                    trial.push(Applied::new(*e, theta));
+                    let Ok((_, r)) = self.sys.run(&trial) else { return f64::INFINITY };
+                    worst = worst.max((r.log_likelihood() - base).abs());
+                    if worst > penalty {
+                        break;
+                    }
+                }
+                worst
+            })
+            .collect();
+        for (e, worst) in screened.iter().zip(worsts) {
+            let penalty = self.bic(e, false);
+            let label = self.sys.label(e);
+            let what = label.detail.parameter.clone().unwrap_or_else(|| label.kind.to_string());
+            self.progress(|| format!("screen: {what} of {}: |Δ log-likelihood| ≤ {worst:.2}", label.location));
+            if worst <= penalty {
+                out.push(NotIdentifiable {
+                    kind: label.kind,
+                    location: label.location,
+                    parameter: label.detail.parameter,
+                    statistic: "max_delta_log_likelihood".into(),
+                    value: worst,
+                    reason: format!(
+                        "halving or doubling it changes the log-likelihood by at most {worst:.2}, less than its BIC cost {penalty:.1}: these sensors cannot see it"
+                    ),
+                });
+            }
+        }
+        out
+    }
+}
+
+/// The factors a component parameter is screened at: halved and doubled.
+const PROBES: [f64; 2] = [0.5, 2.0];
+
+/// The family of an effect for identifiability: same kind and order, different location.
+fn family(l: &EffectLabel) -> (EffectKind, Option<u64>, Option<&str>) {
+    (l.kind, l.detail.order.map(f64::to_bits), l.detail.parameter.as_deref().map(|_| "parameter"))
+}
