@@ -149,7 +149,7 @@ impl LoopSystem for Oscillator {
     }
 
     fn fitting(&self, e: &Effect) -> Fitting {
-        let factor = ScalarRange { low: 0.5f64.ln(), high: 2f64.ln(), neutral: 0.0, log: true, tolerance: 1e-5 };
+        let factor = ScalarRange::factor(0.5, 2.0, 1e-5);
         match e {
             Effect::Bias => Fitting::states(1),
             Effect::Stiffness | Effect::Mount => Fitting::scalar(1, factor, 6),

@@ -67,3 +67,15 @@ fn healthy_flight_with_the_declared_model_adds_nothing_on_ten_seeds() {
         assert!(r.effects_added.is_empty(), "seed {seed}: {:?}", effects(&r));
     }
 }
+
+/// Identifiability is the engine's for every system: on healthy flight the vehicle's declared
+/// component parameters (mass, surge drag) are screened on the final model, and what the
+/// sensors cannot see is reported with its reason.
+#[test]
+fn the_report_says_which_declared_parameters_the_sensors_cannot_see() {
+    let config = UuvConfig::default();
+    let r = close(&config, &config, Scenario::Healthy, 150.0, 11);
+    for n in &r.not_identifiable {
+        eprintln!("not identifiable: {} {:?} at {}: {} ({})", n.kind, n.parameter, n.location, n.value, n.reason);
+    }
+}

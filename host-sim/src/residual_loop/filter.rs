@@ -70,6 +70,27 @@ pub struct FinalFilter {
 }
 
 impl Run {
+    /// Records a sample's update: each channel's innovation and its variance, the NIS and
+    /// `ln det S`.
+    fn push_update(&mut self, e: &[f64], variances: &[f64], nis: f64, logdet: f64) {
+        for ((inn, var), (ei, si)) in self.innovation.iter_mut().zip(&mut self.variance).zip(e.iter().zip(variances)) {
+            inn.push(*ei);
+            var.push(*si);
+        }
+        self.nis.push(nis);
+        self.log_det_s.push(logdet);
+    }
+
+    /// Records a sample without an update (a missing value on one of the `m` channels).
+    fn push_missing(&mut self, m: usize) {
+        for i in 0..m {
+            self.innovation[i].push(f64::NAN);
+            self.variance[i].push(f64::NAN);
+        }
+        self.nis.push(f64::NAN);
+        self.log_det_s.push(f64::NAN);
+    }
+
     /// `−½ Σ (ln det S + NIS)` over the updated samples (the constant `−½ m ln 2π` left out).
     pub fn log_likelihood(&self) -> f64 {
         -0.5 * self
@@ -171,19 +192,7 @@ fn run_in(
     modal: bool,
 ) -> Result<Run> {
     let Some((_, first)) = segments.first() else { return Err(anyhow!("filter: no model to run")) };
-    let n = first.a.nrows();
-    let m = first.c.nrows();
-    if segments.iter().any(|(_, s)| s.a.nrows() != n || s.c.nrows() != m || s.c.ncols() != n) {
-        return Err(anyhow!("filter: the segments' models differ in size"));
-    }
-    let len = columns.iter().map(|c| c.len()).min().unwrap_or(0);
-    if outputs.ncols() != n || tracked.iter().any(|&i| i >= n) || columns.len() != m {
-        return Err(anyhow!(
-            "filter: {n} states and {m} channels, given {} columns, output rows of width {} and tracked states {tracked:?}",
-            columns.len(),
-            outputs.ncols()
-        ));
-    }
+    let (n, m, len) = sizes(segments, columns, outputs, tracked)?;
     let models: Vec<Segment> =
         segments.iter().map(|(k, s)| Segment::new(*k, s, dt, outputs, tracked, modal)).collect::<Result<_>>()?;
     let mut segment = 0;
@@ -230,41 +239,11 @@ fn run_in(
                 sdiag.copy_from_slice(steady);
                 (nis, *logdet)
             } else {
-                // `P Cᵀ` by columns (`P` symmetric: row k of `P` is its column k).
-                for (i, c_i) in seg.c_t.column_iter().enumerate() {
-                    for (kk, p_k) in p.column_iter().enumerate() {
-                        pct[(kk, i)] = p_k.dot(&c_i);
-                    }
-                }
-                let s = DMatrix::from_fn(m, m, |a, b| {
-                    0.5 * (seg.c_t.column(a).dot(&pct.column(b)) + seg.c_t.column(b).dot(&pct.column(a)))
-                        + 0.5 * (seg.r[(a, b)] + seg.r[(b, a)])
-                });
-                let chol = s
-                    .clone()
-                    .cholesky()
+                let (nis, logdet, s_inv) = update(seg, (&mut x, &mut p), &e, (&mut pct, &mut gain), &mut sdiag)
                     .ok_or_else(|| anyhow!("innovation covariance not positive definite at sample {k}"))?;
-                let logdet = 2.0 * chol.l().diagonal().iter().map(|v| v.ln()).sum::<f64>();
-                let s_inv = chol.inverse();
-                gain.gemm(1.0, &pct, &s_inv, 0.0);
-                let nis = quadratic(&s_inv, &e);
-                x.gemv(1.0, &gain, &e, 1.0);
-                // `P ← P − K (P Cᵀ)ᵀ`, column by column.
-                for (j, mut p_j) in p.column_iter_mut().enumerate() {
-                    for (i, k_i) in gain.column_iter().enumerate() {
-                        p_j.axpy(-pct[(j, i)], &k_i, 1.0);
-                    }
-                }
-                symmetrise(&mut p);
-                sdiag.iter_mut().enumerate().for_each(|(i, v)| *v = s[(i, i)]);
                 let diag = p.diagonal();
                 if let Some(prev) = &prev_diag {
-                    let change = diag
-                        .iter()
-                        .zip(prev.iter())
-                        .map(|(a, b)| ((a - b) / b.abs().max(1e-300)).abs())
-                        .fold(0.0, f64::max);
-                    if change < 1e-7 || k - switched_at >= max_tv {
+                    if settled(&diag, prev) || k - switched_at >= max_tv {
                         frozen =
                             Some(Frozen { gain: gain.clone(), sdiag: sdiag.clone(), s_inv: s_inv.clone(), logdet });
                         run.frozen_at = Some(k);
@@ -274,19 +253,9 @@ fn run_in(
                 updated = true;
                 (nis, logdet)
             };
-            for i in 0..m {
-                run.innovation[i].push(e[i]);
-                run.variance[i].push(sdiag[i]);
-            }
-            run.nis.push(nis);
-            run.log_det_s.push(logdet);
+            run.push_update(e.as_slice(), &sdiag, nis, logdet);
         } else {
-            for i in 0..m {
-                run.innovation[i].push(f64::NAN);
-                run.variance[i].push(f64::NAN);
-            }
-            run.nis.push(f64::NAN);
-            run.log_det_s.push(f64::NAN);
+            run.push_missing(m);
         }
         for (row, out) in seg.outputs_t.column_iter().zip(run.outputs.iter_mut()) {
             out.push(row.dot(&x));
@@ -307,6 +276,74 @@ fn run_in(
         c: seg.plant_c.clone(),
     });
     Ok(run)
+}
+
+/// The sizes of a run: states, channels and samples, after checking that the segments, the
+/// columns, the output rows and the tracked states agree.
+fn sizes(
+    segments: &[(usize, StateSpace<'_>)],
+    columns: &[&[f64]],
+    outputs: &DMatrix<f64>,
+    tracked: &[usize],
+) -> Result<(usize, usize, usize)> {
+    let (n, m) = segments.first().map_or((0, 0), |(_, s)| (s.a.nrows(), s.c.nrows()));
+    if segments.iter().any(|(_, s)| s.a.nrows() != n || s.c.nrows() != m || s.c.ncols() != n) {
+        return Err(anyhow!("filter: the segments' models differ in size"));
+    }
+    let len = columns.iter().map(|c| c.len()).min().unwrap_or(0);
+    if outputs.ncols() != n || tracked.iter().any(|&i| i >= n) || columns.len() != m {
+        return Err(anyhow!(
+            "filter: {n} states and {m} channels, given {} columns, output rows of width {} and tracked states {tracked:?}",
+            columns.len(),
+            outputs.ncols()
+        ));
+    }
+    Ok((n, m, len))
+}
+
+/// The time-varying measurement update of `(x, P)` with the innovations `e` on `seg`'s model:
+/// `P Cᵀ` and the gain into the work space `(pct, gain)`, the innovations' variances into
+/// `sdiag`. The NIS, `ln det S` and `S⁻¹`; `None` if `S` is not positive definite.
+fn update(
+    seg: &Segment,
+    (x, p): (&mut DVector<f64>, &mut DMatrix<f64>),
+    e: &DVector<f64>,
+    (pct, gain): (&mut DMatrix<f64>, &mut DMatrix<f64>),
+    sdiag: &mut [f64],
+) -> Option<(f64, f64, DMatrix<f64>)> {
+    let m = e.len();
+    // `P Cᵀ` by columns (`P` symmetric: row k of `P` is its column k).
+    for (i, c_i) in seg.c_t.column_iter().enumerate() {
+        for (kk, p_k) in p.column_iter().enumerate() {
+            pct[(kk, i)] = p_k.dot(&c_i);
+        }
+    }
+    let s = DMatrix::from_fn(m, m, |a, b| {
+        0.5 * (seg.c_t.column(a).dot(&pct.column(b)) + seg.c_t.column(b).dot(&pct.column(a)))
+            + 0.5 * (seg.r[(a, b)] + seg.r[(b, a)])
+    });
+    let chol = s.clone().cholesky()?;
+    let logdet = 2.0 * chol.l().diagonal().iter().map(|v| v.ln()).sum::<f64>();
+    let s_inv = chol.inverse();
+    gain.gemm(1.0, pct, &s_inv, 0.0);
+    let nis = quadratic(&s_inv, e);
+    x.gemv(1.0, gain, e, 1.0);
+    // `P ← P − K (P Cᵀ)ᵀ`, column by column.
+    for (j, mut p_j) in p.column_iter_mut().enumerate() {
+        for (i, k_i) in gain.column_iter().enumerate() {
+            p_j.axpy(-pct[(j, i)], &k_i, 1.0);
+        }
+    }
+    symmetrise(p);
+    sdiag.iter_mut().enumerate().for_each(|(i, v)| *v = s[(i, i)]);
+    Some((nis, logdet, s_inv))
+}
+
+/// Whether the covariance's diagonal has settled since the last update (every element within
+/// 1e-7 of its previous value, relatively): the gain can be frozen.
+fn settled(diag: &DVector<f64>, prev: &DVector<f64>) -> bool {
+    let change = diag.iter().zip(prev.iter()).map(|(a, b)| ((a - b) / b.abs().max(1e-300)).abs()).fold(0.0, f64::max);
+    change < 1e-7
 }
 
 /// `eᵀ S⁻¹ e`, without a temporary.

@@ -17,6 +17,20 @@ pub struct ScalarRange {
     pub tolerance: f64,
 }
 
+impl ScalarRange {
+    /// A factor on a declared value, fitted in `ln` between `low` and `high` (neutral at 1) to
+    /// `tolerance` in `ln`.
+    ///
+    /// ```
+    /// use edgekf_sim::residual_loop::ScalarRange;
+    /// let r = ScalarRange::factor(0.5, 2.0, 1e-4);
+    /// assert_eq!((r.low, r.high, r.neutral, r.log), (0.5f64.ln(), 2f64.ln(), 0.0, true));
+    /// ```
+    pub fn factor(low: f64, high: f64, tolerance: f64) -> Self {
+        Self { low: low.ln(), high: high.ln(), neutral: 0.0, log: true, tolerance }
+    }
+}
+
 /// The best point found and how many evaluations it took.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Maximum {

@@ -145,6 +145,15 @@ pub struct Traces {
     pub after: Run,
 }
 
+impl Traces {
+    /// The data's time, channels, virtual rows and their `truth_` columns (the engine fills in
+    /// the runs).
+    pub fn new(t: &[f64], channels: &[Channel], rows: &[Channel], truth: &[Option<&[f64]>]) -> Self {
+        let truth = truth.iter().map(|c| c.map(<[f64]>::to_vec)).collect();
+        Self { t: t.to_vec(), channels: channels.to_vec(), rows: rows.to_vec(), truth, ..Self::default() }
+    }
+}
+
 /// What the loop found.
 #[derive(Debug, Clone, Serialize)]
 pub struct LoopReport {

@@ -256,8 +256,7 @@ pub fn named_line(f: f64, lines: &[NamedLine], tol_hz: f64, located: bool) -> Op
 /// Summarises `run`: per-channel signatures over the samples after `settle`, the NIS, and the
 /// virtual-sensing error of the rows against their truth (where given).
 pub fn summarise(run: &Run, ctx: &SummaryContext<'_>, o: &SignatureOptions) -> RunSummary {
-    let SummaryContext { t, channels, rows, truth, lines, sample_rate } = *ctx;
-    let (speed, naturals) = (lines.speed, lines.naturals.as_slice());
+    let SummaryContext { t, channels, sample_rate, .. } = *ctx;
     let t0 = t.first().copied().unwrap_or(0.0);
     let keep: Vec<usize> = (0..t.len()).filter(|&k| t[k] - t0 >= o.settle).collect();
     let mut out = Vec::new();
@@ -265,134 +264,25 @@ pub fn summarise(run: &Run, ctx: &SummaryContext<'_>, o: &SignatureOptions) -> R
     let fine = sample_rate > FINE_ABOVE_HZ;
     let mut bin_width_hz = sample_rate / if fine { FINE_SEGMENT } else { SEGMENT } as f64;
     for (i, channel) in channels.iter().enumerate() {
-        let name = &channel.name;
-        let mut stats = RunningStats::<f64>::new();
-        let mut nis = RunningStats::<f64>::new();
-        let mut white = WhitenessWindow::<f64, 2048>::new();
-        let mut zs = Vec::with_capacity(keep.len());
-        let mut z2 = Vec::with_capacity(keep.len());
-        for &k in &keep {
-            let e = run.innovation[i][k];
-            let s = run.variance[i][k];
-            if !(e.is_finite() && s.is_finite()) {
-                continue;
-            }
-            stats.push(e);
-            nis.push(e * e / s);
-            z2.push((t[k] - t0, e * e / s));
-            let z = e / s.sqrt();
-            white.push(z);
-            zs.push(z);
-        }
-        let lb = white.ljung_box(20);
-        let mut peaks = Vec::new();
-        // A slow channel (a 5 Hz log in 50 Hz rows) is its own sequence at its own rate.
-        let rate =
-            if 2 * zs.len() < keep.len() { sample_rate * zs.len() as f64 / keep.len() as f64 } else { sample_rate };
-        let spectrum = if fine {
-            welch_spectrum::<FINE_SEGMENT>(&zs, rate, o.peak_db)
-        } else {
-            welch_spectrum::<SEGMENT>(&zs, rate, o.peak_db)
-        };
+        let (signature, spectrum) = channel_signature(run, i, &channel.name, &keep, ctx, o);
         match spectrum {
-            Some((width, psd, found)) => {
-                // The plots share one frequency axis: a slow channel's spectrum is not drawn.
-                if rate == sample_rate {
-                    bin_width_hz = width;
-                    spectra.push(psd);
-                } else {
-                    spectra.push(Vec::new());
-                }
-                let tol = PeakTolerance::new(1.2 * width);
-                for (f, prominence_db) in found {
-                    let located = locate_peak(f, speed, naturals, &tol).class;
-                    let line = named_line(f, &lines.named, tol.abs_hz, !matches!(located, PeakClass::Unexplained));
-                    let (class, order) = if let Some((i, h)) = line {
-                        let times = if h == 1 { String::new() } else { format!("{h}×") };
-                        let l = &lines.named[i];
-                        (format!("{times}{} at {}", l.name, l.location), None)
-                    } else {
-                        match located {
-                            PeakClass::Order(o) => {
-                                (format!("{}/{}x", o.numerator, o.denominator), o.is_integer().then_some(o.numerator))
-                            }
-                            PeakClass::OrderAtNatural { order: o, natural } => (
-                                format!("{}/{}x at natural {natural}", o.numerator, o.denominator),
-                                o.is_integer().then_some(o.numerator),
-                            ),
-                            PeakClass::Natural(n) => (format!("natural {n}"), None),
-                            PeakClass::Unexplained => ("unexplained".to_string(), None),
-                        }
-                    };
-                    peaks.push(PeakSignature {
-                        frequency_hz: f,
-                        prominence_db,
-                        class: class.replace("/1x", "x"),
-                        order,
-                        line,
-                    });
-                }
+            // The plots share one frequency axis: a slow channel's spectrum is not drawn.
+            Some((width, psd)) => {
+                bin_width_hz = width;
+                spectra.push(psd);
             }
             None => spectra.push(Vec::new()),
         }
-        let se = stats.standard_error();
-        let half = z2.len() / 2;
-        let mean = |s: &[(f64, f64)]| s.iter().map(|v| v.1).sum::<f64>() / s.len().max(1) as f64;
-        out.push(ChannelSignature {
-            name: name.clone(),
-            mean: stats.mean(),
-            standard_error: se,
-            z: stats.mean() / se,
-            rms: stats.rms(),
-            nis: nis.mean(),
-            nis_halves: [mean(&z2[..half]), mean(&z2[half..])],
-            step: step(&z2),
-            whiteness_p: lb.p_value,
-            peaks,
-        });
-    }
-    let mut nis_total = RunningStats::<f64>::new();
-    // Degrees of freedom of the samples' NIS: the channels each had (a slow sensor's channels
-    // are in one sample of ten).
-    let (mut dof, mut nis_sum) = (0usize, 0.0);
-    for &k in &keep {
-        nis_total.push(run.nis[k]);
-        if run.nis[k].is_finite() {
-            dof += (0..channels.len()).filter(|&i| run.innovation[i][k].is_finite()).count();
-            nis_sum += run.nis[k];
-        }
+        out.push(signature);
     }
     let m = channels.len().max(1);
-    let samples = nis_total.count().max(1) as usize;
-    // Every channel in every sample: `mean(NIS)` against χ²(n m)/n; otherwise NIS per degree of
-    // freedom against χ²(dof)/dof (the same test when the channels are all there).
-    let uniform = dof == m * samples;
-    let (bounds, per_channel) = if uniform || dof == 0 {
-        (NisBounds::new(m, samples, o.alpha), nis_total.mean() / m as f64)
-    } else {
-        (NisBounds::new(1, dof, o.alpha), nis_sum / dof as f64)
-    };
-    let mut error_rms = BTreeMap::new();
-    for (j, name) in rows.iter().map(|r| &r.name).enumerate() {
-        if let Some(Some(truth)) = truth.get(j) {
-            let (mut s, mut n) = (0.0, 0usize);
-            for ((tk, est), tr) in t.iter().zip(&run.outputs[j]).zip(truth.iter()) {
-                if tk - t0 >= o.error_after && tr.is_finite() && est.is_finite() {
-                    s += (est - tr).powi(2);
-                    n += 1;
-                }
-            }
-            if n > 0 {
-                error_rms.insert(name.clone(), (s / n as f64).sqrt());
-            }
-        }
-    }
-    let nis_consistent = bounds.contains(if uniform || dof == 0 { nis_total.mean() } else { per_channel });
+    let (nis_mean, nis_consistent) = nis_consistency(run, &keep, channels.len(), o);
+    let error_rms = error_rms(run, ctx, t0, o);
     let whiteness_p = out.iter().map(|c| c.whiteness_p).fold(1.0, f64::min);
     let consistent = nis_consistent && whiteness_p >= o.alpha / m as f64 && out.iter().all(|c| c.z.abs() < o.bias_z);
     RunSummary {
         innovation_rms: out.iter().map(|c| (c.name.clone(), c.rms)).collect(),
-        nis_mean: per_channel,
+        nis_mean,
         nis_consistent,
         whiteness_p,
         consistent,
@@ -403,6 +293,141 @@ pub fn summarise(run: &Run, ctx: &SummaryContext<'_>, o: &SignatureOptions) -> R
         bin_width_hz,
         spectra,
     }
+}
+
+/// Channel `i`'s signature over the samples `keep`, and its spectrum (bin width, PSD) where it
+/// is sampled at the run's rate.
+fn channel_signature(
+    run: &Run,
+    i: usize,
+    name: &str,
+    keep: &[usize],
+    ctx: &SummaryContext<'_>,
+    o: &SignatureOptions,
+) -> (ChannelSignature, Option<(f64, Vec<f32>)>) {
+    let (t, sample_rate) = (ctx.t, ctx.sample_rate);
+    let t0 = t.first().copied().unwrap_or(0.0);
+    let mut stats = RunningStats::<f64>::new();
+    let mut nis = RunningStats::<f64>::new();
+    let mut white = WhitenessWindow::<f64, 2048>::new();
+    let mut zs = Vec::with_capacity(keep.len());
+    let mut z2 = Vec::with_capacity(keep.len());
+    for &k in keep {
+        let e = run.innovation[i][k];
+        let s = run.variance[i][k];
+        if !(e.is_finite() && s.is_finite()) {
+            continue;
+        }
+        stats.push(e);
+        nis.push(e * e / s);
+        z2.push((t[k] - t0, e * e / s));
+        let z = e / s.sqrt();
+        white.push(z);
+        zs.push(z);
+    }
+    let lb = white.ljung_box(20);
+    let mut peaks = Vec::new();
+    // A slow channel (a 5 Hz log in 50 Hz rows) is its own sequence at its own rate.
+    let rate = if 2 * zs.len() < keep.len() { sample_rate * zs.len() as f64 / keep.len() as f64 } else { sample_rate };
+    let spectrum = if sample_rate > FINE_ABOVE_HZ {
+        welch_spectrum::<FINE_SEGMENT>(&zs, rate, o.peak_db)
+    } else {
+        welch_spectrum::<SEGMENT>(&zs, rate, o.peak_db)
+    };
+    let mut drawn = None;
+    if let Some((width, psd, found)) = spectrum {
+        drawn = (rate == sample_rate).then_some((width, psd));
+        let tol = PeakTolerance::new(1.2 * width);
+        peaks.extend(found.into_iter().map(|(f, prominence_db)| peak(f, prominence_db, ctx.lines, &tol)));
+    }
+    let se = stats.standard_error();
+    let half = z2.len() / 2;
+    let mean = |s: &[(f64, f64)]| s.iter().map(|v| v.1).sum::<f64>() / s.len().max(1) as f64;
+    let signature = ChannelSignature {
+        name: name.to_string(),
+        mean: stats.mean(),
+        standard_error: se,
+        z: stats.mean() / se,
+        rms: stats.rms(),
+        nis: nis.mean(),
+        nis_halves: [mean(&z2[..half]), mean(&z2[half..])],
+        step: step(&z2),
+        whiteness_p: lb.p_value,
+        peaks,
+    };
+    (signature, drawn)
+}
+
+/// A spectral line at `f` Hz placed among the reference `lines`: a named line (or its
+/// harmonic), an order of the running speed, a natural frequency, or unexplained.
+fn peak(f: f64, prominence_db: f64, lines: &ReferenceLines, tol: &PeakTolerance<f64>) -> PeakSignature {
+    let located = locate_peak(f, lines.speed, &lines.naturals, tol).class;
+    let line = named_line(f, &lines.named, tol.abs_hz, !matches!(located, PeakClass::Unexplained));
+    let (class, order) = if let Some((i, h)) = line {
+        let times = if h == 1 { String::new() } else { format!("{h}×") };
+        let l = &lines.named[i];
+        (format!("{times}{} at {}", l.name, l.location), None)
+    } else {
+        match located {
+            PeakClass::Order(o) => {
+                (format!("{}/{}x", o.numerator, o.denominator), o.is_integer().then_some(o.numerator))
+            }
+            PeakClass::OrderAtNatural { order: o, natural } => (
+                format!("{}/{}x at natural {natural}", o.numerator, o.denominator),
+                o.is_integer().then_some(o.numerator),
+            ),
+            PeakClass::Natural(n) => (format!("natural {n}"), None),
+            PeakClass::Unexplained => ("unexplained".to_string(), None),
+        }
+    };
+    PeakSignature { frequency_hz: f, prominence_db, class: class.replace("/1x", "x"), order, line }
+}
+
+/// The NIS per channel over the samples `keep` of a run with `channels` channels, and whether
+/// it lies within the χ² bounds.
+fn nis_consistency(run: &Run, keep: &[usize], channels: usize, o: &SignatureOptions) -> (f64, bool) {
+    let mut nis_total = RunningStats::<f64>::new();
+    // Degrees of freedom of the samples' NIS: the channels each had (a slow sensor's channels
+    // are in one sample of ten).
+    let (mut dof, mut nis_sum) = (0usize, 0.0);
+    for &k in keep {
+        nis_total.push(run.nis[k]);
+        if run.nis[k].is_finite() {
+            dof += (0..channels).filter(|&i| run.innovation[i][k].is_finite()).count();
+            nis_sum += run.nis[k];
+        }
+    }
+    let m = channels.max(1);
+    let samples = nis_total.count().max(1) as usize;
+    // Every channel in every sample: `mean(NIS)` against χ²(n m)/n; otherwise NIS per degree of
+    // freedom against χ²(dof)/dof (the same test when the channels are all there).
+    let uniform = dof == m * samples;
+    let (bounds, per_channel) = if uniform || dof == 0 {
+        (NisBounds::new(m, samples, o.alpha), nis_total.mean() / m as f64)
+    } else {
+        (NisBounds::new(1, dof, o.alpha), nis_sum / dof as f64)
+    };
+    (per_channel, bounds.contains(if uniform || dof == 0 { nis_total.mean() } else { per_channel }))
+}
+
+/// Each virtual row's RMS error against its truth after `o.error_after`, where it has one.
+fn error_rms(run: &Run, ctx: &SummaryContext<'_>, t0: f64, o: &SignatureOptions) -> BTreeMap<String, f64> {
+    let mut error_rms = BTreeMap::new();
+    for (j, name) in ctx.rows.iter().map(|r| &r.name).enumerate() {
+        if let Some(Some(truth)) = ctx.truth.get(j) {
+            let (mut s, mut n) = (0.0, 0usize);
+            for ((tk, est), tr) in ctx.t.iter().zip(&run.outputs[j]).zip(truth.iter()) {
+                if tk - t0 >= o.error_after && tr.is_finite() && est.is_finite() {
+                    s += (est - tr).powi(2);
+                    n += 1;
+                }
+            }
+            if n > 0 {
+                error_rms.insert(name.clone(), (s / n as f64).sqrt());
+            }
+        }
+    }
+    error_rms
 }
 
 /// The most likely step in the mean of `z²` (CUSUM of `z² − mean`): its time and the ratio of

@@ -21,7 +21,7 @@ use std::fmt::Debug;
 /// use edgekf_sim::residual_loop::{Fitting, ScalarRange};
 /// let bias = Fitting::states(2);
 /// assert_eq!((bias.parameters, bias.scalar.is_none(), bias.limit), (2, true, None));
-/// let factor = ScalarRange { low: 0.5f64.ln(), high: 2f64.ln(), neutral: 0.0, log: true, tolerance: 1e-4 };
+/// let factor = ScalarRange::factor(0.5, 2.0, 1e-4);
 /// let stiffness = Fitting { may_start_mid_run: true, ..Fitting::scalar(1, factor, 5) };
 /// assert_eq!(stiffness.scalar.map(|(_, grid)| grid), Some(5));
 /// ```

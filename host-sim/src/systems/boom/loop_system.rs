@@ -167,13 +167,6 @@ impl<'a> BoomSystem<'a> {
     /// Each effect's scalar range and grid: factors within what a boom's settings can be off
     /// by, a lag up to `[bounds] lag`, an extra mode within two bins of its line.
     fn scalar(&self, e: &Effect) -> (ScalarRange, usize) {
-        let factor = |low: f64, high: f64| ScalarRange {
-            low: low.ln(),
-            high: high.ln(),
-            neutral: 0.0,
-            log: true,
-            tolerance: 1e-4,
-        };
         match e {
             Effect::InclinometerLag => (
                 ScalarRange {
@@ -188,9 +181,9 @@ impl<'a> BoomSystem<'a> {
             Effect::InclinometerOffset => {
                 (ScalarRange { low: -MAX_OFFSET, high: MAX_OFFSET, neutral: 0.0, log: false, tolerance: 1e-5 }, 5)
             }
-            Effect::GyroScale => (factor(0.95, 1.05), 5),
-            Effect::Stiffness => (factor(0.8, 1.25), 5),
-            Effect::PlatformMass => (factor(0.5, 2.5), 5),
+            Effect::GyroScale => (ScalarRange::factor(0.95, 1.05, 1e-4), 5),
+            Effect::Stiffness => (ScalarRange::factor(0.8, 1.25, 1e-4), 5),
+            Effect::PlatformMass => (ScalarRange::factor(0.5, 2.5, 1e-4), 5),
             Effect::ExtraMode { seed_mhz, .. } => {
                 let (f, w) = (*seed_mhz as f64 * 1e-3, 2.0 * self.bin_width_hz());
                 (ScalarRange { low: (f - w).max(0.05), high: f + w, neutral: f, log: false, tolerance: 1e-3 }, 5)
@@ -367,13 +360,7 @@ impl LoopSystem for BoomSystem<'_> {
     }
 
     fn traces(&self) -> Traces {
-        Traces {
-            t: self.data.t.clone(),
-            channels: self.channels.clone(),
-            rows: self.rows.clone(),
-            truth: self.truth().into_iter().map(|c| c.map(<[f64]>::to_vec)).collect(),
-            ..Traces::default()
-        }
+        Traces::new(&self.data.t, &self.channels, &self.rows, &self.truth())
     }
 
     /// What the configuration declared of the sensors the effects act on.

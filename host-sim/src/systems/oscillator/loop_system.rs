@@ -308,17 +308,10 @@ impl LoopSystem for OscillatorSystem<'_> {
             Effect::HarmonicForce { .. } => 2,
             _ => 1,
         };
-        let factor = |low: f64, high: f64| ScalarRange {
-            low: low.ln(),
-            high: high.ln(),
-            neutral: 0.0,
-            log: true,
-            tolerance: 1e-5,
-        };
         let scalar = match e {
-            Effect::SensorScale => Some((factor(0.5, 2.0), 4)),
-            Effect::Frequency => Some((factor(0.8, 1.25), 6)),
-            Effect::Damping => Some((factor(0.25, 4.0), 4)),
+            Effect::SensorScale => Some((ScalarRange::factor(0.5, 2.0, 1e-5), 4)),
+            Effect::Frequency => Some((ScalarRange::factor(0.8, 1.25, 1e-5), 6)),
+            Effect::Damping => Some((ScalarRange::factor(0.25, 4.0, 1e-5), 4)),
             Effect::SensorBias | Effect::HarmonicForce { .. } => None,
         };
         Fitting { parameters, scalar, limit: None, may_start_mid_run: true }
@@ -346,13 +339,7 @@ impl LoopSystem for OscillatorSystem<'_> {
     }
 
     fn traces(&self) -> Traces {
-        Traces {
-            t: self.data.t.clone(),
-            channels: self.channels.to_vec(),
-            rows: self.rows.to_vec(),
-            truth: vec![self.data.column("truth_x").map(<[f64]>::to_vec)],
-            ..Traces::default()
-        }
+        Traces::new(&self.data.t, &self.channels, &self.rows, &[self.data.column("truth_x")])
     }
 }
 

@@ -4,12 +4,12 @@
 //! unbalance. Learned from a healthy recording ([`super::baseline`]), they are put into the base
 //! model before the loop asks what changed, so the loop reports a change, not the machine.
 
+use super::effects::mode::{oscillator, ModeSpec, ModeTarget};
 use super::effects::Effect;
 use crate::systems::rotor::estimate::ReducedRotor;
 use anyhow::{bail, Result};
 use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
-use std::f64::consts::TAU;
 
 /// A lightly damped mode outside the rotor model (a housing or foundation resonance), driven
 /// by broadband forces, on every channel with its own level: two states per channel.
@@ -105,41 +105,4 @@ impl Healthy {
         }
         Ok(out)
     }
-}
-
-/// A mode outside the rotor model as it enters the matrices: frequency, damping and the
-/// standard deviation of its response on the channel that reads it.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(super) struct ModeSpec {
-    pub hz: f64,
-    pub zeta: f64,
-    pub level: f64,
-}
-
-/// The matrices a mode is written into.
-pub(super) struct ModeTarget<'a> {
-    pub a: &'a mut DMatrix<f64>,
-    pub qc: &'a mut DMatrix<f64>,
-    pub c: &'a mut DMatrix<f64>,
-    pub p0: &'a mut DMatrix<f64>,
-}
-
-/// The mode `spec` in states `q, q + 1`, read on channel `ch`, driven by white noise so that
-/// its response's standard deviation is `spec.level`.
-pub(super) fn oscillator(t: ModeTarget<'_>, q: usize, ch: usize, spec: ModeSpec) -> Result<()> {
-    let ModeSpec { hz, zeta, level } = spec;
-    if !(hz.is_finite() && hz > 0.0 && zeta.is_finite() && zeta > 0.0 && level.is_finite() && level >= 0.0) {
-        bail!("a resonance needs a positive frequency and damping and a level ≥ 0, not {hz} Hz, ζ {zeta}, {level}");
-    }
-    let (w, v) = (TAU * hz, q + 1);
-    t.a[(q, v)] = 1.0;
-    t.a[(v, q)] = -w * w;
-    t.a[(v, v)] = -2.0 * zeta * w;
-    t.c[(ch, q)] = 1.0;
-    // White acceleration of density psd gives a stationary displacement variance psd / (4 ζ ω³).
-    let var = level * level;
-    t.qc[(v, v)] = var * 4.0 * zeta * w.powi(3);
-    t.p0[(q, q)] = var;
-    t.p0[(v, v)] = var * w * w;
-    Ok(())
 }

@@ -1,8 +1,9 @@
 //! The rotor as a [`LoopSystem`]: the reduced virtual-sensing filter of
 //! [`rotor_akf`](crate::systems::rotor::estimate) with the effect library of [`effects`], on a data file
 //! with the configured sensors' channels.
-
 //!
+//! * [`system`]: the [`LoopSystem`] implementation; [`candidates`]: what the loop tries next;
+//!   [`bearings`]: the defect lines looked for before the search;
 //! * [`effects`]: the rotor's effect library (`sensor_bias`, `sensor_scale`, `sensor_delay`,
 //!   `harmonic_force`, `unknown_input`, `parameter`, `point_mass`, `extra_mode`, `bearing_defect`) composed
 //!   onto the reduced rotor's public matrices;
@@ -13,30 +14,26 @@
 //!   the README use; [`twin`]: a synthetic twin of the CWRU bearing rig.
 
 pub mod baseline;
+pub mod bearings;
+pub mod candidates;
 pub mod cases;
 pub mod effects;
 pub mod healthy;
 pub mod inject;
 pub mod speed;
+pub mod system;
 pub mod twin;
 
 use self::baseline::RotorBaseline;
-use self::effects::{
-    apply_parameters, augment, force_columns, AugmentedModel, Effect, EffectTuning, Flexibility, Parameter,
-};
+use self::effects::{apply_parameters, augment, AugmentedModel, Effect, EffectTuning, Flexibility};
 use self::healthy::Healthy;
 use self::speed::{estimate_speed, RunningSpeed};
 use crate::diagnostics::bearings::envelope::LineSearch;
-use crate::diagnostics::bearings::impacts::{self, ImpactLine};
-use crate::diagnostics::locate::{self, open_loop, C64};
 use crate::io::data::DataFile;
 use crate::residual_loop::filter::{run_state_space, Run, StateSpace};
 use crate::residual_loop::onset::settled_mean;
-use crate::residual_loop::signature::{summarise, Channel, NamedLine, ReferenceLines, SummaryContext};
-use crate::residual_loop::{
-    search, Applied, EffectDetail, EffectKind, EffectLabel, Fitting, LoopOptions, LoopReport, LoopSystem, PreStage,
-    RunSummary, SystemSection, Traces,
-};
+use crate::residual_loop::signature::{Channel, NamedLine, ReferenceLines};
+use crate::residual_loop::{search, Applied, LoopOptions, LoopReport, LoopSystem};
 use crate::systems::rotor::bearing_geometry::BearingLine;
 use crate::systems::rotor::estimate::Tuning;
 use crate::systems::rotor::estimate::{reduce, ReducedRotor};
@@ -44,25 +41,6 @@ use crate::systems::rotor::{RotorConfig, RotorModel};
 use anyhow::{anyhow, Result};
 use nalgebra::DMatrix;
 use std::f64::consts::TAU;
-
-/// How many nodes a force at an order or a point mass is fitted at: the ones whose inputs
-/// explain most of the innovations at its lines.
-pub const PLACES: usize = 3;
-
-/// At most this many nodes for a force when more explain as much as the best.
-const MAX_PLACES: usize = 8;
-
-/// Shares of the innovations that close to the best's are ties.
-const TIED_SHARE: f64 = 1e-3;
-
-/// The input a node is ranked for.
-#[derive(Debug, Clone, Copy)]
-enum Input {
-    /// A force rotating forward (one direction per node).
-    Rotating,
-    /// A mass's inertial force, `x` and `y` independent.
-    Inertial,
-}
 
 /// The rotor's own settings of the loop: its filter's tuning, its effects' noise and priors,
 /// and whether the running speed is read from the data.
@@ -345,48 +323,6 @@ impl<'a> RotorSystem<'a> {
         Ok((m, run))
     }
 
-    /// The [`PLACES`] nodes of the shaft where an `input` at `order`'s columns explains most of
-    /// the innovations of `run` (made with `model`) at the lines `hz`, and for a force any
-    /// further ones that explain as much (up to eight); all the force sites if nothing can be
-    /// ranked.
-    fn places(&self, run: &Run, model: &AugmentedModel, hz: &[f64], order: u32, input: Input) -> Vec<usize> {
-        let nodes = self.red.displacement.nrows() / 2;
-        let n = model.a.nrows();
-        let columns: Vec<(usize, DMatrix<f64>, DMatrix<f64>)> = (0..nodes)
-            .filter_map(|node| {
-                let (b, d) = force_columns(&self.red, self.model, &self.flex, node, order).ok()?;
-                let mut padded = DMatrix::<f64>::zeros(n, 2);
-                let rows = b.nrows().min(n);
-                padded.view_mut((0, 0), (rows, 2)).copy_from(&b.rows(0, rows));
-                Some((node, padded, d))
-            })
-            .collect();
-        let response = |i: &usize, f: f64| {
-            let (_, b, d) = &columns[*i];
-            let y = open_loop(&model.a, b, &model.c, d, f)?;
-            Some(match input {
-                // Forward: F_y lags F_x by a quarter turn, F = (1, −i) c.
-                Input::Rotating => {
-                    let forward = y.column(0) - y.column(1) * C64::new(0.0, 1.0);
-                    DMatrix::from_column_slice(forward.nrows(), 1, forward.as_slice())
-                }
-                Input::Inertial => y,
-            })
-        };
-        let ranked = locate::rank(run, hz, self.red.sample_rate, (0..columns.len()).collect(), response);
-        if ranked.is_empty() {
-            return self.force_sites.clone();
-        }
-        // A force's nodes the innovations cannot tell apart (a lever's worth of nodes on an
-        // overhang) are all fitted, so that the fits list them as rivals; a mass's fits cost
-        // dozens of runs each, so it keeps to the best few.
-        let best = ranked[0].explained;
-        let tied = |i: usize, p: &locate::Placement<usize>| {
-            i < PLACES || (matches!(input, Input::Rotating) && i < MAX_PLACES && p.explained >= best - TIED_SHARE)
-        };
-        ranked.iter().enumerate().take_while(|(i, p)| tied(*i, p)).map(|(_, p)| columns[p.location].0).collect()
-    }
-
     /// The running speed, Hz, and where it came from.
     pub fn speed(&self) -> RunningSpeed {
         self.speed
@@ -408,313 +344,6 @@ impl<'a> RotorSystem<'a> {
                 (node, settled_mean(&size, 0) / w2)
             })
             .collect()
-    }
-
-    /// Every defect line of every bearing with a geometry, at the running speed: an inner-race
-    /// defect turns with the shaft through the load zone (modulated at the shaft's rate), a
-    /// rolling element with the cage (at the cage's, FTF). A line found on an integer order of
-    /// the shaft speed is refused by the stage (a synchronous modulation looks the same).
-    fn impact_lines(&self) -> Vec<ImpactLine<Effect>> {
-        let shaft_hz = self.red.speed / TAU;
-        self.lines
-            .iter()
-            .map(|&(bearing, line, order)| {
-                let cage = self.lines.iter().find(|(b, l, _)| *b == bearing && *l == BearingLine::Ftf).map(|x| x.2);
-                let modulation_hz = match line {
-                    BearingLine::Bpfi => Some(shaft_hz),
-                    BearingLine::Bsf => cage.map(|c| c * shaft_hz),
-                    BearingLine::Bpfo | BearingLine::Ftf => None,
-                };
-                let order_milli = (order * 1e3).round() as u32;
-                ImpactLine {
-                    effect: Effect::BearingDefect { bearing, line, order_milli },
-                    hz: order * shaft_hz,
-                    modulation_hz,
-                    synchronous_hz: Some(shaft_hz),
-                }
-            })
-            .collect()
-    }
-
-    /// Takes `signal` (in the channel's unit) out of channel `channel` of the data: the
-    /// vibration of the impacts the first stage found, so that later runs do not see it.
-    fn subtract(&mut self, channel: usize, signal: &[f64]) -> Result<()> {
-        let col = self.columns.get_mut(channel).ok_or_else(|| anyhow!("no channel #{channel}"))?;
-        if col.len() != signal.len() {
-            return Err(anyhow!("a signal of {} samples for a channel of {}", signal.len(), col.len()));
-        }
-        col.iter_mut().zip(signal).for_each(|(v, s)| *v -= s);
-        Ok(())
-    }
-}
-
-impl LoopSystem for RotorSystem<'_> {
-    type Effect = Effect;
-    type Model = AugmentedModel;
-
-    fn name(&self) -> &str {
-        "rotor"
-    }
-
-    /// Composes the augmented model (the healthy parts, then the effects; re-reducing the
-    /// rotor when a component parameter is changed) and runs the filter over the data.
-    fn run(&self, applied: &[Applied<Effect>]) -> Result<(AugmentedModel, Run)> {
-        self.run_on(&self.red, &self.healthy, applied)
-    }
-
-    fn summarise(&self, run: &Run) -> RunSummary {
-        let truth: Vec<Option<&[f64]>> =
-            self.row_names.iter().map(|n| self.data.column(&format!("truth_{n}"))).collect();
-        let ctx = SummaryContext {
-            t: &self.data.t,
-            channels: &self.channel_info,
-            rows: &self.row_info,
-            truth: &truth,
-            lines: &self.reference,
-            sample_rate: self.red.sample_rate,
-        };
-        summarise(run, &ctx, &self.options.signatures)
-    }
-
-    /// Candidates named directly by a signature (a bias, a line at an order, a bearing line or
-    /// elsewhere), then the structural ones (scales, delays, parameters, point masses) when the
-    /// innovations carry lines or colour; the catch-all (`unknown_input` at each force site) in
-    /// a tier of its own. A force at an order and a point mass may act at any node: they are
-    /// tried at the [`PLACES`] nodes whose inputs explain most of the innovations at their
-    /// lines ([`locate`]).
-    fn candidates(
-        &self,
-        s: &RunSummary,
-        run: &Run,
-        model: &AugmentedModel,
-        _effects: &[Applied<Effect>],
-    ) -> Vec<Vec<Effect>> {
-        let mut named = Vec::new();
-        let mut biased: Vec<(f64, usize)> = s
-            .channels
-            .iter()
-            .enumerate()
-            .filter(|(_, c)| c.z.abs() >= self.options.signatures.bias_z)
-            .map(|(i, c)| (c.z.abs(), i))
-            .collect();
-        biased.sort_by(|a, b| b.0.total_cmp(&a.0));
-        named.extend(biased.into_iter().map(|(_, channel)| Effect::SensorBias { channel }));
-        let mut structural = false;
-        let mut modes: Vec<u32> = Vec::new();
-        let mut orders: Vec<(f64, u32)> = Vec::new();
-        for c in &s.channels {
-            if c.whiteness_p < self.options.signatures.alpha || !c.peaks.is_empty() {
-                structural = true;
-            }
-            for p in &c.peaks {
-                if p.line.is_some() {
-                    // A bearing line in the spectrum itself: the envelope stage looks for defects.
-                    continue;
-                } else if let Some(k) = p.order {
-                    match orders.iter_mut().find(|(_, o)| *o == k) {
-                        Some(e) => e.0 = e.0.max(p.prominence_db),
-                        None => orders.push((p.prominence_db, k)),
-                    }
-                } else if p.class == "unexplained" {
-                    let mhz = (p.frequency_hz * 1e3).round() as u32;
-                    let near = |m: &u32| (*m as f64 - mhz as f64).abs() * 1e-3 < 2.0 * s.bin_width_hz;
-                    if !modes.iter().any(near) {
-                        modes.push(mhz);
-                    }
-                }
-            }
-        }
-        orders.sort_by(|a, b| b.0.total_cmp(&a.0));
-        let shaft_hz = self.red.speed / TAU;
-        for (_, order) in orders {
-            for node in self.places(run, model, &[order as f64 * shaft_hz], order, Input::Rotating) {
-                if order == 1 && self.red.force_nodes.contains(&node) {
-                    continue;
-                }
-                named.push(Effect::HarmonicForce { node, order });
-            }
-        }
-        named.extend(modes.into_iter().map(|seed_mhz| Effect::ExtraMode { seed_mhz }));
-        if structural || !s.nis_consistent {
-            // With a baseline the sensors are as it found them: a sensor's scale, delay and
-            // lag do not change between a healthy and a faulty record of the same rig.
-            for channel in (0..self.channels()).filter(|_| self.baseline.is_none()) {
-                named.push(Effect::SensorScale { channel });
-                named.push(Effect::SensorDelay { channel });
-                named.push(Effect::SensorLag { channel });
-            }
-            named.extend(Parameter::all(self.cfg).into_iter().map(Effect::Parameter));
-            // A mass changes the 1× response and the natural frequencies: its inertial force at
-            // the node, in x and y alike. One at a disk is that disk's mass (a parameter).
-            let mut lines = vec![shaft_hz];
-            lines.extend(
-                s.channels
-                    .iter()
-                    .flat_map(|c| &c.peaks)
-                    .filter(|p| p.class.starts_with("natural"))
-                    .map(|p| p.frequency_hz),
-            );
-            let disks = self.disk_nodes();
-            let nodes = self.places(run, model, &lines, 1, Input::Inertial).into_iter().filter(|n| !disks.contains(n));
-            named.extend(nodes.map(|node| Effect::PointMass { node }));
-        }
-        let catch_all = self.force_sites.iter().map(|&node| Effect::UnknownInput { node }).collect();
-        vec![named, catch_all]
-    }
-
-    fn label(&self, e: &Effect) -> EffectLabel {
-        let detail = EffectDetail {
-            order: e.order(),
-            parameter: match e {
-                Effect::Parameter(p) => Some(p.name().to_string()),
-                _ => None,
-            },
-            line: match e {
-                Effect::BearingDefect { line, .. } => Some(line.name().to_string()),
-                _ => None,
-            },
-            ..EffectDetail::default()
-        };
-        EffectLabel {
-            kind: e.kind(),
-            location: e.location(&self.red.channels, self.cfg),
-            detail,
-            unit: match e {
-                // A bias is in its channel's unit.
-                Effect::SensorBias { channel } => {
-                    self.channel_info.get(*channel).map_or_else(|| e.unit().to_string(), |c| c.unit.clone())
-                }
-                _ => e.unit().to_string(),
-            },
-        }
-    }
-
-    /// Parameters and point masses get a finer grid: a stiffness factor's log-likelihood has
-    /// side lobes where a natural frequency crosses a line. A force (harmonic or unknown) may
-    /// not exceed `[bounds] force`, by default the rotor's weight: a larger one is the force
-    /// standing in for something else.
-    fn fitting(&self, e: &Effect) -> Fitting {
-        let grid = if e.changes_structure() { 7 } else { 4 };
-        Fitting {
-            parameters: e.parameters(self.channels()),
-            scalar: e.scalar(self.red.sample_rate, &self.cfg.bounds, self.cfg.mass()).map(|r| (r, grid)),
-            limit: matches!(e, Effect::HarmonicForce { .. } | Effect::UnknownInput { .. })
-                .then(|| self.cfg.bounds.force_n(self.cfg.weight())),
-            may_start_mid_run: false,
-        }
-    }
-
-    /// The fitted scalar (a factor as `exp θ`), or the effect states' size once settled.
-    fn value(&self, model: &AugmentedModel, run: &Run, applied: &Applied<Effect>) -> f64 {
-        let effect = &applied.effect;
-        let Some(pos) = model.effects.iter().position(|(e, _, _)| e == effect) else { return f64::NAN };
-        let m = self.channels();
-        let offset: usize = model.effects[..pos].iter().map(|(e, _, _)| e.states(m)).sum();
-        let from = applied.first_sample(&self.data.t);
-        let s = &run.effect_states;
-        let settled = |f: &dyn Fn(usize) -> f64| settled_mean(&(0..s[offset].len()).map(f).collect::<Vec<_>>(), from);
-        match effect {
-            Effect::SensorBias { .. } => settled(&|k| s[offset][k]),
-            Effect::HarmonicForce { .. } => settled(&|k| s[offset][k].hypot(s[offset + 1][k])),
-            Effect::UnknownInput { .. } => settled(&|k| s[offset][k].powi(2) + s[offset + 1][k].powi(2)).sqrt(),
-            Effect::SensorScale { .. } | Effect::SensorLag { .. } | Effect::Parameter(_) | Effect::PointMass { .. } => {
-                applied.theta.exp()
-            }
-            Effect::SensorDelay { .. } | Effect::ExtraMode { .. } => applied.theta,
-            // Valued by the envelope stage, which fits it.
-            Effect::BearingDefect { .. } => f64::NAN,
-        }
-    }
-
-    /// Every component parameter (the engine screens them for what the data cannot see).
-    fn declared(&self) -> Vec<Effect> {
-        Parameter::all(self.cfg).into_iter().map(Effect::Parameter).collect()
-    }
-
-    /// The bearings' defects named by their envelope lines ([`impacts`]) and their vibration
-    /// taken out of the data; after a defect is named, a broadband stand-in (a mode the model
-    /// lacks, a catch-all input) is not fitted: the impacts ring every lightly damped mode.
-    fn prestage(&mut self, run: &Run, options: &LoopOptions) -> Result<PreStage<Effect>> {
-        let lines = self.impact_lines();
-        let traces = self.traces();
-        let found = impacts::stage(&lines, |e| self.label(e), run, &traces, &self.rotor.envelope, options.half_gain);
-        for (channel, signal) in &found.signals {
-            self.subtract(*channel, signal)?;
-        }
-        if options.progress {
-            for (_, a) in &found.added {
-                eprintln!(
-                    "loop: impacts {} at {}: Δ log-likelihood {:.1}, BIC cost {:.1}",
-                    a.kind, a.location, a.delta_log_likelihood, a.bic_penalty
-                );
-            }
-        }
-        let excludes = match found.added.first() {
-            Some((_, defect)) => [EffectKind::ExtraMode, EffectKind::UnknownInput]
-                .map(|kind| {
-                    let why = format!(
-                        "not fitted: the impacts of the {} at {} ring every lightly damped mode, and a broadband \
-                         stand-in fitted after them is their ringing",
-                        defect.kind, defect.location
-                    );
-                    (kind, why)
-                })
-                .to_vec(),
-            None => Vec::new(),
-        };
-        Ok(PreStage {
-            data_changed: !found.signals.is_empty(),
-            added: found.added,
-            trials: found.trials,
-            refused: found.refused,
-            excludes,
-        })
-    }
-
-    fn traces(&self) -> Traces {
-        Traces {
-            t: self.data.t.clone(),
-            channels: self.channel_info.clone(),
-            rows: self.row_info.clone(),
-            truth: self
-                .row_names
-                .iter()
-                .map(|n| self.data.column(&format!("truth_{n}")).map(<[f64]>::to_vec))
-                .collect(),
-            ..Traces::default()
-        }
-    }
-
-    /// `running_speed`: the speed the loop used and where it came from; with a baseline, the
-    /// baseline it started from (`baseline`) and the record's levels beside its
-    /// (`baseline_comparison`).
-    fn section(&self, model: &AugmentedModel, run: &Run) -> SystemSection {
-        let mut section = SystemSection::default();
-        if let Ok(v) = serde_json::to_value(self.speed) {
-            section.fields.insert("running_speed".into(), v);
-        }
-        section.lines.push(("running speed".into(), self.speed.describe()));
-        if let Some(b) = &self.baseline {
-            let about = serde_json::json!({
-                "condition": b.condition,
-                "data": b.source.data,
-                "data_sha256": b.source.data_sha256,
-                "speed_hz": b.speed_hz,
-                "resonances": b.resonances.len(),
-                "synchronous_forces": b.forces.len(),
-            });
-            section.fields.insert("baseline".into(), about);
-            let what = b.condition.as_deref().map(|c| format!(" ({c})")).unwrap_or_default();
-            section.lines.push(("baseline".into(), format!("learned on {}{what}", b.source.data)));
-            let rows = b.compare(self, model, run);
-            for c in &rows {
-                section.lines.push(("compared".into(), c.describe()));
-            }
-            if let Ok(v) = serde_json::to_value(&rows) {
-                section.fields.insert("baseline_comparison".into(), v);
-            }
-        }
-        section
     }
 }
 

@@ -213,16 +213,9 @@ impl LoopSystem for UuvSystem<'_> {
     /// A thruster's health changes mid-run (a fouled propeller, a failing motor); the rest are
     /// properties of the vehicle and its sensors.
     fn fitting(&self, e: &Effect) -> Fitting {
-        let factor = |low: f64, high: f64| ScalarRange {
-            low: low.ln(),
-            high: high.ln(),
-            neutral: 0.0,
-            log: true,
-            tolerance: 1e-3,
-        };
         let scalar = match e {
-            Effect::Parameter(Parameter::Mass) => Some((factor(0.8, 1.25), 4)),
-            Effect::Parameter(Parameter::SurgeDrag) => Some((factor(0.7, 1.43), 4)),
+            Effect::Parameter(Parameter::Mass) => Some((ScalarRange::factor(0.8, 1.25, 1e-3), 4)),
+            Effect::Parameter(Parameter::SurgeDrag) => Some((ScalarRange::factor(0.7, 1.43, 1e-3), 4)),
             _ => None,
         };
         Fitting {
@@ -255,13 +248,7 @@ impl LoopSystem for UuvSystem<'_> {
     }
 
     fn traces(&self) -> Traces {
-        Traces {
-            t: self.data.t.clone(),
-            channels: self.channels.clone(),
-            rows: self.rows.clone(),
-            truth: self.truth().into_iter().map(|c| c.map(<[f64]>::to_vec)).collect(),
-            ..Traces::default()
-        }
+        Traces::new(&self.data.t, &self.channels, &self.rows, &self.truth())
     }
 
     /// What the configuration declared: the base model's states beside the vehicle's.

@@ -5,109 +5,26 @@
 //! (a bias, a force), some add one scalar the search fits by maximum likelihood (a sensor's scale
 //! or delay, a component parameter, a mode's frequency), some both. Each says which residual
 //! signatures point to it ([`Effect::signature`]).
+//!
+//! * [`augment`](mod@augment): the augmented model, composed family by family: [`sensor`],
+//!   [`force`], [`mode`]; [`parameter`]: the effects that change the configuration itself (a
+//!   component parameter, a point mass). A bearing defect is named before the search, on the
+//!   innovations' envelope ([`bearings`](super::bearings)), never inside the filter.
 
-use super::healthy::{oscillator, ModeSpec, ModeTarget};
+pub mod augment;
+pub mod force;
+pub mod mode;
+pub mod parameter;
+pub mod sensor;
+
+pub use self::augment::{augment, AugmentedModel};
+pub use self::force::{force_columns, Flexibility};
+pub use self::parameter::{apply_parameters, Parameter};
 pub use crate::residual_loop::optimize::ScalarRange;
 use crate::residual_loop::EffectKind;
 use crate::systems::rotor::bearing_geometry::BearingLine;
 use crate::systems::rotor::bounds::Bounds;
-use crate::systems::rotor::config::PointMassConfig;
-use crate::systems::rotor::estimate::ReducedRotor;
-use crate::systems::rotor::{dof, RotorConfig, RotorModel, SensorKind};
-use anyhow::{anyhow, bail, Context, Result};
-use edgekf::linalg::expm;
-use nalgebra::DMatrix;
-
-/// A component of the rotor whose declared parameter may be wrong.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum Parameter {
-    /// Mass of disk `i` (configuration order); its inertias scale with it.
-    DiskMass(usize),
-    /// Young's modulus of the shaft (its bending stiffness).
-    ShaftYoung,
-    /// Density of the shaft (its mass).
-    ShaftDensity,
-    /// Direct stiffness `kxx` of bearing `i`.
-    BearingKxx(usize),
-    /// Direct stiffness `kyy` of bearing `i`.
-    BearingKyy(usize),
-    /// Direct damping `cxx` of bearing `i`.
-    BearingCxx(usize),
-    /// Direct damping `cyy` of bearing `i`.
-    BearingCyy(usize),
-}
-
-impl Parameter {
-    /// Every parameter of `cfg` the library can correct (damping only where it is declared
-    /// non-zero: a factor on zero means nothing).
-    pub fn all(cfg: &RotorConfig) -> Vec<Parameter> {
-        let mut out: Vec<Parameter> = (0..cfg.disks.len()).map(Parameter::DiskMass).collect();
-        out.extend([Parameter::ShaftYoung, Parameter::ShaftDensity]);
-        for (i, b) in cfg.bearings.iter().enumerate() {
-            out.extend([Parameter::BearingKxx(i), Parameter::BearingKyy(i)]);
-            if b.cxx > 0.0 {
-                out.push(Parameter::BearingCxx(i));
-            }
-            if b.cyy > 0.0 {
-                out.push(Parameter::BearingCyy(i));
-            }
-        }
-        out
-    }
-
-    /// The parameter's name in the report (`mass`, `young`, `kxx`, …).
-    pub fn name(self) -> &'static str {
-        match self {
-            Parameter::DiskMass(_) => "mass",
-            Parameter::ShaftYoung => "young",
-            Parameter::ShaftDensity => "density",
-            Parameter::BearingKxx(_) => "kxx",
-            Parameter::BearingKyy(_) => "kyy",
-            Parameter::BearingCxx(_) => "cxx",
-            Parameter::BearingCyy(_) => "cyy",
-        }
-    }
-
-    /// The component, as the report names it (`disk 12`, `shaft`, `bearing 4`: by node).
-    pub fn component(self, cfg: &RotorConfig) -> String {
-        let node = |n: Option<usize>| n.map_or("?".to_string(), |n| n.to_string());
-        match self {
-            Parameter::DiskMass(i) => format!("disk {}", node(cfg.disks.get(i).map(|d| d.node))),
-            Parameter::ShaftYoung | Parameter::ShaftDensity => "shaft".to_string(),
-            Parameter::BearingKxx(i)
-            | Parameter::BearingKyy(i)
-            | Parameter::BearingCxx(i)
-            | Parameter::BearingCyy(i) => {
-                format!("bearing {}", node(cfg.bearings.get(i).map(|b| b.node)))
-            }
-        }
-    }
-
-    /// Multiplies the parameter in `cfg` by `factor`.
-    pub fn apply(self, cfg: &mut RotorConfig, factor: f64) -> Result<()> {
-        if !(factor.is_finite() && factor > 0.0) {
-            bail!("a parameter factor must be positive and finite, not {factor}");
-        }
-        let missing = || anyhow!("the configuration has no component for {self:?}");
-        match self {
-            Parameter::DiskMass(i) => {
-                let d = cfg.disks.get_mut(i).ok_or_else(missing)?;
-                // The inertias follow the mass (a solid disk's are proportional to it; declared
-                // ones are scaled alike).
-                d.mass *= factor;
-                d.ip = d.ip.map(|v| v * factor);
-                d.id = d.id.map(|v| v * factor);
-            }
-            Parameter::ShaftYoung => cfg.shaft.young *= factor,
-            Parameter::ShaftDensity => cfg.shaft.density *= factor,
-            Parameter::BearingKxx(i) => cfg.bearings.get_mut(i).ok_or_else(missing)?.kxx *= factor,
-            Parameter::BearingKyy(i) => cfg.bearings.get_mut(i).ok_or_else(missing)?.kyy *= factor,
-            Parameter::BearingCxx(i) => cfg.bearings.get_mut(i).ok_or_else(missing)?.cxx *= factor,
-            Parameter::BearingCyy(i) => cfg.bearings.get_mut(i).ok_or_else(missing)?.cyy *= factor,
-        }
-        Ok(())
-    }
-}
+use crate::systems::rotor::RotorConfig;
 
 /// One kind of model augmentation, at one place.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -171,7 +88,7 @@ pub enum Effect {
     },
     /// A defect of a rolling-element bearing: impacts at a defect line's rate ringing a
     /// housing resonance, found and fitted by the engine's first stage on the innovations'
-    /// envelope (`residual_loop::impacts`), never inside the rotor's filter. Value: RMS of the
+    /// envelope ([`impacts`](crate::diagnostics::bearings::impacts)), never inside the rotor's filter. Value: RMS of the
     /// impacts' vibration, in the channel's unit.
     BearingDefect {
         /// Bearing index (configuration order).
@@ -245,7 +162,7 @@ impl Effect {
         match *self {
             Effect::SensorScale { .. } | Effect::Parameter(_) => {
                 let (low, high) = bounds.factor_range();
-                Some(ScalarRange { low: low.ln(), high: high.ln(), neutral: 0.0, log: true, tolerance: 1e-5 })
+                Some(ScalarRange::factor(low, high, 1e-5))
             }
             Effect::SensorDelay { .. } => Some(ScalarRange {
                 low: 0.0,
@@ -368,275 +285,12 @@ impl Default for EffectTuning {
     }
 }
 
-/// The base model plus effects: `ẋ = A x + w`, `y = C x + v`, and the virtual outputs.
-#[derive(Debug, Clone)]
-pub struct AugmentedModel {
-    /// Continuous system matrix.
-    pub a: DMatrix<f64>,
-    /// Continuous process-noise density.
-    pub qc: DMatrix<f64>,
-    /// Sensor rows.
-    pub c: DMatrix<f64>,
-    /// Measurement-noise covariance per sample.
-    pub r: DMatrix<f64>,
-    /// Initial covariance.
-    pub p0: DMatrix<f64>,
-    /// Displacement rows of every node (node-major `n0_x, n0_y, …`), effects included.
-    pub displacement: DMatrix<f64>,
-    /// The effects with their scalar, and the index of their first state.
-    pub effects: Vec<(Effect, f64, usize)>,
-    /// The unbalance forces' states (`F_x`, `F_y` per unbalance node, N).
-    pub unbalance: std::ops::Range<usize>,
-}
-
-/// What [`augment`] needs besides the reduced model: the static stiffness of the FE model (for
-/// the truncated modes' static correction of new forces).
-#[derive(Debug, Clone)]
-pub struct Flexibility {
-    k: DMatrix<f64>,
-}
-
-impl Flexibility {
-    /// The stiffness of `model` at `speed`.
-    pub fn new(model: &RotorModel, speed: f64) -> Self {
-        let sys = model.assemble(speed);
-        let k = DMatrix::from_fn(sys.k.nrows(), sys.k.ncols(), |i, j| sys.k[(i, j)]);
-        Self { k }
-    }
-}
-
-/// The matrices a new force is written into.
-struct Target<'a> {
-    a: &'a mut DMatrix<f64>,
-    c: &'a mut DMatrix<f64>,
-    displacement: &'a mut DMatrix<f64>,
-}
-
-/// A force at `node` whose `x` component is state `sx` and `y` component state `sy` (either
-/// may be absent): modal input `Φᵀ` at the node's DOFs, and the static correction of the
-/// truncated modes (`K⁻¹ S − Φ Λ⁻¹ Φᵀ S`) on every displacement and sensor row.
-fn add_force(
-    t: Target<'_>,
-    red: &ReducedRotor,
-    model: &RotorModel,
-    flex: &Flexibility,
-    node: usize,
-    states: [Option<usize>; 2],
-) -> Result<()> {
-    let r = red.frequencies_hz.len();
-    let nodes = red.displacement.nrows() / 2;
-    if node >= nodes {
-        bail!("no node {node}");
-    }
-    let lambda: Vec<f64> = red.frequencies_hz.iter().map(|f| (2.0 * std::f64::consts::PI * f).powi(2)).collect();
-    let ndof = flex.k.nrows();
-    let mut sf = DMatrix::<f64>::zeros(ndof, 2);
-    sf[(dof(node, 0), 0)] = 1.0;
-    sf[(dof(node, 1), 1)] = 1.0;
-    let k_inv_sf = flex.k.clone().lu().solve(&sf).context("the stiffness matrix is singular")?;
-    let corr = |dof_row: usize, out_row: usize, col: usize| {
-        let modal: f64 =
-            (0..r).map(|m| red.displacement[(out_row, m)] * red.displacement[(2 * node + col, m)] / lambda[m]).sum();
-        k_inv_sf[(dof_row, col)] - modal
-    };
-    for (col, s) in states.iter().enumerate() {
-        let Some(s) = *s else { continue };
-        for i in 0..r {
-            t.a[(r + i, s)] = red.displacement[(2 * node + col, i)];
-        }
-        for q in 0..nodes {
-            for d in 0..2 {
-                t.displacement[(2 * q + d, s)] = corr(dof(q, d), 2 * q + d, col);
-            }
-        }
-        // Probes read the displacement; accelerometer rows are extended in `augment` once
-        // every state is in place.
-        for (i, sensor) in model.config().sensors.iter().enumerate() {
-            if matches!(sensor.kind, SensorKind::Displacement { .. }) {
-                let d = sensor.direction.dof();
-                t.c[(i, s)] = corr(dof(sensor.node, d), 2 * sensor.node + d, col);
-            }
-        }
-    }
-    Ok(())
-}
-
-/// Builds `red` plus `effects`, each with its scalar (ignored by effects without one; a
-/// `Parameter` effect must already be applied to the configuration `red` was reduced from).
-///
-/// `red`, `model` and `flex` describe the same configuration. A new force reaches a probe through
-/// the displacement rows and an accelerometer through its low-pass input (the acceleration of
-/// the measured DOF, modal part and static correction alike).
-pub fn augment(
-    red: &ReducedRotor,
-    model: &RotorModel,
-    flex: &Flexibility,
-    effects: &[(Effect, f64)],
-    tuning: &EffectTuning,
-) -> Result<AugmentedModel> {
-    let n0 = red.states();
-    let m = red.c.nrows();
-    let extra: usize = effects.iter().map(|(e, _)| e.states(m)).sum();
-    let ns = n0 + extra;
-    let grow = |mat: &DMatrix<f64>, rows: usize| {
-        let mut out = DMatrix::<f64>::zeros(rows, ns);
-        out.view_mut((0, 0), (mat.nrows(), mat.ncols())).copy_from(mat);
-        out
-    };
-    let mut a = grow(&red.a, ns);
-    let mut qc = grow(&red.qc, ns);
-    let mut p0 = grow(&red.p0, ns);
-    let mut c = grow(&red.c, m);
-    let mut displacement = grow(&red.displacement, red.displacement.nrows());
-    let channel_ok = |ch: usize| if ch < m { Ok(()) } else { Err(anyhow!("no channel #{ch}")) };
-    let rotating = |a: &mut DMatrix<f64>, s: usize, w: f64| {
-        a[(s, s + 1)] = -w;
-        a[(s + 1, s)] = w;
-    };
-    let mut next = n0;
-    let mut placed = Vec::new();
-    for &(e, theta) in effects {
-        let s = next;
-        match e {
-            Effect::SensorBias { channel } => {
-                channel_ok(channel)?;
-                c[(channel, s)] = 1.0;
-                qc[(s, s)] = tuning.bias_psd;
-                p0[(s, s)] = tuning.bias_std.powi(2);
-            }
-            Effect::SensorScale { channel } | Effect::SensorDelay { channel } | Effect::SensorLag { channel } => {
-                channel_ok(channel)?
-            }
-            Effect::HarmonicForce { node, order } => {
-                rotating(&mut a, s, order as f64 * red.speed);
-                let t = Target { a: &mut a, c: &mut c, displacement: &mut displacement };
-                add_force(t, red, model, flex, node, [Some(s), Some(s + 1)])?;
-                for d in 0..2 {
-                    qc[(s + d, s + d)] = tuning.force_psd;
-                    p0[(s + d, s + d)] = tuning.force_std.powi(2);
-                }
-            }
-            Effect::UnknownInput { node } => {
-                let t = Target { a: &mut a, c: &mut c, displacement: &mut displacement };
-                add_force(t, red, model, flex, node, [Some(s), Some(s + 1)])?;
-                for d in 0..2 {
-                    qc[(s + d, s + d)] = tuning.unknown_psd;
-                    p0[(s + d, s + d)] = tuning.force_std.powi(2);
-                }
-            }
-            Effect::BearingDefect { .. } => {
-                bail!("a bearing defect is fitted on the innovations' envelope, not in the rotor's filter")
-            }
-            Effect::ExtraMode { .. } => {
-                if !(theta.is_finite() && theta > 0.0) {
-                    bail!("an extra mode needs a positive frequency, not {theta}");
-                }
-                for ch in 0..m {
-                    let level = tuning.mode_std * red.r[(ch, ch)].sqrt();
-                    let t = ModeTarget { a: &mut a, qc: &mut qc, c: &mut c, p0: &mut p0 };
-                    oscillator(t, s + 2 * ch, ch, ModeSpec { hz: theta, zeta: tuning.mode_damping, level })?;
-                }
-            }
-            Effect::Parameter(_) | Effect::PointMass { .. } => {}
-        }
-        placed.push((e, theta, s));
-        next += e.states(m);
-    }
-    // Accelerometers: the new states' share of each measured DOF's acceleration (the
-    // displacement row twice through the dynamics) enters the low-pass input (or the output).
-    let accel: Vec<(usize, Option<usize>, f64, DMatrix<f64>)> =
-        red.accel_inputs.iter().map(|i| (i.channel, i.state, i.gain, displacement.rows(i.row, 1) * &a * &a)).collect();
-    for (channel, state, gain, row) in accel {
-        for j in n0..ns {
-            match state {
-                Some(y) => a[(y, j)] += gain * row[(0, j)],
-                None => c[(channel, j)] += gain * row[(0, j)],
-            }
-        }
-    }
-    // Output-side effects last, over the complete dynamics.
-    for &(e, theta) in effects {
-        match e {
-            Effect::SensorScale { channel } => {
-                let f = theta.exp();
-                c.row_mut(channel).iter_mut().for_each(|v| *v *= f);
-            }
-            Effect::SensorDelay { channel } if theta != 0.0 => {
-                let back = delay_matrix(&a, theta)?;
-                let row = c.row(channel) * back;
-                c.row_mut(channel).copy_from(&row);
-            }
-            _ => {}
-        }
-    }
-    // A lag reads what the channel read so far through `ẏ = (C x − y) / τ`, starting from it.
-    for &(e, theta, s) in &placed {
-        if let Effect::SensorLag { channel } = e {
-            let tau = theta.exp();
-            if !(tau.is_finite() && tau > 0.0) {
-                bail!("a sensor lag needs a positive time constant, not {tau}");
-            }
-            let row = c.row(channel).clone_owned();
-            for j in 0..ns {
-                a[(s, j)] += row[j] / tau;
-            }
-            a[(s, s)] -= 1.0 / tau;
-            p0[(s, s)] = (&row * &p0 * row.transpose())[(0, 0)];
-            c.row_mut(channel).fill(0.0);
-            c[(channel, s)] = 1.0;
-        }
-    }
-    let u0 = 2 * red.frequencies_hz.len();
-    let unbalance = u0..u0 + 2 * red.force_nodes.len();
-    Ok(AugmentedModel { a, qc, c, r: red.r.clone(), p0, displacement, effects: placed, unbalance })
-}
-
-/// `e^{−Aτ}`: maps the state now to the state `τ` ago along the noise-free dynamics (of the
-/// reduced model, so by the shared core's [`expm`]).
-fn delay_matrix(a: &DMatrix<f64>, tau: f64) -> Result<DMatrix<f64>> {
-    expm(&(a * -tau)).map_err(|e| anyhow!("cannot form the delay: {e}"))
-}
-
-/// The configuration with the effects of `effects` that change it applied: a `Parameter`'s
-/// factor and a `PointMass`'s mass (their scalar is the log of either).
-pub fn apply_parameters(cfg: &RotorConfig, effects: &[(Effect, f64)]) -> Result<RotorConfig> {
-    let mut out = cfg.clone();
-    for &(e, theta) in effects {
-        match e {
-            Effect::Parameter(p) => p.apply(&mut out, theta.exp())?,
-            Effect::PointMass { node } => {
-                let mass = theta.exp();
-                if !(mass.is_finite() && mass > 0.0) {
-                    bail!("a point mass must be positive and finite, not {mass} kg");
-                }
-                out.masses.push(PointMassConfig { node, mass, ip: 0.0, id: 0.0 });
-            }
-            _ => {}
-        }
-    }
-    Ok(out)
-}
-
-/// How a force at `node` at `order ×` the running speed enters `red` (augmented as
-/// [`augment`] would): its columns in the base model's dynamics (`B`, `red.states() × 2`,
-/// for `F_x`, `F_y`) and in the sensor rows (`D`, channels × 2). What
-/// [`direction`](crate::residual_loop::direction) ranks a force's or a mass's places with.
-pub fn force_columns(
-    red: &ReducedRotor,
-    model: &RotorModel,
-    flex: &Flexibility,
-    node: usize,
-    order: u32,
-) -> Result<(DMatrix<f64>, DMatrix<f64>)> {
-    let m = augment(red, model, flex, &[(Effect::HarmonicForce { node, order }, 0.0)], &EffectTuning::default())?;
-    let n0 = red.states();
-    Ok((m.a.view((0, n0), (n0, 2)).clone_owned(), m.c.view((0, n0), (m.c.nrows(), 2)).clone_owned()))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::systems::rotor::config::PointMassConfig;
     use crate::systems::rotor::estimate::{reduce, Tuning};
+    use crate::systems::rotor::RotorModel;
 
     fn paper() -> RotorModel {
         let cfg =

@@ -1,0 +1,166 @@
+//! The rotor as a [`LoopSystem`]: its runs, summaries, effects and report section; the
+//! candidates are [`candidates`](super::candidates)'s and the first stage
+//! [`bearings`](super::bearings)'.
+
+use super::effects::{AugmentedModel, Effect, Parameter};
+use super::RotorSystem;
+use crate::residual_loop::filter::Run;
+use crate::residual_loop::onset::settled_mean;
+use crate::residual_loop::signature::{summarise, SummaryContext};
+use crate::residual_loop::{
+    Applied, EffectDetail, EffectLabel, Fitting, LoopOptions, LoopSystem, PreStage, RunSummary, SystemSection, Traces,
+};
+use anyhow::Result;
+
+impl LoopSystem for RotorSystem<'_> {
+    type Effect = Effect;
+    type Model = AugmentedModel;
+
+    fn name(&self) -> &str {
+        "rotor"
+    }
+
+    /// Composes the augmented model (the healthy parts, then the effects; re-reducing the
+    /// rotor when a component parameter is changed) and runs the filter over the data.
+    fn run(&self, applied: &[Applied<Effect>]) -> Result<(AugmentedModel, Run)> {
+        self.run_on(&self.red, &self.healthy, applied)
+    }
+
+    fn summarise(&self, run: &Run) -> RunSummary {
+        let truth: Vec<Option<&[f64]>> =
+            self.row_names.iter().map(|n| self.data.column(&format!("truth_{n}"))).collect();
+        let ctx = SummaryContext {
+            t: &self.data.t,
+            channels: &self.channel_info,
+            rows: &self.row_info,
+            truth: &truth,
+            lines: &self.reference,
+            sample_rate: self.red.sample_rate,
+        };
+        summarise(run, &ctx, &self.options.signatures)
+    }
+
+    /// Candidates named directly by a signature, then the structural ones, then the
+    /// catch-all ([`candidates`]).
+    fn candidates(
+        &self,
+        s: &RunSummary,
+        run: &Run,
+        model: &AugmentedModel,
+        _effects: &[Applied<Effect>],
+    ) -> Vec<Vec<Effect>> {
+        self.propose(s, run, model)
+    }
+
+    fn label(&self, e: &Effect) -> EffectLabel {
+        let detail = EffectDetail {
+            order: e.order(),
+            parameter: match e {
+                Effect::Parameter(p) => Some(p.name().to_string()),
+                _ => None,
+            },
+            line: match e {
+                Effect::BearingDefect { line, .. } => Some(line.name().to_string()),
+                _ => None,
+            },
+            ..EffectDetail::default()
+        };
+        EffectLabel {
+            kind: e.kind(),
+            location: e.location(&self.red.channels, self.cfg),
+            detail,
+            unit: match e {
+                // A bias is in its channel's unit.
+                Effect::SensorBias { channel } => {
+                    self.channel_info.get(*channel).map_or_else(|| e.unit().to_string(), |c| c.unit.clone())
+                }
+                _ => e.unit().to_string(),
+            },
+        }
+    }
+
+    /// Parameters and point masses get a finer grid: a stiffness factor's log-likelihood has
+    /// side lobes where a natural frequency crosses a line. A force (harmonic or unknown) may
+    /// not exceed `[bounds] force`, by default the rotor's weight: a larger one is the force
+    /// standing in for something else.
+    fn fitting(&self, e: &Effect) -> Fitting {
+        let grid = if e.changes_structure() { 7 } else { 4 };
+        Fitting {
+            parameters: e.parameters(self.channels()),
+            scalar: e.scalar(self.red.sample_rate, &self.cfg.bounds, self.cfg.mass()).map(|r| (r, grid)),
+            limit: matches!(e, Effect::HarmonicForce { .. } | Effect::UnknownInput { .. })
+                .then(|| self.cfg.bounds.force_n(self.cfg.weight())),
+            may_start_mid_run: false,
+        }
+    }
+
+    /// The fitted scalar (a factor as `exp θ`), or the effect states' size once settled.
+    fn value(&self, model: &AugmentedModel, run: &Run, applied: &Applied<Effect>) -> f64 {
+        let effect = &applied.effect;
+        let Some(pos) = model.effects.iter().position(|(e, _, _)| e == effect) else { return f64::NAN };
+        let m = self.channels();
+        let offset: usize = model.effects[..pos].iter().map(|(e, _, _)| e.states(m)).sum();
+        let from = applied.first_sample(&self.data.t);
+        let s = &run.effect_states;
+        let settled = |f: &dyn Fn(usize) -> f64| settled_mean(&(0..s[offset].len()).map(f).collect::<Vec<_>>(), from);
+        match effect {
+            Effect::SensorBias { .. } => settled(&|k| s[offset][k]),
+            Effect::HarmonicForce { .. } => settled(&|k| s[offset][k].hypot(s[offset + 1][k])),
+            Effect::UnknownInput { .. } => settled(&|k| s[offset][k].powi(2) + s[offset + 1][k].powi(2)).sqrt(),
+            Effect::SensorScale { .. } | Effect::SensorLag { .. } | Effect::Parameter(_) | Effect::PointMass { .. } => {
+                applied.theta.exp()
+            }
+            Effect::SensorDelay { .. } | Effect::ExtraMode { .. } => applied.theta,
+            // Valued by the envelope stage, which fits it.
+            Effect::BearingDefect { .. } => f64::NAN,
+        }
+    }
+
+    /// Every component parameter (the engine screens them for what the data cannot see).
+    fn declared(&self) -> Vec<Effect> {
+        Parameter::all(self.cfg).into_iter().map(Effect::Parameter).collect()
+    }
+
+    /// The bearings' defects named by their envelope lines ([`bearings`]).
+    fn prestage(&mut self, run: &Run, options: &LoopOptions) -> Result<PreStage<Effect>> {
+        self.first_stage(run, options)
+    }
+
+    fn traces(&self) -> Traces {
+        let truth: Vec<Option<&[f64]>> =
+            self.row_names.iter().map(|n| self.data.column(&format!("truth_{n}"))).collect();
+        Traces::new(&self.data.t, &self.channel_info, &self.row_info, &truth)
+    }
+
+    /// `running_speed`: the speed the loop used and where it came from; with a baseline, the
+    /// baseline it started from (`baseline`) and the record's levels beside its
+    /// (`baseline_comparison`).
+    fn section(&self, model: &AugmentedModel, run: &Run) -> SystemSection {
+        let mut section = SystemSection::default();
+        if let Ok(v) = serde_json::to_value(self.speed) {
+            section.fields.insert("running_speed".into(), v);
+        }
+        section.lines.push(("running speed".into(), self.speed.describe()));
+        if let Some(b) = &self.baseline {
+            let about = serde_json::json!({
+                "condition": b.condition,
+                "data": b.source.data,
+                "data_sha256": b.source.data_sha256,
+                "speed_hz": b.speed_hz,
+                "resonances": b.resonances.len(),
+                "synchronous_forces": b.forces.len(),
+            });
+            section.fields.insert("baseline".into(), about);
+            let what = b.condition.as_deref().map(|c| format!(" ({c})")).unwrap_or_default();
+            section.lines.push(("baseline".into(), format!("learned on {}{what}", b.source.data)));
+            let rows = b.compare(self, model, run);
+            for c in &rows {
+                section.lines.push(("compared".into(), c.describe()));
+            }
+            if let Ok(v) = serde_json::to_value(&rows) {
+                section.fields.insert("baseline_comparison".into(), v);
+            }
+        }
+        section
+    }
+}
