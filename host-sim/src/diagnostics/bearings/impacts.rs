@@ -99,30 +99,88 @@ pub fn stage<E: Copy + PartialEq>(
     let Some(highest) = lines.iter().map(|l| l.hz).max_by(f64::total_cmp) else { return out };
     let Some(fs) = sample_rate(&traces.t) else { return out };
     let n_meas = run.measurements().max(2) as f64;
-    let cost = |p: usize| 0.5 * p as f64 * n_meas.ln();
+    let st = Stage { lines, label_of: &label_of, run, traces, search, half_gain, fs, highest, n_meas };
     let mut per_channel: Vec<ChannelFits<E>> = Vec::new();
     for (ch, (innovation, variance)) in run.innovation.iter().zip(&run.variance).enumerate() {
         let u: Vec<f64> = innovation.iter().zip(variance).map(|(e, s)| e / s.sqrt()).collect();
+        let cands = st.candidates(&u, &mut out.refused);
+        per_channel.push(ChannelFits { channel: ch, u, cands });
+    }
+    // The channel with the strongest evidence decides first; on the others the same defect is
+    // preferred, and another is kept only if its line is not one of the first's combination
+    // lines (an inner race's BPFI − 3× sits near BSF).
+    per_channel.sort_by(|a, b| {
+        let best = |cs: &[Candidate<E>]| {
+            cs.iter().filter(|c| st.pays(c)).map(Candidate::score).fold(f64::NEG_INFINITY, f64::max)
+        };
+        best(&b.cands).total_cmp(&best(&a.cands))
+    });
+    let mut accepted: Vec<(ImpactLine<E>, f64)> = Vec::new();
+    for fits in per_channel {
+        st.decide(fits, &mut accepted, &mut out);
+    }
+    out.added = merged(std::mem::take(&mut out.added));
+    out
+}
+
+/// What one run of the stage works with.
+struct Stage<'a, E, L> {
+    lines: &'a [ImpactLine<E>],
+    label_of: &'a L,
+    run: &'a Run,
+    traces: &'a Traces,
+    search: &'a LineSearch,
+    half_gain: f64,
+    /// Samples per second.
+    fs: f64,
+    /// The highest line, Hz.
+    highest: f64,
+    /// Scalar measurements of the run (for the BIC).
+    n_meas: f64,
+}
+
+impl<E> Candidate<E> {
+    /// The gain beyond the cost.
+    fn score(&self) -> f64 {
+        self.delta - self.penalty
+    }
+}
+
+impl<E: Copy + PartialEq, L: Fn(&E) -> EffectLabel> Stage<'_, E, L> {
+    /// `½ p ln n`.
+    fn cost(&self, p: usize) -> f64 {
+        0.5 * p as f64 * self.n_meas.ln()
+    }
+
+    /// Pays for itself over the run and in each half.
+    fn pays(&self, c: &Candidate<E>) -> bool {
+        c.delta > c.penalty && c.halves[0].min(c.halves[1]) >= self.half_gain * c.penalty
+    }
+
+    /// Every line found in the envelope of one of the most impulsive bands of the normalised
+    /// innovations `u`, fitted as impacts ringing that band; a line on a whole order of the
+    /// running speed is refused into `refused`.
+    fn candidates(&self, u: &[f64], refused: &mut Vec<Refused>) -> Vec<Candidate<E>> {
+        let (fs, search, highest) = (self.fs, self.search, self.highest);
         // The band must lie above the lines and be wide enough to carry their harmonics; the
         // most impulsive bands are each tried (the most impulsive may carry little energy).
         let (min_hz, min_width) = (3.0 * highest, (search.harmonics as f64 + 0.2) * highest);
         let mut cands: Vec<Candidate<E>> = Vec::new();
-        let (null, null_halves) = white(&u);
-        for band in kurtogram_bands(&u, fs, min_hz, min_width, BANDS) {
-            let env = squared_envelope(&u, fs, &band);
+        let (null, null_halves) = white(u);
+        for band in kurtogram_bands(u, fs, min_hz, min_width, BANDS) {
+            let env = squared_envelope(u, fs, &band);
             let spec = spectrum(&env, fs);
             let mut seen: Vec<(ImpactLine<E>, LineEvidence)> = Vec::new();
-            for line in lines {
+            for line in self.lines {
                 let Some(evidence) = find_line(&spec, line.hz, search) else { continue };
                 match synchronous(line, &evidence, spec.df) {
                     Some(order) => {
-                        let label = label_of(&line.effect);
-                        if !out
-                            .refused
+                        let label = (self.label_of)(&line.effect);
+                        if !refused
                             .iter()
                             .any(|r| r.location == label.location && r.reason.contains(&format!("on {order}x")))
                         {
-                            out.refused.push(Refused {
+                            refused.push(Refused {
                                 kind: label.kind,
                                 location: label.location,
                                 value: None,
@@ -139,14 +197,14 @@ pub fn stage<E: Copy + PartialEq>(
             if seen.is_empty() {
                 continue;
             }
-            let Some(background) = fit_background(&u, fs, (band.low_hz, band.high_hz)) else { continue };
-            let background_cost = cost(3);
+            let Some(background) = fit_background(u, fs, (band.low_hz, band.high_hz)) else { continue };
+            let background_cost = self.cost(3);
             for (line, evidence) in seen {
                 let top = evidence.harmonics.iter().copied().max().unwrap_or(1);
                 let (g, bins) =
                     intensity(&env, fs, evidence.hz, top, line.modulation_hz, search.tolerance, search.width);
-                let Some(fit) = fit_impacts(&u, fs, (band.low_hz, band.high_hz), &g, &background) else { continue };
-                let penalty = cost(impact_parameters(bins));
+                let Some(fit) = fit_impacts(u, fs, (band.low_hz, band.high_hz), &g, &background) else { continue };
+                let penalty = self.cost(impact_parameters(bins));
                 // The alternative the impacts must beat: no resonance, or the resonance alone.
                 let over_resonance = background.log_likelihood - background_cost > null;
                 let (rival, rival_halves, rival_cost) = if over_resonance {
@@ -167,19 +225,16 @@ pub fn stage<E: Copy + PartialEq>(
                 });
             }
         }
-        per_channel.push(ChannelFits { channel: ch, u, cands });
+        cands
     }
-    let pays = |c: &Candidate<E>| c.delta > c.penalty && c.halves[0].min(c.halves[1]) >= half_gain * c.penalty;
-    let score = |c: &Candidate<E>| c.delta - c.penalty;
-    // The channel with the strongest evidence decides first; on the others the same defect is
-    // preferred, and another is kept only if its line is not one of the first's combination
-    // lines (an inner race's BPFI − 3× sits near BSF).
-    per_channel.sort_by(|a, b| {
-        let best = |cs: &[Candidate<E>]| cs.iter().filter(|c| pays(c)).map(score).fold(f64::NEG_INFINITY, f64::max);
-        best(&b.cands).total_cmp(&best(&a.cands))
-    });
-    let mut accepted: Vec<(ImpactLine<E>, f64)> = Vec::new();
-    for ChannelFits { channel: ch, u, cands } in per_channel {
+
+    /// Keeps the best paying line of one channel's `fits` (the one defect already `accepted`
+    /// elsewhere if it is among them), and says why each other line seen is not kept.
+    fn decide(&self, fits: ChannelFits<E>, accepted: &mut Vec<(ImpactLine<E>, f64)>, out: &mut Outcome<E>) {
+        let ChannelFits { channel: ch, u, cands } = fits;
+        let (run, traces, search, fs) = (self.run, self.traces, self.search, self.fs);
+        let pays = |c: &Candidate<E>| self.pays(c);
+        let score = Candidate::<E>::score;
         let variance = &run.variance[ch];
         // A line is shadowed by a defect kept on another channel whose combination line it is,
         // or by a stronger line on this one whose combination line it is (105's BSF at
@@ -208,7 +263,7 @@ pub fn stage<E: Copy + PartialEq>(
         };
         let best = pool.into_iter().max_by(|&a, &b| score(&cands[a]).total_cmp(&score(&cands[b])));
         for (i, c) in cands.iter().enumerate() {
-            let label = label_of(&c.line.effect);
+            let label = (self.label_of)(&c.line.effect);
             let unit = traces.channels.get(ch).map_or_else(String::new, |c| c.unit.clone());
             let signal: Vec<f64> =
                 predictions(&u, fs, &c.fit, Some(&c.g)).iter().zip(variance).map(|(z, s)| z * s.sqrt()).collect();
@@ -246,7 +301,7 @@ pub fn stage<E: Copy + PartialEq>(
                     c.penalty
                 )
             } else if let Some((a, hz)) = shadows[i] {
-                let first = label_of(&a.effect);
+                let first = (self.label_of)(&a.effect);
                 format!(
                     "its line at {:.2} Hz is a combination line of the {} at {} ({hz:.2} Hz), a stronger line",
                     c.evidence.hz,
@@ -261,9 +316,12 @@ pub fn stage<E: Copy + PartialEq>(
             }
         }
     }
-    // One effect per defect: where several channels show it, their gains and costs add up.
+}
+
+/// One effect per defect: where several channels show it, their gains and costs add up.
+fn merged<E: PartialEq>(added: Vec<(E, AddedEffect)>) -> Vec<(E, AddedEffect)> {
     let mut merged: Vec<(E, AddedEffect)> = Vec::new();
-    for (e, a) in out.added.drain(..) {
+    for (e, a) in added {
         match merged.iter_mut().find(|(x, _)| *x == e) {
             Some((_, m)) => {
                 m.delta_log_likelihood += a.delta_log_likelihood;
@@ -273,8 +331,7 @@ pub fn stage<E: Copy + PartialEq>(
             None => merged.push((e, a)),
         }
     }
-    out.added = merged;
-    out
+    merged
 }
 
 /// The integer order of [`ImpactLine::synchronous_hz`] the line found sits on (within 1 %, at

@@ -238,145 +238,165 @@ pub fn run(command: RotorCommand) -> anyhow::Result<()> {
             estimate::tune(&config, method == TuneMethodArg::Ml, seed, duration, budget, modes)
         }
         RotorCommand::Export { config, out, modes, robust } => estimate::export(&config, &out, modes, robust),
-        RotorCommand::Modes { config, speed, count, json } => {
-            let (cfg, model) = load(&config)?;
-            let speed = speed.unwrap_or(cfg.operation.speed);
-            let modal = model.modes(speed)?;
-            let n = take(modal.modes.len(), count);
-            if json {
-                let modes: Vec<_> = modal.modes.iter().take(n).map(mode_json).collect();
-                println!("{}", serde_json::json!({ "speed": speed, "modes": modes }));
-            } else {
-                println!(
-                    "{}: {} nodes, {} DOFs, at {speed} rad/s ({:.4} Hz)",
-                    config.display(),
-                    model.n_nodes(),
-                    model.n_dofs(),
-                    speed / (2.0 * PI)
-                );
-                print!("{}", modes_table(&modal, count));
-            }
-            Ok(())
-        }
+        RotorCommand::Modes { config, speed, count, json } => modes(&config, speed, count, json),
         RotorCommand::Campbell { config, max_speed, steps, count, json } => {
-            let (_, model) = load(&config)?;
-            if !(max_speed.is_finite() && max_speed >= 0.0) || steps < 2 {
-                anyhow::bail!("--max-speed must be ≥ 0 and --steps at least 2");
-            }
-            let speeds: Vec<f64> = (0..steps).map(|i| max_speed * i as f64 / (steps - 1) as f64).collect();
-            let c = model.campbell(&speeds, count)?;
-            if json {
-                let modes: Vec<Vec<_>> = c.modes.iter().map(|ms| ms.iter().map(mode_json).collect()).collect();
-                println!("{}", serde_json::json!({ "speeds": c.speeds, "modes": modes }));
-            } else {
-                println!("{}: frequencies in Hz (F forward, B backward, P planar whirl)", config.display());
-                let mut head = format!("{:>10}", "speed");
-                for i in 0..count {
-                    let _ = write!(head, "  {:>11}", format!("mode {}", i + 1));
-                }
-                println!("{head}");
-                for (w, ms) in c.speeds.iter().zip(&c.modes) {
-                    let mut line = format!("{w:>10.2}");
-                    for m in ms {
-                        let tag = match m.whirl {
-                            Whirl::Forward => 'F',
-                            Whirl::Backward => 'B',
-                            Whirl::Planar => 'P',
-                        };
-                        let _ = write!(line, "  {:>9.3} {tag}", m.frequency_hz);
-                    }
-                    println!("{line}");
-                }
-            }
-            Ok(())
+            campbell(&config, max_speed, steps, count, json)
         }
-        RotorCommand::Unbalance { config, speed } => {
-            let (cfg, model) = load(&config)?;
-            let speed = speed.unwrap_or(cfg.operation.speed);
-            let r = model.unbalance_response(speed)?;
-            println!("{}: steady unbalance response at {speed} rad/s", config.display());
-            println!("{:>6}  {:>4}  {:>15}  {:>10}", "node", "dir", "amplitude [um]", "phase [deg]");
-            let mut seen = Vec::new();
-            for s in &cfg.sensors {
-                if seen.contains(&(s.node, s.direction)) {
-                    continue;
-                }
-                seen.push((s.node, s.direction));
-                println!(
-                    "{:>6}  {:>4}  {:>15.4}  {:>10.2}",
-                    s.node,
-                    s.direction.as_str(),
-                    1e6 * r.amplitude(s.node, s.direction),
-                    r.phase_deg(s.node, s.direction)
-                );
-            }
-            let (node, a) =
-                (0..model.n_nodes())
-                    .map(|k| (k, r.major_axis(k)))
-                    .fold((0, 0.0), |best, c| if c.1 > best.1 { c } else { best });
-            println!(
-                "largest orbit: node {node}, semi-major axis {:.4} um (x {:.4} um, y {:.4} um)",
-                1e6 * a,
-                1e6 * r.amplitude(node, Direction::X),
-                1e6 * r.amplitude(node, Direction::Y)
-            );
-            Ok(())
-        }
+        RotorCommand::Unbalance { config, speed } => unbalance(&config, speed),
         RotorCommand::Simulate { config, duration, out, seed, method, substeps } => {
-            crate::io::output::check(&[Some(&out)], &[Some(&config)])?;
-            let (_, model) = load(&config)?;
-            let method = match method {
-                MethodArg::Exact => Method::Exact,
-                MethodArg::Newmark => Method::Trapezoidal { substeps },
-            };
-            let opts = SimOptions { duration, seed, noise: true, method, speed: None };
-            let start = Instant::now();
-            let mut last_decile = 0;
-            let rec = model
-                .simulate_with_progress(&opts, &mut |p| match p {
-                    Progress::Discretised { states } => {
-                        eprintln!(
-                            "rotor simulate: {states} states discretised in {:.2} s",
-                            start.elapsed().as_secs_f64()
-                        );
-                    }
-                    Progress::Samples { done, total } => {
-                        let decile = 10 * done / total;
-                        if total >= 10_000 && decile > last_decile {
-                            last_decile = decile;
-                            eprintln!("rotor simulate: {}% ({done}/{total} samples)", 10 * decile);
-                        }
-                    }
-                })
-                .with_context(|| format!("{}: cannot simulate", config.display()))?;
-            let sim_s = start.elapsed().as_secs_f64();
-            rec.write_csv(&out)?;
-            let total_s = start.elapsed().as_secs_f64();
-            let channels: Vec<String> = rec
-                .channels
-                .iter()
-                .map(|c| match c.sensor.kind {
-                    SensorKind::Displacement { .. } => format!("{} (σ {:.3e} m)", c.name, c.noise_std),
-                    SensorKind::Acceleration(a) if a.sensitivity.is_some() => {
-                        format!("{} (σ {:.3e} V)", c.name, c.noise_std)
-                    }
-                    SensorKind::Acceleration(_) => format!("{} (σ {:.3e} m/s²)", c.name, c.noise_std),
-                })
-                .collect();
-            println!(
-                "wrote {}: {} samples at {} Hz, {} rad/s, seed {seed}; sensors: {}; truth: {} nodes, forces at nodes {:?}",
-                out.display(),
-                rec.len(),
-                rec.sample_rate,
-                rec.speed,
-                if channels.is_empty() { "none".to_string() } else { channels.join(", ") },
-                model.n_nodes(),
-                rec.forces.iter().map(|f| f.node).collect::<Vec<_>>()
-            );
-            println!("wall time: {sim_s:.3} s to simulate, {total_s:.3} s with the CSV");
-            Ok(())
+            simulate(&config, duration, &out, seed, method, substeps)
         }
     }
+}
+
+/// Prints the modes at a speed (a table, or JSON).
+fn modes(config: &std::path::Path, speed: Option<f64>, count: usize, json: bool) -> anyhow::Result<()> {
+    let (cfg, model) = load(config)?;
+    let speed = speed.unwrap_or(cfg.operation.speed);
+    let modal = model.modes(speed)?;
+    let n = take(modal.modes.len(), count);
+    if json {
+        let modes: Vec<_> = modal.modes.iter().take(n).map(mode_json).collect();
+        println!("{}", serde_json::json!({ "speed": speed, "modes": modes }));
+    } else {
+        println!(
+            "{}: {} nodes, {} DOFs, at {speed} rad/s ({:.4} Hz)",
+            config.display(),
+            model.n_nodes(),
+            model.n_dofs(),
+            speed / (2.0 * PI)
+        );
+        print!("{}", modes_table(&modal, count));
+    }
+    Ok(())
+}
+
+/// Prints the Campbell diagram (a table, or JSON).
+fn campbell(config: &std::path::Path, max_speed: f64, steps: usize, count: usize, json: bool) -> anyhow::Result<()> {
+    let (_, model) = load(config)?;
+    if !(max_speed.is_finite() && max_speed >= 0.0) || steps < 2 {
+        anyhow::bail!("--max-speed must be ≥ 0 and --steps at least 2");
+    }
+    let speeds: Vec<f64> = (0..steps).map(|i| max_speed * i as f64 / (steps - 1) as f64).collect();
+    let c = model.campbell(&speeds, count)?;
+    if json {
+        let modes: Vec<Vec<_>> = c.modes.iter().map(|ms| ms.iter().map(mode_json).collect()).collect();
+        println!("{}", serde_json::json!({ "speeds": c.speeds, "modes": modes }));
+    } else {
+        println!("{}: frequencies in Hz (F forward, B backward, P planar whirl)", config.display());
+        let mut head = format!("{:>10}", "speed");
+        for i in 0..count {
+            let _ = write!(head, "  {:>11}", format!("mode {}", i + 1));
+        }
+        println!("{head}");
+        for (w, ms) in c.speeds.iter().zip(&c.modes) {
+            let mut line = format!("{w:>10.2}");
+            for m in ms {
+                let tag = match m.whirl {
+                    Whirl::Forward => 'F',
+                    Whirl::Backward => 'B',
+                    Whirl::Planar => 'P',
+                };
+                let _ = write!(line, "  {:>9.3} {tag}", m.frequency_hz);
+            }
+            println!("{line}");
+        }
+    }
+    Ok(())
+}
+
+/// Prints the steady unbalance response at the sensors and the largest orbit.
+fn unbalance(config: &std::path::Path, speed: Option<f64>) -> anyhow::Result<()> {
+    let (cfg, model) = load(config)?;
+    let speed = speed.unwrap_or(cfg.operation.speed);
+    let r = model.unbalance_response(speed)?;
+    println!("{}: steady unbalance response at {speed} rad/s", config.display());
+    println!("{:>6}  {:>4}  {:>15}  {:>10}", "node", "dir", "amplitude [um]", "phase [deg]");
+    let mut seen = Vec::new();
+    for s in &cfg.sensors {
+        if seen.contains(&(s.node, s.direction)) {
+            continue;
+        }
+        seen.push((s.node, s.direction));
+        println!(
+            "{:>6}  {:>4}  {:>15.4}  {:>10.2}",
+            s.node,
+            s.direction.as_str(),
+            1e6 * r.amplitude(s.node, s.direction),
+            r.phase_deg(s.node, s.direction)
+        );
+    }
+    let (node, a) =
+        (0..model.n_nodes())
+            .map(|k| (k, r.major_axis(k)))
+            .fold((0, 0.0), |best, c| if c.1 > best.1 { c } else { best });
+    println!(
+        "largest orbit: node {node}, semi-major axis {:.4} um (x {:.4} um, y {:.4} um)",
+        1e6 * a,
+        1e6 * r.amplitude(node, Direction::X),
+        1e6 * r.amplitude(node, Direction::Y)
+    );
+    Ok(())
+}
+
+/// Simulates the configuration and writes the recording, with progress on long runs.
+fn simulate(
+    config: &std::path::Path,
+    duration: f64,
+    out: &std::path::Path,
+    seed: u64,
+    method: MethodArg,
+    substeps: u32,
+) -> anyhow::Result<()> {
+    crate::io::output::check(&[Some(out)], &[Some(config)])?;
+    let (_, model) = load(config)?;
+    let method = match method {
+        MethodArg::Exact => Method::Exact,
+        MethodArg::Newmark => Method::Trapezoidal { substeps },
+    };
+    let opts = SimOptions { duration, seed, noise: true, method, speed: None };
+    let start = Instant::now();
+    let mut last_decile = 0;
+    let rec = model
+        .simulate_with_progress(&opts, &mut |p| match p {
+            Progress::Discretised { states } => {
+                eprintln!("rotor simulate: {states} states discretised in {:.2} s", start.elapsed().as_secs_f64());
+            }
+            Progress::Samples { done, total } => {
+                let decile = 10 * done / total;
+                if total >= 10_000 && decile > last_decile {
+                    last_decile = decile;
+                    eprintln!("rotor simulate: {}% ({done}/{total} samples)", 10 * decile);
+                }
+            }
+        })
+        .with_context(|| format!("{}: cannot simulate", config.display()))?;
+    let sim_s = start.elapsed().as_secs_f64();
+    rec.write_csv(out)?;
+    let total_s = start.elapsed().as_secs_f64();
+    let channels: Vec<String> = rec
+        .channels
+        .iter()
+        .map(|c| match c.sensor.kind {
+            SensorKind::Displacement { .. } => format!("{} (σ {:.3e} m)", c.name, c.noise_std),
+            SensorKind::Acceleration(a) if a.sensitivity.is_some() => {
+                format!("{} (σ {:.3e} V)", c.name, c.noise_std)
+            }
+            SensorKind::Acceleration(_) => format!("{} (σ {:.3e} m/s²)", c.name, c.noise_std),
+        })
+        .collect();
+    println!(
+        "wrote {}: {} samples at {} Hz, {} rad/s, seed {seed}; sensors: {}; truth: {} nodes, forces at nodes {:?}",
+        out.display(),
+        rec.len(),
+        rec.sample_rate,
+        rec.speed,
+        if channels.is_empty() { "none".to_string() } else { channels.join(", ") },
+        model.n_nodes(),
+        rec.forces.iter().map(|f| f.node).collect::<Vec<_>>()
+    );
+    println!("wall time: {sim_s:.3} s to simulate, {total_s:.3} s with the CSV");
+    Ok(())
 }
 
 /// `edgekf loop rotor`'s own flags (beside the ones every loop has).

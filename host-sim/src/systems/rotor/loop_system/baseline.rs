@@ -283,53 +283,7 @@ pub fn learn(
     let mut run = sys.run_healthy(&h, &[])?.1;
     say(format!("noise levels {:?}: log-likelihood {:.1}", noise(&sys, &h), run.log_likelihood()));
     for part in 0..b.max_parts {
-        let summary = sys.summarise(&run);
-        let bin = summary.bin_width_hz;
-        // The strongest lines no bearing line names and no part already explains.
-        let mut all: Vec<(f64, f64, Option<u32>, usize)> = summary
-            .channels
-            .iter()
-            .enumerate()
-            .flat_map(|(ch, c)| c.peaks.iter().map(move |p| (ch, p)))
-            .filter(|(_, p)| p.line.is_none() && !p.class.starts_with("natural"))
-            .map(|(ch, p)| (p.prominence_db, p.frequency_hz, p.order, ch))
-            .filter(|&(_, f, _, _)| !h.resonances.iter().any(|r| (r.frequency_hz - f).abs() < 3.0 * bin))
-            .collect();
-        all.sort_by(|a, b| b.0.total_cmp(&a.0));
-        // A line both channels see is one candidate.
-        let mut peaks: Vec<(f64, f64, Option<u32>, usize)> = Vec::new();
-        for p in all {
-            if !peaks.iter().any(|q| (q.1 - p.1).abs() < 2.0 * bin) {
-                peaks.push(p);
-            }
-        }
-        let mut best: Option<Tried> = None;
-        // A line at an order may be a synchronous force; any line may be a narrow mode (a
-        // motor's tone near an order is one).
-        let tries = peaks.iter().take(3).flat_map(|&(_, f, order, ch)| {
-            let force = order.map(|k| (f, Some(k), ch));
-            force.into_iter().chain([(f, None, ch)])
-        });
-        for (f, order, ch) in tries {
-            let tried = match order {
-                Some(k) => try_force(&sys, &h, &run, k, penalty(2)),
-                None => try_resonance(&sys, &h, &run, (f, ch), bin, penalty(2 + m)),
-            };
-            match tried {
-                Ok(Some(t)) => {
-                    say(format!(
-                        "{}: Δ log-likelihood {:.1}, BIC cost {:.1}, halves {:.1} / {:.1}",
-                        t.what, t.delta, t.penalty, t.halves[0], t.halves[1]
-                    ));
-                    let pays = t.delta > t.penalty && t.halves[0].min(t.halves[1]) >= options.half_gain * t.penalty;
-                    if pays && best.as_ref().is_none_or(|b| t.delta - t.penalty > b.delta - b.penalty) {
-                        best = Some(t);
-                    }
-                }
-                Ok(None) => {}
-                Err(e) => say(format!("a part at {f:.2} Hz: {e:#}")),
-            }
-        }
+        let best = best_part(&sys, &h, &run, &penalty, options.half_gain, &say);
         let Some(kept) = best else {
             say(format!("no further part pays for itself after {part}"));
             break;
@@ -339,23 +293,8 @@ pub fn learn(
         run = kept.run;
     }
     h = fit_noise(&sys, h)?;
-    // The probe gets a system of its own: the loop may take impacts out of its channels.
-    let mut probe_sys = RotorSystem::healthy(model, data, options, rotor, speed, h.clone())?;
-    say("measuring what the healthy record leaves unexplained (one round of the loop)".into());
-    let probe = LoopOptions { max_effects: 1, screen_parameters: false, progress: false, gain_floor: 0.0, ..*options };
-    let leftover = search(&mut probe_sys, &probe)?;
     let gain_floor =
-        leftover.trials.iter().map(|t| (t.delta_log_likelihood - t.bic_penalty) / n_meas).fold(0.0, f64::max);
-    if let Some(t) = leftover
-        .trials
-        .iter()
-        .max_by(|a, b| (a.delta_log_likelihood - a.bic_penalty).total_cmp(&(b.delta_log_likelihood - b.bic_penalty)))
-    {
-        say(format!(
-            "best next effect: {} at {} (Δ log-likelihood {:.1}, BIC cost {:.1}): gain floor {gain_floor:.2e} per measurement",
-            t.kind, t.location, t.delta_log_likelihood, t.bic_penalty
-        ));
-    }
+        leftover_gain(RotorSystem::healthy(model, data, options, rotor, speed, h.clone())?, options, n_meas, &say)?;
     let (fm, fr) = sys.run_healthy(&h, &[])?;
     let names = sys.channel_names().to_vec();
     let noise_std = noise(&sys, &h);
@@ -387,6 +326,95 @@ pub fn learn(
         unbalances: sys.unbalance(&fm, &fr).into_iter().map(|(node, value)| UnbalanceLevel { node, value }).collect(),
         orders: order_levels(&sys),
     })
+}
+
+/// The part (a resonance, a synchronous force) whose fit pays most on top of `h` (whose run is
+/// `run`), among the strongest lines of the run's innovations no part explains yet; `None` if
+/// none pays in both halves of the run.
+fn best_part(
+    sys: &RotorSystem<'_>,
+    h: &Healthy,
+    run: &Run,
+    penalty: &dyn Fn(usize) -> f64,
+    half_gain: f64,
+    say: &dyn Fn(String),
+) -> Option<Tried> {
+    let m = sys.channel_names().len();
+    let summary = sys.summarise(run);
+    let bin = summary.bin_width_hz;
+    // The strongest lines no bearing line names and no part already explains.
+    let mut all: Vec<(f64, f64, Option<u32>, usize)> = summary
+        .channels
+        .iter()
+        .enumerate()
+        .flat_map(|(ch, c)| c.peaks.iter().map(move |p| (ch, p)))
+        .filter(|(_, p)| p.line.is_none() && !p.class.starts_with("natural"))
+        .map(|(ch, p)| (p.prominence_db, p.frequency_hz, p.order, ch))
+        .filter(|&(_, f, _, _)| !h.resonances.iter().any(|r| (r.frequency_hz - f).abs() < 3.0 * bin))
+        .collect();
+    all.sort_by(|a, b| b.0.total_cmp(&a.0));
+    // A line both channels see is one candidate.
+    let mut peaks: Vec<(f64, f64, Option<u32>, usize)> = Vec::new();
+    for p in all {
+        if !peaks.iter().any(|q| (q.1 - p.1).abs() < 2.0 * bin) {
+            peaks.push(p);
+        }
+    }
+    let mut best: Option<Tried> = None;
+    // A line at an order may be a synchronous force; any line may be a narrow mode (a
+    // motor's tone near an order is one).
+    let tries = peaks.iter().take(3).flat_map(|&(_, f, order, ch)| {
+        let force = order.map(|k| (f, Some(k), ch));
+        force.into_iter().chain([(f, None, ch)])
+    });
+    for (f, order, ch) in tries {
+        let tried = match order {
+            Some(k) => try_force(sys, h, run, k, penalty(2)),
+            None => try_resonance(sys, h, run, (f, ch), bin, penalty(2 + m)),
+        };
+        match tried {
+            Ok(Some(t)) => {
+                say(format!(
+                    "{}: Δ log-likelihood {:.1}, BIC cost {:.1}, halves {:.1} / {:.1}",
+                    t.what, t.delta, t.penalty, t.halves[0], t.halves[1]
+                ));
+                let pays = t.delta > t.penalty && t.halves[0].min(t.halves[1]) >= half_gain * t.penalty;
+                if pays && best.as_ref().is_none_or(|b| t.delta - t.penalty > b.delta - b.penalty) {
+                    best = Some(t);
+                }
+            }
+            Ok(None) => {}
+            Err(e) => say(format!("a part at {f:.2} Hz: {e:#}")),
+        }
+    }
+    best
+}
+
+/// What the healthy record still leaves unexplained, per scalar measurement: the best next
+/// effect's gain beyond its BIC cost after one round of the loop on `probe_sys` (a system of
+/// its own: the loop may take impacts out of its channels).
+fn leftover_gain(
+    mut probe_sys: RotorSystem<'_>,
+    options: &LoopOptions,
+    n_meas: f64,
+    say: &dyn Fn(String),
+) -> Result<f64> {
+    say("measuring what the healthy record leaves unexplained (one round of the loop)".into());
+    let probe = LoopOptions { max_effects: 1, screen_parameters: false, progress: false, gain_floor: 0.0, ..*options };
+    let leftover = search(&mut probe_sys, &probe)?;
+    let gain_floor =
+        leftover.trials.iter().map(|t| (t.delta_log_likelihood - t.bic_penalty) / n_meas).fold(0.0, f64::max);
+    if let Some(t) = leftover
+        .trials
+        .iter()
+        .max_by(|a, b| (a.delta_log_likelihood - a.bic_penalty).total_cmp(&(b.delta_log_likelihood - b.bic_penalty)))
+    {
+        say(format!(
+            "best next effect: {} at {} (Δ log-likelihood {:.1}, BIC cost {:.1}): gain floor {gain_floor:.2e} per measurement",
+            t.kind, t.location, t.delta_log_likelihood, t.bic_penalty
+        ));
+    }
+    Ok(gain_floor)
 }
 
 /// The noise standard deviation of each channel in the model with `h`.
