@@ -22,10 +22,10 @@ fn recording(joint: Joint, clearance: f64, seed: u64) -> Recording {
 
 #[test]
 fn compiled_model_is_current() {
-    let committed = include_str!("../../firmware/src/generated/clearance.rs");
+    let committed = include_str!("../../firmware/src/systems/crank/generated/clearance.rs");
     assert!(
         FastModel::builtin().to_rust() == committed,
-        "firmware/src/generated/clearance.rs is stale: run `cargo run -p edgekf-sim -- crank export --out firmware/src/generated/clearance.rs`"
+        "firmware/src/systems/crank/generated/clearance.rs is stale: run `cargo run -p edgekf-sim -- crank export --out firmware/src/systems/crank/generated/clearance.rs`"
     );
     // And what the firmware compiles is that model, rounded to f32.
     let m = FastModel::builtin().to_shared();

@@ -18,11 +18,11 @@ fn compiled_constants_are_current() {
     let (text, states) =
         edgekf_sim::systems::rotor::cli::estimate::export_sized_text(Path::new(CONFIG), 8, true).unwrap();
     assert_eq!(states, 28);
-    let committed = include_str!("../../firmware/src/generated/rotor_accel.rs");
+    let committed = include_str!("../../firmware/src/systems/rotor/generated/rotor_accel.rs");
     assert!(
         text == committed,
-        "firmware/src/generated/rotor_accel.rs is stale: run `cargo run -p edgekf-sim -- rotor export --config \
-         host-sim/configs/rotor_paper_accel.toml --robust --out firmware/src/generated/rotor_accel.rs`"
+        "firmware/src/systems/rotor/generated/rotor_accel.rs is stale: run `cargo run -p edgekf-sim -- rotor export --config \
+         host-sim/configs/rotor_paper_accel.toml --robust --out firmware/src/systems/rotor/generated/rotor_accel.rs`"
     );
 }
 

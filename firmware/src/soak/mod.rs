@@ -6,6 +6,10 @@
 //! One row per filter in [`SOAKS`], each naming its system (a module of [`crate::systems`])
 //! and its HIL image: a test checks that every system module has a row, and `xtask`'s image
 //! table test that every HIL image has one, so a new system cannot come without its soak.
+//! This module is the engine (the frame, the drifts, the block statistics and covariance
+//! checks) and names no system: each system's rows and soak code live in its folder,
+//! `systems/<name>/soak.rs`, and [`joint_ukf`] soaks the shared core's joint UKF, which no
+//! system runs as such.
 //!
 //! The truth comes from each filter's own model with the drift added, in `f32` like the
 //! filter: `f64` is soft-float on the Cortex-M4F (~100 instructions an operation) and would
@@ -17,11 +21,9 @@
 //!
 //! No allocation and no panic path: the image is proven panic-free at link time.
 
-pub mod boom;
-pub mod crank;
-pub mod kalman;
-pub mod uuv;
+pub mod joint_ukf;
 
+use crate::systems;
 use edgekf::Real;
 use nalgebra::SMatrix;
 
@@ -94,16 +96,16 @@ pub struct SoakRow {
 
 /// Every soak, one row per filter; the index is the frame's `filter`.
 pub static SOAKS: [SoakRow; 10] = [
-    kalman::OSCILLATOR_VARYING,
-    kalman::OSCILLATOR_STEADY,
-    kalman::ROTOR_START_UP,
-    kalman::ROTOR_NODE,
-    kalman::ROTOR_ACCEL_START_UP,
-    kalman::ROTOR_ACCEL_NODE,
-    kalman::JOINT_UKF,
-    crank::CRANK,
-    uuv::UUV,
-    boom::BOOM,
+    systems::oscillator::soak::OSCILLATOR_VARYING,
+    systems::oscillator::soak::OSCILLATOR_STEADY,
+    systems::rotor::soak::ROTOR_START_UP,
+    systems::rotor::soak::ROTOR_NODE,
+    systems::rotor::soak::ROTOR_ACCEL_START_UP,
+    systems::rotor::soak::ROTOR_ACCEL_NODE,
+    joint_ukf::JOINT_UKF,
+    systems::crank::soak::CRANK,
+    systems::uuv::soak::UUV,
+    systems::boom::soak::BOOM,
 ];
 
 /// Runs soak `index` of [`SOAKS`] for `steps` steps (`None` for an index out of range).
@@ -112,6 +114,11 @@ pub fn run(index: usize, steps: u32) -> Option<SoakFrame> {
     let mut frame = (row.run)(steps);
     frame.filter = u8::try_from(index).unwrap_or(u8::MAX);
     Some(frame)
+}
+
+/// A soak that could not start: every step counted non-finite, so that it fails its check.
+pub fn not_started(steps: u32) -> SoakFrame {
+    SoakFrame { steps, non_finite: steps.max(1), ..SoakFrame::default() }
 }
 
 /// A zero-mean uniform number generator of unit variance, in `f32` (the LCG of

@@ -1,6 +1,8 @@
-//! Each system's node estimator, its report frames and its HIL image, one file per system.
-//! Adding a system means a file here (a [`crate::node::NodeEstimator`] and a
-//! [`crate::hil::HilImage`]), a one-line QEMU binary and a row in `xtask`'s image table.
+//! Each system's chip code, one folder per system: `<name>/mod.rs` its node estimator, report
+//! frames and HIL image, `<name>/soak.rs` its filters' numerical soak rows, `<name>/generated/`
+//! the constants the host exports for it. Adding a system means a folder here (a
+//! [`crate::node::NodeEstimator`], a [`crate::hil::HilImage`] and its soak rows), its rows in
+//! [`crate::soak::SOAKS`], a one-line QEMU binary and a row in `xtask`'s image table.
 //!
 //! * [`oscillator`]: the harmonic force driving a structural mode, from one ADXL355 axis;
 //! * [`rotor`]: rotor virtual sensing (disk motion and unbalance forces from four probes, or

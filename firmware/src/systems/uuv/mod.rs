@@ -17,6 +17,8 @@ use edgekf::systems::uuv::{
     Command, Estimate, EstimatorError, EstimatorSettings, Layout, Sample, Status, UuvEstimator, Vehicle,
 };
 
+pub mod soak;
+
 /// Sample rate, Hz (`sensors.rate`).
 pub const SAMPLE_RATE_HZ: u32 = 50;
 

@@ -21,6 +21,8 @@ use edgekf::systems::boom::{
     PaperSettings, MAX_SECTIONS,
 };
 
+pub mod soak;
+
 /// Sample rate, Hz (`[gyro] sample_rate`).
 pub const SAMPLE_RATE_HZ: u32 = 100;
 

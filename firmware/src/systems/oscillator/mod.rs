@@ -6,7 +6,7 @@
 //! discretisation and no Riccati solve at start-up (which would cost about 15 KB of stack and a
 //! few hundred thousand software-`f64` operations on the Cortex-M4F). Regenerate after changing
 //! `NodeConfig::default().estimator` (a test below fails until then):
-//! `cargo run -p edgekf-sim -- oscillator export --out firmware/src/generated/harmonic.rs`.
+//! `cargo run -p edgekf-sim -- oscillator export --out firmware/src/systems/oscillator/generated/harmonic.rs`.
 
 use crate::adxl355::{self, Adxl355, Interface};
 use crate::frame::FrameSink;
@@ -18,9 +18,11 @@ use crate::virtual_adxl355::VirtualAdxl355;
 use edgekf::export::{matrix, model};
 use edgekf::systems::oscillator::{EstimatorCounters, HarmonicForceEstimator, HarmonicForceParams, ModelError};
 
+pub mod soak;
+
 #[allow(missing_docs, clippy::excessive_precision, clippy::unreadable_literal)]
 mod constants {
-    include!("../generated/harmonic.rs");
+    include!("generated/harmonic.rs");
 }
 
 /// The estimator from the compiled-in model and gain, with `params` for the physical scaling
@@ -394,7 +396,10 @@ mod tests {
         let ss = solve_riccati(&live, 1e-12, 100_000).unwrap();
         let compiled =
             model(&constants::HARMONIC_A, &constants::HARMONIC_C, &constants::HARMONIC_Q, &constants::HARMONIC_R);
-        assert_eq!(compiled, live, "regenerate firmware/src/generated/harmonic.rs (see module docs)");
+        assert_eq!(
+            compiled, live,
+            "regenerate firmware/src/systems/oscillator/generated/harmonic.rs (see module docs)"
+        );
         assert_eq!(matrix(&constants::HARMONIC_GAIN), ss.gain);
         assert_eq!(matrix(&constants::HARMONIC_S), ss.innovation);
     }
