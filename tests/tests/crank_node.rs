@@ -150,7 +150,7 @@ mod hil {
     /// joint.
     #[test]
     fn crank_clearance_in_qemu_matches_the_host() {
-        let elf = qemu::crank_elf().unwrap_or_else(|e| panic!("{e:#}"));
+        let elf = qemu::image_elf("edgekf-crank-qemu").unwrap_or_else(|e| panic!("{e:#}"));
         let model = FastModel::builtin();
         for (joint, c, seed) in [(Joint::A, 0.25e-3, 1), (Joint::B, 0.3e-3, 2)] {
             let rec = recording(joint, c, seed);
@@ -196,7 +196,7 @@ mod hil {
     /// [`FAULTY_TOLERANCE`] of the clean run's).
     #[test]
     fn crank_image_bridges_missing_and_garbage_lines() {
-        let elf = qemu::crank_elf().unwrap_or_else(|e| panic!("{e:#}"));
+        let elf = qemu::image_elf("edgekf-crank-qemu").unwrap_or_else(|e| panic!("{e:#}"));
         let rec = recording(Joint::A, 0.25e-3, 1);
         let text = csv(&rec.t, &rec.crank_alpha);
         let faulty = faulty_csv(&text);
@@ -224,7 +224,7 @@ mod hil {
     /// Bad lines in the input: the image skips and counts them and finishes.
     #[test]
     fn crank_image_skips_bad_samples() {
-        let elf = qemu::crank_elf().unwrap_or_else(|e| panic!("{e:#}"));
+        let elf = qemu::image_elf("edgekf-crank-qemu").unwrap_or_else(|e| panic!("{e:#}"));
         let rec = recording(Joint::A, 0.25e-3, 5);
         let mut text = csv(&rec.t[..5000], &rec.crank_alpha[..5000]);
         text.insert_str(text.find("\n0.01,").unwrap_or(20) + 1, "0.00999,NaN\n0.009995,\n");

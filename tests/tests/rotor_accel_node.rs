@@ -156,7 +156,7 @@ mod hil {
     fn rotor_accel_in_qemu_matches_the_host() {
         let (_, _, rec) = record();
         let csv = rec.to_data_file().to_csv_string().unwrap();
-        let elf = edgekf_tests::qemu::rotor_accel_elf().unwrap_or_else(|e| panic!("{e:#}"));
+        let elf = edgekf_tests::qemu::image_elf("edgekf-rotor-accel-qemu").unwrap_or_else(|e| panic!("{e:#}"));
         let lines = qemu_matches_host::<RotorAccelImage, RotorAccelEnd>(&elf, csv.as_bytes())
             .unwrap_or_else(|e| panic!("{e:#}"));
         let reports = parse_numbered(&lines).unwrap();

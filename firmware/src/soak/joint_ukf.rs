@@ -9,6 +9,9 @@ use nalgebra::{Matrix1, Matrix2, Vector1, Vector2};
 /// Steps per block of statistics.
 const BLOCK: u32 = 10_000;
 
+/// Its row.
+pub const SOAKS: &[SoakRow] = &[JOINT_UKF];
+
 /// The joint UKF of a mode's state and stiffness (the shared core's UKF; no node runs it as
 /// such).
 pub const JOINT_UKF: SoakRow = SoakRow {

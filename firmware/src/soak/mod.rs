@@ -23,6 +23,7 @@
 
 pub mod joint_ukf;
 
+use crate::manifest::{concat, count};
 use crate::systems;
 use edgekf::Real;
 use nalgebra::SMatrix;
@@ -94,19 +95,12 @@ pub struct SoakRow {
     pub run: fn(u32) -> SoakFrame,
 }
 
+/// The rows in [`SOAKS`]' order: every system's, in the manifest's order
+/// ([`crate::systems::SOAKS`]), then the shared core's.
+const PARTS: &[&[SoakRow]] = &[&systems::SOAKS, joint_ukf::SOAKS];
+
 /// Every soak, one row per filter; the index is the frame's `filter`.
-pub static SOAKS: [SoakRow; 10] = [
-    systems::oscillator::soak::OSCILLATOR_VARYING,
-    systems::oscillator::soak::OSCILLATOR_STEADY,
-    systems::rotor::soak::ROTOR_START_UP,
-    systems::rotor::soak::ROTOR_NODE,
-    systems::rotor::soak::ROTOR_ACCEL_START_UP,
-    systems::rotor::soak::ROTOR_ACCEL_NODE,
-    joint_ukf::JOINT_UKF,
-    systems::crank::soak::CRANK,
-    systems::uuv::soak::UUV,
-    systems::boom::soak::BOOM,
-];
+pub static SOAKS: [SoakRow; count(PARTS)] = concat(PARTS);
 
 /// Runs soak `index` of [`SOAKS`] for `steps` steps (`None` for an index out of range).
 pub fn run(index: usize, steps: u32) -> Option<SoakFrame> {
@@ -360,28 +354,29 @@ pub fn parse_plan(text: &[u8], mut each: impl FnMut(usize, u32)) {
 mod tests {
     use super::*;
 
-    /// Every module of `src/systems` (a system the node runs) has a soak row: a new system
-    /// cannot come without its soak.
+    /// Every folder of `src/systems` (a system the node runs) is in the manifest, and every
+    /// system there has a soak row of its own: a new system cannot come without its soak.
     #[test]
     fn every_system_has_a_soak() {
         let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src/systems");
-        let mut systems = 0;
+        let mut folders = std::vec::Vec::new();
         for entry in std::fs::read_dir(&dir).unwrap() {
             let path = entry.unwrap().path();
-            let stem = path.file_stem().unwrap().to_str().unwrap();
-            if stem == "mod" {
-                continue;
+            if path.is_dir() {
+                folders.push(std::string::String::from(path.file_name().unwrap().to_str().unwrap()));
             }
-            systems += 1;
-            assert!(
-                SOAKS.iter().any(|r| r.system == stem),
-                "system `{stem}` ({}) has no soak row in SOAKS",
-                path.display()
-            );
         }
-        assert!(systems >= 5, "found only {systems} systems in {}", dir.display());
+        folders.sort();
+        let mut names: std::vec::Vec<_> = systems::NAMES.iter().map(|n| std::string::String::from(*n)).collect();
+        names.sort();
+        assert_eq!(folders, names, "the folders of {} and the manifest (systems!) differ", dir.display());
+        assert!(names.len() >= 5, "found only {} systems in {}", names.len(), dir.display());
+        for name in systems::NAMES {
+            assert!(SOAKS.iter().any(|r| r.system == *name), "system `{name}` has no soak row in SOAKS");
+        }
         for (i, r) in SOAKS.iter().enumerate() {
             assert!(SOAKS[..i].iter().all(|o| o.name != r.name), "two rows named {}", r.name);
+            assert!(r.system == "core" || systems::NAMES.contains(&r.system), "row {} names no system", r.name);
         }
     }
 

@@ -15,6 +15,9 @@ use crate::node::{Innovation, Node, NodeEstimator, Poll};
 use crate::source::ChannelSource;
 use edgekf::systems::crank::{ClearanceEstimate, ClearanceEstimator, ClearanceModel, FeatureError, FEATURES};
 
+#[cfg(all(target_os = "none", feature = "qemu"))]
+pub mod bench;
+pub mod images;
 pub mod soak;
 
 #[allow(missing_docs, clippy::excessive_precision, clippy::unreadable_literal)]

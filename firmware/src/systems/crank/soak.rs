@@ -6,15 +6,20 @@
 //! statistics a fresh estimator gives on the same samples, and that the recording's features
 //! (`f32` running means) stay with the same means accumulated in `f64`.
 
+use super::CrankImage;
+use crate::hil::HilImage;
 use super::{Storage, MODEL, SAMPLE_RATE_HZ, WINDOW};
 use crate::soak::{Blocks, Drift, Noise, SoakFrame, SoakRow};
 use edgekf::systems::crank::{ClearanceEstimator, CrankFeatures, CLEARANCE_RANGE, FEATURES};
+
+/// Its rows.
+pub const SOAKS: &[SoakRow] = &[CRANK];
 
 /// The clearance estimator's row.
 pub const CRANK: SoakRow = SoakRow {
     name: "crank",
     system: "crank",
-    image: Some("edgekf-crank-qemu"),
+    image: Some(CrankImage::NAME),
     what: "clearance estimator (window sums, 10 kHz, 0.25 s windows)",
     drift: "crank speed 10 Hz ±20 % over 15 min, impact amplitude ±30 % over 10 min",
     error_of: "a late window's statistics against a fresh estimator's",

@@ -18,6 +18,9 @@ use crate::virtual_adxl355::VirtualAdxl355;
 use edgekf::export::{matrix, model};
 use edgekf::systems::oscillator::{EstimatorCounters, HarmonicForceEstimator, HarmonicForceParams, ModelError};
 
+#[cfg(all(target_os = "none", feature = "qemu"))]
+pub mod bench;
+pub mod images;
 pub mod soak;
 
 #[allow(missing_docs, clippy::excessive_precision, clippy::unreadable_literal)]

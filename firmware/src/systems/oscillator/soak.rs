@@ -1,6 +1,8 @@
 //! The soaks of the oscillator's harmonic-force filter, time-varying and with the
 //! steady-state gain its node runs.
 
+use super::OscillatorImage;
+use crate::hil::HilImage;
 use crate::soak::{not_started, psd_root, swing, Blocks, Drift, Noise, SoakFrame, SoakRow};
 use edgekf::systems::oscillator::{GainMode, HarmonicForceEstimator, HarmonicForceParams};
 use nalgebra::Vector4;
@@ -8,11 +10,14 @@ use nalgebra::Vector4;
 /// Steps per block of statistics.
 const BLOCK: u32 = 10_000;
 
+/// Its rows.
+pub const SOAKS: &[SoakRow] = &[OSCILLATOR_VARYING, OSCILLATOR_STEADY];
+
 /// The harmonic-force estimator, time-varying gain.
 pub const OSCILLATOR_VARYING: SoakRow = SoakRow {
     name: "oscillator_varying",
     system: "oscillator",
-    image: Some("edgekf-qemu"),
+    image: Some(OscillatorImage::NAME),
     what: "harmonic-force KF, time-varying (oscillator)",
     drift: "force 0.5–1.5 N over 10 min, mode frequency ±0.3 % over 20 min",
     error_of: "force amplitude",

@@ -18,6 +18,9 @@ use nalgebra::{ArrayStorage, SMatrix, SVector};
 
 pub mod accel;
 
+#[cfg(all(target_os = "none", feature = "qemu"))]
+pub mod bench;
+pub mod images;
 pub mod soak;
 
 /// The exported model, steady state, prior and start-up term, as the host wrote them (`f64`).

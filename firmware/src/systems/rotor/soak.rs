@@ -2,8 +2,9 @@
 //! its start-up term throughout, and as the node runs it (the start-up term, then the
 //! steady-state gain).
 
-use super::accel::{self, ACCEL_DESIGN, ACCEL_STATES};
-use super::{constants as probes, RotorEstimator, DESIGN, STATES, STEADY_AFTER};
+use super::accel::{self, RotorAccelImage, ACCEL_DESIGN, ACCEL_STATES};
+use super::{constants as probes, RotorEstimator, RotorImage, DESIGN, STATES, STEADY_AFTER};
+use crate::hil::HilImage;
 use crate::soak::{psd_root, swing, Blocks, Drift, Noise, SoakFrame, SoakRow};
 use edgekf::export::matrix;
 use nalgebra::SVector;
@@ -11,11 +12,14 @@ use nalgebra::SVector;
 /// Steps per block of statistics.
 const BLOCK: u32 = 10_000;
 
+/// Its rows.
+pub const SOAKS: &[SoakRow] = &[ROTOR_START_UP, ROTOR_NODE, ROTOR_ACCEL_START_UP, ROTOR_ACCEL_NODE];
+
 /// The rotor's AKF with its start-up term throughout.
 pub const ROTOR_START_UP: SoakRow = SoakRow {
     name: "rotor_start_up",
     system: "rotor",
-    image: Some("edgekf-rotor-qemu"),
+    image: Some(RotorImage::NAME),
     what: "rotor AKF with its start-up term throughout (20 states, 4 probes)",
     drift: "unbalance sizes ±50 % over 10 and 7 min",
     error_of: "disk displacements",
@@ -39,7 +43,7 @@ pub const ROTOR_NODE: SoakRow = SoakRow {
 /// The accelerometer rotor's AKF with its start-up term throughout (`edgekf-rotor-accel-qemu`).
 pub const ROTOR_ACCEL_START_UP: SoakRow = SoakRow {
     name: "rotor_accel_start_up",
-    image: Some("edgekf-rotor-accel-qemu"),
+    image: Some(RotorAccelImage::NAME),
     what: "rotor AKF from accelerometers with its start-up term throughout (28 states)",
     // About 85 000 instructions a step with the truth's: 10¹⁰ in 120 000 steps.
     qemu_long_steps: 120_000,

@@ -6,6 +6,8 @@
 //! health drifting slowly (the main one between 1 and 0.8 over 20 minutes, the vertical one
 //! between 1 and 0.9 over 30); the sensors read it with the filter's noise, the DVL at 5 Hz.
 
+use super::UuvImage;
+use crate::hil::HilImage;
 use super::{estimator, LAYOUT, SAMPLE_RATE_HZ, STATES};
 use crate::soak::{Blocks, Drift, Noise, SoakFrame, SoakRow};
 use edgekf::systems::uuv::{
@@ -13,11 +15,14 @@ use edgekf::systems::uuv::{
 };
 use nalgebra::SVector;
 
+/// Its rows.
+pub const SOAKS: &[SoakRow] = &[UUV];
+
 /// The vehicle's row.
 pub const UUV: SoakRow = SoakRow {
     name: "uuv",
     system: "uuv",
-    image: Some("edgekf-uuv-qemu"),
+    image: Some(UuvImage::NAME),
     what: "vehicle joint UKF of state and thruster health (20 states, 50 Hz)",
     drift: "main thruster's health 1–0.8 over 20 min, vertical's 1–0.9 over 30 min",
     error_of: "both health factors",
