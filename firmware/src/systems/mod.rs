@@ -29,9 +29,11 @@
 //! Nothing in `xtask`: its rows come from `images.rs`. Its HIL tests are a new file in
 //! `tests/tests/`, named by its image row, that finds its ELF with
 //! `edgekf_tests::qemu::image_elf`; its soak rows run in `tests/tests/soak.rs` and the soak
-//! image without an edit. The tests check the rest: every folder here is in the manifest, every
-//! system has a soak row, every HIL image has a soak row and a real-time requirement, and every
-//! image's binary is declared in `firmware/Cargo.toml`.
+//! image without an edit. The build checks that every system has `soak::SOAKS`,
+//! `images::IMAGES` and (on the chip) `bench::run`; the tests check the rest: every folder here
+//! is in the manifest, every system has a soak row, every HIL image has a soak row and a
+//! real-time requirement, every image's binary is declared in `firmware/Cargo.toml`, and
+//! `cargo xtask bench` fails on a budget that no kernel measures.
 //!
 //! * [`oscillator`]: the harmonic force driving a structural mode, from one ADXL355 axis;
 //! * [`rotor`]: rotor virtual sensing (disk motion and unbalance forces from four probes, or
