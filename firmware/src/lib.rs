@@ -12,20 +12,28 @@
 //! * [`source`]: the node's sample sources, the ADXL355 through either bus interface or named
 //!   channels of a HIL file;
 //! * [`node`]: the main loop, generic over the source and the estimator, with its counters;
-//! * [`systems`]: each system's estimator on the node, its report frames and its HIL image;
+//! * [`systems`]: each system's chip code, one folder per system (estimator, report frames,
+//!   HIL image, soak rows, image rows, bench kernels, generated constants), and the manifest
+//!   that registers them;
+//! * [`manifest`]: the firmware images as data (binary, flag, HIL tests, budgets, real-time
+//!   requirement), which `cargo xtask` reads;
 //! * [`frame`]: report frames defined once, for the defmt emitter and the host's parser alike;
 //! * [`hil`]: the HIL images' run, shared by the QEMU entry point and the host reference runs;
 //! * [`soak`]: the numerical soak of every filter, the same code on the host and in QEMU;
 //! * `semihost` (QEMU images only): host files, exit codes, the QEMU entry skeleton;
+//! * `bench` (QEMU images only): the instruction-count markers the systems' bench kernels call;
 //! * `stack` (chip only): stack high-water marks by painting.
 //!
 //! On the chip, feature `no-panic-proof` replaces the images' panic handlers by `panic-never`'s
 //! (see the README's firmware section): an image with a reachable panic then fails to link.
 
 pub mod adxl355;
+#[cfg(all(target_os = "none", feature = "qemu"))]
+pub mod bench;
 pub mod frame;
 pub mod hil;
 pub mod line_feed;
+pub mod manifest;
 pub mod node;
 pub mod pair_source;
 #[cfg(all(target_os = "none", feature = "qemu"))]

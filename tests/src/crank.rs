@@ -18,19 +18,9 @@ pub struct CrankRun {
     pub features: [f32; FEATURES],
     /// The estimate for the whole recording.
     pub estimate: ClearanceEstimate<f32>,
-    /// Samples stepped (input lines, and missing lines bridged).
-    pub samples: u32,
-    /// Samples skipped (lines that did not parse or held a non-finite value, and missing
-    /// lines).
-    pub skipped: u32,
-    /// Lines that did not parse.
-    pub bad_lines: u32,
-    /// Lines without a usable `t` (not stepped).
-    pub untimed_lines: u32,
-    /// Lines missing from the file, stepped as missing samples.
-    pub missing_lines: u32,
-    /// Lines whose `t` was off the sample grid.
-    pub time_jumps: u32,
+    /// The end-of-run frame as the image sent it, the firmware's own struct: its counters of
+    /// samples stepped and skipped, and of bad, untimed and missing lines and time jumps.
+    pub end: CrankEnd,
 }
 
 /// Runs the firmware's crank image over CSV text exactly as `edgekf-crank-qemu` does.
@@ -48,17 +38,7 @@ pub fn parse(lines: &[String]) -> Result<CrankRun> {
     if end.windows as usize != windows.len() {
         bail!("{} window lines but the end line says {}", windows.len(), end.windows);
     }
-    Ok(CrankRun {
-        windows,
-        features: features.values(),
-        estimate: end.estimate().ok_or_else(joint)?,
-        samples: end.samples,
-        skipped: end.skipped,
-        bad_lines: end.bad_lines,
-        untimed_lines: end.untimed_lines,
-        missing_lines: end.missing_lines,
-        time_jumps: end.time_jumps,
-    })
+    Ok(CrankRun { windows, features: features.values(), estimate: end.estimate().ok_or_else(joint)?, end })
 }
 
 /// The HIL input: `t, crank_alpha` in shortest round-trip form.
@@ -137,7 +117,8 @@ pub fn faulty_csv(text: &str) -> String {
 /// same joint named as the clean run after as many windows, and the clearance within
 /// `tolerance` (relative) of the clean run's then. Returns the clearance's relative difference.
 pub fn check_faulty_run(run: &CrankRun, clean: &CrankRun, samples: usize, tolerance: f64) -> Result<f64> {
-    let counts = (run.samples, run.skipped, run.bad_lines, run.untimed_lines, run.missing_lines, run.time_jumps);
+    let e = &run.end;
+    let counts = (e.samples, e.skipped, e.bad_lines, e.untimed_lines, e.missing_lines, e.time_jumps);
     // Skipped: the missing lines, the empty cell and the NaN.
     let missing = FAULTS.missing_lines();
     let want = (samples as u32, missing + 2, FaultPlan::BAD_LINES, FaultPlan::UNTIMED_LINES, missing, 0);

@@ -37,39 +37,24 @@ impl FirmwareRun {
     }
 }
 
-/// The firmware ELF to test: `$EDGEKF_FW_ELF` (set by `cargo xtask test`).
-pub fn firmware_elf() -> Result<PathBuf> {
-    elf_from("EDGEKF_FW_ELF")
-}
-
-/// The rotor virtual-sensing image: `$EDGEKF_ROTOR_ELF` (set by `cargo xtask test`).
-pub fn rotor_elf() -> Result<PathBuf> {
-    elf_from("EDGEKF_ROTOR_ELF")
-}
-
-/// The accelerometer rotor image: `$EDGEKF_ROTOR_ACCEL_ELF` (set by `cargo xtask test`).
-pub fn rotor_accel_elf() -> Result<PathBuf> {
-    elf_from("EDGEKF_ROTOR_ACCEL_ELF")
-}
-
-/// The slider-crank clearance image: `$EDGEKF_CRANK_ELF` (set by `cargo xtask test`).
-pub fn crank_elf() -> Result<PathBuf> {
-    elf_from("EDGEKF_CRANK_ELF")
-}
-
-/// The underwater-vehicle thruster-health image: `$EDGEKF_UUV_ELF` (set by `cargo xtask test`).
-pub fn uuv_elf() -> Result<PathBuf> {
-    elf_from("EDGEKF_UUV_ELF")
-}
-
-/// The boom tip-vibration image: `$EDGEKF_BOOM_ELF` (set by `cargo xtask test`).
-pub fn boom_elf() -> Result<PathBuf> {
-    elf_from("EDGEKF_BOOM_ELF")
-}
-
 /// The numerical soak image: `$EDGEKF_SOAK_ELF` (set by `cargo xtask test` and `soak`).
 pub fn soak_elf() -> Result<PathBuf> {
     elf_from("EDGEKF_SOAK_ELF")
+}
+
+/// The ELF of a system's HIL image `bin` (its `HilImage::NAME`): the path in the environment
+/// variable its row in the firmware's manifest names (`edgekf_firmware::systems::IMAGES`, which
+/// `cargo xtask test` sets from the same row), so a new system's HIL test needs no function
+/// here.
+pub fn image_elf(bin: &str) -> Result<PathBuf> {
+    let image = edgekf_firmware::systems::IMAGES
+        .iter()
+        .find(|i| i.bin == bin)
+        .with_context(|| format!("{bin} is no system's image in edgekf_firmware::systems::IMAGES"))?;
+    match image.role {
+        edgekf_firmware::manifest::Role::Hil { env, .. } => elf_from(env),
+        _ => bail!("{bin} is not a HIL image"),
+    }
 }
 
 fn elf_from(var: &str) -> Result<PathBuf> {

@@ -107,7 +107,7 @@ mod hil {
     /// on the chip): every frame bit-identical to the image's code on the host.
     #[test]
     fn boom_in_qemu_matches_the_host() {
-        let elf = qemu::boom_elf().unwrap_or_else(|e| panic!("{e:#}"));
+        let elf = qemu::image_elf("edgekf-boom-qemu").unwrap_or_else(|e| panic!("{e:#}"));
         let (_, text) = recording(Scenario::Extension, 40.0);
         let run = qemu::run(&elf, text.as_bytes(), Duration::from_secs(600)).unwrap_or_else(|e| panic!("{e:#}"));
         if let Some(msg) = run.failure() {

@@ -22,10 +22,10 @@ fn recording(joint: Joint, clearance: f64, seed: u64) -> Recording {
 
 #[test]
 fn compiled_model_is_current() {
-    let committed = include_str!("../../firmware/src/generated/clearance.rs");
+    let committed = include_str!("../../firmware/src/systems/crank/generated/clearance.rs");
     assert!(
         FastModel::builtin().to_rust() == committed,
-        "firmware/src/generated/clearance.rs is stale: run `cargo run -p edgekf-sim -- crank export --out firmware/src/generated/clearance.rs`"
+        "firmware/src/systems/crank/generated/clearance.rs is stale: run `cargo run -p edgekf-sim -- crank export --out firmware/src/systems/crank/generated/clearance.rs`"
     );
     // And what the firmware compiles is that model, rounded to f32.
     let m = FastModel::builtin().to_shared();
@@ -65,7 +65,7 @@ fn node_f32_agrees_with_the_host_f64_estimator() {
         let node = run_host(csv(&rec.t, &rec.crank_alpha).as_bytes()).unwrap();
         let host = model.estimate(&rec).unwrap();
         assert_eq!(node.windows.len(), host.features.windows);
-        assert_eq!((node.samples as usize, node.skipped), (rec.t.len(), 0));
+        assert_eq!((node.end.samples as usize, node.end.skipped), (rec.t.len(), 0));
         let worst_feature =
             (0..FEATURES).map(|i| (node.features[i] as f64 - host.features.values[i]).abs()).fold(0.0, f64::max);
         let rel = node.estimate.clearance as f64 / host.clearance[host.joint.index()] - 1.0;
@@ -104,14 +104,14 @@ fn bad_samples_are_skipped_and_counted() {
     text.push_str("0.751,NaN\n0.7511,\n0.7512,oops\n0.7513,inf\n");
     let clean = run_host(csv(&rec.t[..n], &rec.crank_alpha[..n]).as_bytes()).unwrap();
     let run = run_host(text.as_bytes()).unwrap();
-    assert_eq!((run.samples as usize, run.skipped), (n + 4, 4));
+    assert_eq!((run.end.samples as usize, run.end.skipped), (n + 4, 4));
     assert_eq!(run.windows.len(), 3);
     assert_eq!(run.estimate, clean.estimate);
     // A NaN inside a window: skipped, the window closes one line later.
     let mut lines: Vec<String> = csv(&rec.t[..n], &rec.crank_alpha[..n]).lines().map(String::from).collect();
     lines.insert(100, "0.00995,nan".into());
     let run = run_host((lines.join("\n") + "\n").as_bytes()).unwrap();
-    assert_eq!((run.skipped, run.windows[0].samples), (1, 2501));
+    assert_eq!((run.end.skipped, run.windows[0].samples), (1, 2501));
     assert!(run.estimate.clearance.is_finite());
 }
 
@@ -150,7 +150,7 @@ mod hil {
     /// joint.
     #[test]
     fn crank_clearance_in_qemu_matches_the_host() {
-        let elf = qemu::crank_elf().unwrap_or_else(|e| panic!("{e:#}"));
+        let elf = qemu::image_elf("edgekf-crank-qemu").unwrap_or_else(|e| panic!("{e:#}"));
         let model = FastModel::builtin();
         for (joint, c, seed) in [(Joint::A, 0.25e-3, 1), (Joint::B, 0.3e-3, 2)] {
             let rec = recording(joint, c, seed);
@@ -165,7 +165,7 @@ mod hil {
             let bits = |f: &[f32]| f.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
             assert_eq!(bits(&chip.features), bits(&host.features), "features differ");
             assert_eq!(chip.estimate, host.estimate, "final estimate differs");
-            assert_eq!((chip.samples as usize, chip.skipped), (rec.t.len(), 0));
+            assert_eq!((chip.end.samples as usize, chip.end.skipped), (rec.t.len(), 0));
             let f64_est = model.estimate(&rec).unwrap();
             let rel = chip.estimate.clearance as f64 / f64_est.clearance[f64_est.joint.index()] - 1.0;
             let stack = edgekf_tests::report::frames::<edgekf_firmware::frame::StackFrame>(&run.lines)
@@ -196,7 +196,7 @@ mod hil {
     /// [`FAULTY_TOLERANCE`] of the clean run's).
     #[test]
     fn crank_image_bridges_missing_and_garbage_lines() {
-        let elf = qemu::crank_elf().unwrap_or_else(|e| panic!("{e:#}"));
+        let elf = qemu::image_elf("edgekf-crank-qemu").unwrap_or_else(|e| panic!("{e:#}"));
         let rec = recording(Joint::A, 0.25e-3, 1);
         let text = csv(&rec.t, &rec.crank_alpha);
         let faulty = faulty_csv(&text);
@@ -211,11 +211,11 @@ mod hil {
         eprintln!(
             "HIL crank with missing and garbage lines: {} samples, {} skipped ({} missing lines), {} bad lines ({} \
              without t), {} windows, joint {}, clearance {rel:+.2e} off the clean run's; bit-identical to the host",
-            chip.samples,
-            chip.skipped,
-            chip.missing_lines,
-            chip.bad_lines,
-            chip.untimed_lines,
+            chip.end.samples,
+            chip.end.skipped,
+            chip.end.missing_lines,
+            chip.end.bad_lines,
+            chip.end.untimed_lines,
             chip.windows.len(),
             Joint::ALL[chip.estimate.joint]
         );
@@ -224,7 +224,7 @@ mod hil {
     /// Bad lines in the input: the image skips and counts them and finishes.
     #[test]
     fn crank_image_skips_bad_samples() {
-        let elf = qemu::crank_elf().unwrap_or_else(|e| panic!("{e:#}"));
+        let elf = qemu::image_elf("edgekf-crank-qemu").unwrap_or_else(|e| panic!("{e:#}"));
         let rec = recording(Joint::A, 0.25e-3, 5);
         let mut text = csv(&rec.t[..5000], &rec.crank_alpha[..5000]);
         text.insert_str(text.find("\n0.01,").unwrap_or(20) + 1, "0.00999,NaN\n0.009995,\n");
@@ -235,7 +235,7 @@ mod hil {
         }
         let chip = crank::parse(&run.lines).unwrap();
         let host = run_host(text.as_bytes()).unwrap();
-        assert_eq!((chip.samples, chip.skipped), (5004, 4));
+        assert_eq!((chip.end.samples, chip.end.skipped), (5004, 4));
         assert_eq!(chip.windows, host.windows);
     }
 }

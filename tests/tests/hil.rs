@@ -16,7 +16,7 @@ use edgekf_tests::{first_difference, host, qemu};
 use std::time::Duration;
 
 fn firmware(csv: &[u8]) -> RunReport {
-    let elf = qemu::firmware_elf().unwrap_or_else(|e| panic!("{e:#}"));
+    let elf = qemu::image_elf("edgekf-qemu").unwrap_or_else(|e| panic!("{e:#}"));
     let run = qemu::run(&elf, csv, Duration::from_secs(300)).unwrap_or_else(|e| panic!("{e:#}"));
     if let Some(msg) = run.failure() {
         panic!("{msg}");
@@ -176,7 +176,7 @@ fn fault_sensor_reset_is_detected_and_reconfigured() {
 
 #[test]
 fn a_failing_firmware_run_fails_with_a_readable_message() {
-    let elf = qemu::firmware_elf().unwrap();
+    let elf = qemu::image_elf("edgekf-qemu").unwrap();
     let run = qemu::run(&elf, b"time,accel\n0,1\n", Duration::from_secs(60)).unwrap();
     assert_eq!(run.exit_code, Some(3));
     let msg = run.failure().expect("a failure");
@@ -199,7 +199,7 @@ fn rotor_recording() -> (edgekf_sim::systems::rotor::Recording, String) {
 fn rotor_virtual_sensing_in_qemu_matches_the_host_bit_for_bit() {
     use edgekf_firmware::systems::rotor::{RotorEnd, RotorImage};
     let (rec, csv) = rotor_recording();
-    let elf = qemu::rotor_elf().unwrap_or_else(|e| panic!("{e:#}"));
+    let elf = qemu::image_elf("edgekf-rotor-qemu").unwrap_or_else(|e| panic!("{e:#}"));
     let lines = edgekf_tests::rotor::qemu_matches_host::<RotorImage, RotorEnd>(&elf, csv.as_bytes())
         .unwrap_or_else(|e| panic!("{e:#}"));
     let fw = edgekf_tests::rotor::parse(&lines).unwrap();
@@ -225,7 +225,7 @@ fn rotor_image_bridges_missing_and_garbage_lines() {
     use edgekf_tests::rotor::{check_faulty_run, end, faulty_csv, parse_numbered, qemu_matches_host};
     let (rec, csv) = rotor_recording();
     let faulty = faulty_csv(&csv);
-    let elf = qemu::rotor_elf().unwrap_or_else(|e| panic!("{e:#}"));
+    let elf = qemu::image_elf("edgekf-rotor-qemu").unwrap_or_else(|e| panic!("{e:#}"));
     let lines = qemu_matches_host::<RotorImage, RotorEnd>(&elf, faulty.as_bytes()).unwrap_or_else(|e| panic!("{e:#}"));
     let clean = edgekf_tests::host::lines::<RotorImage>(csv.as_bytes()).unwrap();
     let (err, mismatch) =

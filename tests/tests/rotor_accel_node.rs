@@ -18,11 +18,11 @@ fn compiled_constants_are_current() {
     let (text, states) =
         edgekf_sim::systems::rotor::cli::estimate::export_sized_text(Path::new(CONFIG), 8, true).unwrap();
     assert_eq!(states, 28);
-    let committed = include_str!("../../firmware/src/generated/rotor_accel.rs");
+    let committed = include_str!("../../firmware/src/systems/rotor/generated/rotor_accel.rs");
     assert!(
         text == committed,
-        "firmware/src/generated/rotor_accel.rs is stale: run `cargo run -p edgekf-sim -- rotor export --config \
-         host-sim/configs/rotor_paper_accel.toml --robust --out firmware/src/generated/rotor_accel.rs`"
+        "firmware/src/systems/rotor/generated/rotor_accel.rs is stale: run `cargo run -p edgekf-sim -- rotor export --config \
+         host-sim/configs/rotor_paper_accel.toml --robust --out firmware/src/systems/rotor/generated/rotor_accel.rs`"
     );
 }
 
@@ -156,7 +156,7 @@ mod hil {
     fn rotor_accel_in_qemu_matches_the_host() {
         let (_, _, rec) = record();
         let csv = rec.to_data_file().to_csv_string().unwrap();
-        let elf = edgekf_tests::qemu::rotor_accel_elf().unwrap_or_else(|e| panic!("{e:#}"));
+        let elf = edgekf_tests::qemu::image_elf("edgekf-rotor-accel-qemu").unwrap_or_else(|e| panic!("{e:#}"));
         let lines = qemu_matches_host::<RotorAccelImage, RotorAccelEnd>(&elf, csv.as_bytes())
             .unwrap_or_else(|e| panic!("{e:#}"));
         let reports = parse_numbered(&lines).unwrap();

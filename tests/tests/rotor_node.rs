@@ -11,10 +11,10 @@ const CONFIG: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../host-sim/configs/r
 #[test]
 fn compiled_constants_are_current() {
     let text = edgekf_sim::systems::rotor::cli::estimate::export_text(Path::new(CONFIG), 8).unwrap();
-    let committed = include_str!("../../firmware/src/generated/rotor.rs");
+    let committed = include_str!("../../firmware/src/systems/rotor/generated/rotor.rs");
     assert!(
         text == committed,
-        "firmware/src/generated/rotor.rs is stale: run `cargo run -p edgekf-sim -- rotor export --config host-sim/configs/rotor_paper.toml --out firmware/src/generated/rotor.rs`"
+        "firmware/src/systems/rotor/generated/rotor.rs is stale: run `cargo run -p edgekf-sim -- rotor export --config host-sim/configs/rotor_paper.toml --out firmware/src/systems/rotor/generated/rotor.rs`"
     );
 }
 

@@ -105,7 +105,7 @@ mod hil {
     /// image's code on the host.
     #[test]
     fn uuv_in_qemu_matches_the_host() {
-        let elf = qemu::uuv_elf().unwrap_or_else(|e| panic!("{e:#}"));
+        let elf = qemu::image_elf("edgekf-uuv-qemu").unwrap_or_else(|e| panic!("{e:#}"));
         let (_, text) = paper_tail(3);
         let run = qemu::run(&elf, text.as_bytes(), Duration::from_secs(600)).unwrap_or_else(|e| panic!("{e:#}"));
         if let Some(msg) = run.failure() {

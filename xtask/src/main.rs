@@ -2,12 +2,11 @@
 //!
 //! * `cargo xtask test [--long]` — everything: provisioning, host tests, firmware cross-builds
 //!   (QEMU and board images) with their footprint, then the hardware-in-the-loop tests in QEMU.
-//! * `cargo xtask fw [--board | --rotor | --rotor-accel | --crank | --uuv | --boom | --soak |
-//!   --bench]` — cross-build an image (`edgekf-qemu` without a flag), prove it panic-free and
-//!   print its flash/RAM use.
-//! * `cargo xtask panics [--board | --rotor | --rotor-accel | --crank | --uuv | --boom | --soak |
-//!   --bench]` — build an image without the proof and list its panic paths (source line, panic
-//!   function, enclosing function).
+//! * `cargo xtask fw [FLAG]` — cross-build an image (`edgekf-qemu` without a flag; the flags
+//!   are the image table's, `--board`, `--rotor`, …, and `cargo xtask` alone lists them), prove
+//!   it panic-free and print its flash/RAM use.
+//! * `cargo xtask panics [FLAG]` — build an image without the proof and list its panic paths
+//!   (source line, panic function, enclosing function).
 //! * `cargo xtask run [--data FILE.csv]` — run the QEMU image on a data file (default: the demo
 //!   scenario) and print the decoded defmt log, the stack high-water mark included.
 //! * `cargo xtask bench [--check]` — per-step instruction counts of the filters on the
@@ -26,7 +25,8 @@
 //! Every build proves its image panic-free at link time (feature `no-panic-proof`); a failed
 //! proof lists where the panic paths are ([`panics`]).
 //!
-//! The images, their flags, HIL tests and instruction budgets are one table, [`images::IMAGES`].
+//! The images, their flags, HIL tests and instruction budgets are one table, [`images::IMAGES`]:
+//! the systems' rows come from the firmware's manifest (`edgekf_firmware::systems::IMAGES`).
 
 mod bench;
 mod firmware;

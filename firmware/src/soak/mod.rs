@@ -6,6 +6,10 @@
 //! One row per filter in [`SOAKS`], each naming its system (a module of [`crate::systems`])
 //! and its HIL image: a test checks that every system module has a row, and `xtask`'s image
 //! table test that every HIL image has one, so a new system cannot come without its soak.
+//! This module is the engine (the frame, the drifts, the block statistics and covariance
+//! checks) and names no system: each system's rows and soak code live in its folder,
+//! `systems/<name>/soak.rs`, and [`joint_ukf`] soaks the shared core's joint UKF, which no
+//! system runs as such.
 //!
 //! The truth comes from each filter's own model with the drift added, in `f32` like the
 //! filter: `f64` is soft-float on the Cortex-M4F (~100 instructions an operation) and would
@@ -17,11 +21,10 @@
 //!
 //! No allocation and no panic path: the image is proven panic-free at link time.
 
-pub mod boom;
-pub mod crank;
-pub mod kalman;
-pub mod uuv;
+pub mod joint_ukf;
 
+use crate::manifest::{concat, count};
+use crate::systems;
 use edgekf::Real;
 use nalgebra::SMatrix;
 
@@ -92,19 +95,12 @@ pub struct SoakRow {
     pub run: fn(u32) -> SoakFrame,
 }
 
+/// The rows in [`SOAKS`]' order: every system's, in the manifest's order
+/// ([`crate::systems::SOAKS`]), then the shared core's.
+const PARTS: &[&[SoakRow]] = &[&systems::SOAKS, joint_ukf::SOAKS];
+
 /// Every soak, one row per filter; the index is the frame's `filter`.
-pub static SOAKS: [SoakRow; 10] = [
-    kalman::OSCILLATOR_VARYING,
-    kalman::OSCILLATOR_STEADY,
-    kalman::ROTOR_START_UP,
-    kalman::ROTOR_NODE,
-    kalman::ROTOR_ACCEL_START_UP,
-    kalman::ROTOR_ACCEL_NODE,
-    kalman::JOINT_UKF,
-    crank::CRANK,
-    uuv::UUV,
-    boom::BOOM,
-];
+pub static SOAKS: [SoakRow; count(PARTS)] = concat(PARTS);
 
 /// Runs soak `index` of [`SOAKS`] for `steps` steps (`None` for an index out of range).
 pub fn run(index: usize, steps: u32) -> Option<SoakFrame> {
@@ -112,6 +108,11 @@ pub fn run(index: usize, steps: u32) -> Option<SoakFrame> {
     let mut frame = (row.run)(steps);
     frame.filter = u8::try_from(index).unwrap_or(u8::MAX);
     Some(frame)
+}
+
+/// A soak that could not start: every step counted non-finite, so that it fails its check.
+pub fn not_started(steps: u32) -> SoakFrame {
+    SoakFrame { steps, non_finite: steps.max(1), ..SoakFrame::default() }
 }
 
 /// A zero-mean uniform number generator of unit variance, in `f32` (the LCG of
@@ -353,28 +354,29 @@ pub fn parse_plan(text: &[u8], mut each: impl FnMut(usize, u32)) {
 mod tests {
     use super::*;
 
-    /// Every module of `src/systems` (a system the node runs) has a soak row: a new system
-    /// cannot come without its soak.
+    /// Every folder of `src/systems` (a system the node runs) is in the manifest, and every
+    /// system there has a soak row of its own: a new system cannot come without its soak.
     #[test]
     fn every_system_has_a_soak() {
         let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src/systems");
-        let mut systems = 0;
+        let mut folders = std::vec::Vec::new();
         for entry in std::fs::read_dir(&dir).unwrap() {
             let path = entry.unwrap().path();
-            let stem = path.file_stem().unwrap().to_str().unwrap();
-            if stem == "mod" {
-                continue;
+            if path.is_dir() {
+                folders.push(std::string::String::from(path.file_name().unwrap().to_str().unwrap()));
             }
-            systems += 1;
-            assert!(
-                SOAKS.iter().any(|r| r.system == stem),
-                "system `{stem}` ({}) has no soak row in SOAKS",
-                path.display()
-            );
         }
-        assert!(systems >= 5, "found only {systems} systems in {}", dir.display());
+        folders.sort();
+        let mut names: std::vec::Vec<_> = systems::NAMES.iter().map(|n| std::string::String::from(*n)).collect();
+        names.sort();
+        assert_eq!(folders, names, "the folders of {} and the manifest (systems!) differ", dir.display());
+        assert!(names.len() >= 5, "found only {} systems in {}", names.len(), dir.display());
+        for name in systems::NAMES {
+            assert!(SOAKS.iter().any(|r| r.system == *name), "system `{name}` has no soak row in SOAKS");
+        }
         for (i, r) in SOAKS.iter().enumerate() {
             assert!(SOAKS[..i].iter().all(|o| o.name != r.name), "two rows named {}", r.name);
+            assert!(r.system == "core" || systems::NAMES.contains(&r.system), "row {} names no system", r.name);
         }
     }
 

@@ -1,6 +1,39 @@
-//! Each system's node estimator, its report frames and its HIL image, one file per system.
-//! Adding a system means a file here (a [`crate::node::NodeEstimator`] and a
-//! [`crate::hil::HilImage`]), a one-line QEMU binary and a row in `xtask`'s image table.
+//! Each system the node runs, one folder per system, and the manifest that registers them.
+//!
+//! A system's chip code lives in `systems/<name>/`:
+//! * `mod.rs`: its [`crate::node::NodeEstimator`], report frames and [`crate::hil::HilImage`]
+//!   (further files of the folder as it needs them, e.g. [`rotor::accel`]);
+//! * `soak.rs`: its filters' numerical soak rows, `SOAKS` (the engine is [`crate::soak`]);
+//! * `bench.rs`: its kernels in the bench image (`edgekf-bench`, QEMU only), whose counts its
+//!   image rows' budgets bound;
+//! * `images.rs`: its firmware images as `cargo xtask` builds, runs and checks them, `IMAGES`
+//!   (binary, flag, HIL tests, instruction budgets, real-time requirement: [`crate::manifest`]);
+//! * `generated/`: the constants the host exports for it (`edgekf <name> export`), if any,
+//!   which `mod.rs` `include!`s.
+//!
+//! The manifest below (`systems!`) is the one list of systems: it declares each module and
+//! assembles from the systems' own rows [`SOAKS`] (which [`crate::soak::SOAKS`] runs),
+//! [`IMAGES`] (which `xtask`'s image table reads) and `bench` (the bench image's kernels), so
+//! that no other list in the firmware or `xtask` has to name a new system.
+//!
+//! Adding a system `<name>` with a QEMU image, outside its own folders (here,
+//! `shared/src/systems/<name>/` for what the host runs too, `host-sim/src/systems/<name>/`):
+//! 1. its name in the `systems!` list at the end of this file (and its line in the list
+//!    below);
+//! 2. its image's binary: a `[[bin]]` in `firmware/Cargo.toml` and a new one-line
+//!    `firmware/src/bin/<image>/main.rs`, `edgekf_firmware::qemu_image!(…)` (Cargo cannot
+//!    generate bin targets);
+//! 3. `pub mod <name>;` in `shared/src/systems/mod.rs`, if it has shared code;
+//! 4. one row in `host-sim/src/systems/mod.rs` (`REGISTRY`), which gives its command line.
+//!
+//! Nothing in `xtask`: its rows come from `images.rs`. Its HIL tests are a new file in
+//! `tests/tests/`, named by its image row, that finds its ELF with
+//! `edgekf_tests::qemu::image_elf`; its soak rows run in `tests/tests/soak.rs` and the soak
+//! image without an edit. The build checks that every system has `soak::SOAKS`,
+//! `images::IMAGES` and (on the chip) `bench::run`; the tests check the rest: every folder here
+//! is in the manifest, every system has a soak row, every HIL image has a soak row and a
+//! real-time requirement, every image's binary is declared in `firmware/Cargo.toml`, and
+//! `cargo xtask bench` fails on a budget that no kernel measures.
 //!
 //! * [`oscillator`]: the harmonic force driving a structural mode, from one ADXL355 axis;
 //! * [`rotor`]: rotor virtual sensing (disk motion and unbalance forces from four probes, or
@@ -9,8 +42,35 @@
 //! * [`uuv`]: an underwater vehicle's thruster health from its IMU, depth, compass and DVL;
 //! * [`boom`]: a telescoping boom's tip vibration from a tip gyro and a root inclinometer.
 
-pub mod boom;
-pub mod crank;
-pub mod oscillator;
-pub mod rotor;
-pub mod uuv;
+use crate::manifest::{concat, count, Image};
+use crate::soak::SoakRow;
+
+/// The manifest: declares each system's module and gathers its rows, in the order given (the
+/// order of the soak rows and of `cargo xtask test`'s builds).
+macro_rules! systems {
+    ($($name:ident),+ $(,)?) => {
+        $(pub mod $name;)+
+
+        /// Every system's module name, in the manifest's order.
+        pub const NAMES: &[&str] = &[$(stringify!($name)),+];
+
+        const SOAK_PARTS: &[&[SoakRow]] = &[$($name::soak::SOAKS),+];
+
+        /// Every system's soak rows, in the manifest's order.
+        pub const SOAKS: [SoakRow; count(SOAK_PARTS)] = concat(SOAK_PARTS);
+
+        const IMAGE_PARTS: &[&[Image]] = &[$($name::images::IMAGES),+];
+
+        /// Every system's firmware images, in the manifest's order.
+        pub const IMAGES: [Image; count(IMAGE_PARTS)] = concat(IMAGE_PARTS);
+
+        /// Every system's kernels in the bench image (`<name>/bench.rs`), in the manifest's
+        /// order.
+        #[cfg(all(target_os = "none", feature = "qemu"))]
+        pub fn bench<M: crate::bench::Markers>() {
+            $($name::bench::run::<M>();)+
+        }
+    };
+}
+
+systems!(oscillator, rotor, crank, uuv, boom);

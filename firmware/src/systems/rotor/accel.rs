@@ -4,7 +4,7 @@
 //! unbalance, two states per low-pass), the robust tuning (`Tuning::robust`: it holds the disk
 //! error near 1 µm with the model's stiffness or speed a little off). Computed on the host in
 //! `f64` and compiled in (`edgekf rotor export --config host-sim/configs/rotor_paper_accel.toml
-//! --robust --out firmware/src/generated/rotor_accel.rs`; a cross-crate test checks the file is
+//! --robust --out firmware/src/systems/rotor/generated/rotor_accel.rs`; a cross-crate test checks the file is
 //! current). Outputs and schedule are the probes' node's ([`super`]): the disk nodes'
 //! displacement and the unbalance forces, the start-up term of rank [`ACCEL_START_RANK`] for
 //! [`STEADY_AFTER`] samples, then the steady-state gain.
@@ -20,7 +20,7 @@ use crate::virtual_pair::{PairStartError, VirtualPairSource};
 /// The exported model, steady state, prior and start-up term, as the host wrote them (`f64`).
 #[allow(missing_docs, clippy::excessive_precision, clippy::unreadable_literal)]
 pub mod constants {
-    include!("../../generated/rotor_accel.rs");
+    include!("generated/rotor_accel.rs");
 }
 
 /// States of the model: the probes' 20 and two per accelerometer low-pass.
@@ -127,7 +127,7 @@ mod tests {
     /// The model was discretised at the probes' node's rate, so the schedule is the same.
     #[test]
     fn generated_header_is_the_accelerometer_model_at_the_node_rate() {
-        let mut lines = include_str!("../../generated/rotor_accel.rs").lines();
+        let mut lines = include_str!("generated/rotor_accel.rs").lines();
         let header = lines.next().unwrap();
         let rate = std::format!(" {} Hz.", super::super::SAMPLE_RATE_HZ);
         assert!(header.contains(&rate) && header.contains("--robust"), "{header}");

@@ -49,7 +49,7 @@ pub enum CrankCommand {
     /// with its defaults).
     Train(TrainArgs),
     /// Write the fast estimator's model as Rust constants for the firmware
-    /// (firmware/src/generated/clearance.rs).
+    /// (firmware/src/systems/crank/generated/clearance.rs).
     Export(super::estimate::chip::ExportArgs),
 }
 

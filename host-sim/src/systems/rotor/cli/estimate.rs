@@ -188,14 +188,14 @@ pub const START_RANK: usize = 12;
 pub const ACCEL_START_RANK: usize = 12;
 
 /// The Rust source [`export`] writes with the default tuning (the firmware's
-/// `src/generated/rotor.rs` is this text for `host-sim/configs/rotor_paper.toml`, which a
+/// `firmware/src/systems/rotor/generated/rotor.rs` is this text for `host-sim/configs/rotor_paper.toml`, which a
 /// cross-crate test checks).
 pub fn export_text(config: &Path, modes: usize) -> Result<String> {
     Ok(export_sized_text(config, modes, false)?.0)
 }
 
 /// The Rust source [`export`] writes, and the model's state count: 20 states (displacement
-/// probes) or 28 (accelerometers with 2nd-order low-passes, `src/generated/rotor_accel.rs` for
+/// probes) or 28 (accelerometers with 2nd-order low-passes, `firmware/src/systems/rotor/generated/rotor_accel.rs` for
 /// `rotor_paper_accel.toml` with `robust`), 4 sensors and 2 unbalance nodes.
 pub fn export_sized_text(config: &Path, modes: usize, robust: bool) -> Result<(String, usize)> {
     let (_, red) = load_tuned(config, modes, false, robust)?;

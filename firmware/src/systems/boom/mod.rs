@@ -21,6 +21,11 @@ use edgekf::systems::boom::{
     PaperSettings, MAX_SECTIONS,
 };
 
+#[cfg(all(target_os = "none", feature = "qemu"))]
+pub mod bench;
+pub mod images;
+pub mod soak;
+
 /// Sample rate, Hz (`[gyro] sample_rate`).
 pub const SAMPLE_RATE_HZ: u32 = 100;
 

@@ -7,16 +7,21 @@
 //! with a weak hold on the angle so the drive's noise does not walk it away); the filter is
 //! re-reduced as the length and angle move.
 
-use super::{psd_root, Blocks, Drift, Noise, SoakFrame, SoakRow};
-use crate::systems::boom::{estimators, GYRO, INCLINOMETER, SAMPLE_RATE_HZ};
+use super::BoomImage;
+use crate::hil::HilImage;
+use super::{estimators, GYRO, INCLINOMETER, SAMPLE_RATE_HZ};
+use crate::soak::{psd_root, Blocks, Drift, Noise, SoakFrame, SoakRow};
 use edgekf::systems::boom::{slot, MEASUREMENTS, MODES, STATES};
 use nalgebra::SVector;
+
+/// Its rows.
+pub const SOAKS: &[SoakRow] = &[BOOM];
 
 /// The boom's row.
 pub const BOOM: SoakRow = SoakRow {
     name: "boom",
     system: "boom",
-    image: Some("edgekf-boom-qemu"),
+    image: Some(BoomImage::NAME),
     what: "boom tip-vibration KF (14 states, gyro and inclinometer, 100 Hz)",
     drift: "length 25–35 m over 20 min, angle 0.3–0.9 rad over 15 min (re-reduced as it moves)",
     error_of: "tip vibration",
@@ -36,7 +41,7 @@ const BLOCK: u32 = 10_000;
 /// The soak (see the module docs); `n` samples.
 #[inline(never)]
 pub fn boom(n: u32) -> SoakFrame {
-    let Ok((mut est, _)) = estimators() else { return super::kalman::not_started(n) };
+    let Ok((mut est, _)) = estimators() else { return crate::soak::not_started(n) };
     let dt = 1.0 / f64::from(SAMPLE_RATE_HZ);
     let mut length = Drift::new(dt);
     let (mut feed, mut feed_rate) = (Drift::new(dt), Drift::new(dt));

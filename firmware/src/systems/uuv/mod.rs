@@ -17,6 +17,11 @@ use edgekf::systems::uuv::{
     Command, Estimate, EstimatorError, EstimatorSettings, Layout, Sample, Status, UuvEstimator, Vehicle,
 };
 
+#[cfg(all(target_os = "none", feature = "qemu"))]
+pub mod bench;
+pub mod images;
+pub mod soak;
+
 /// Sample rate, Hz (`sensors.rate`).
 pub const SAMPLE_RATE_HZ: u32 = 50;
 

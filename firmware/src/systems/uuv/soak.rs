@@ -6,18 +6,23 @@
 //! health drifting slowly (the main one between 1 and 0.8 over 20 minutes, the vertical one
 //! between 1 and 0.9 over 30); the sensors read it with the filter's noise, the DVL at 5 Hz.
 
-use super::{Blocks, Drift, Noise, SoakFrame, SoakRow};
-use crate::systems::uuv::{estimator, LAYOUT, SAMPLE_RATE_HZ, STATES};
+use super::UuvImage;
+use crate::hil::HilImage;
+use super::{estimator, LAYOUT, SAMPLE_RATE_HZ, STATES};
+use crate::soak::{Blocks, Drift, Noise, SoakFrame, SoakRow};
 use edgekf::systems::uuv::{
     wrap, Command, Drive, MeasurementNoise, ProcessNoise, ReducedDynamics, Sample, Status, Vehicle, VELOCITY,
 };
 use nalgebra::SVector;
 
+/// Its rows.
+pub const SOAKS: &[SoakRow] = &[UUV];
+
 /// The vehicle's row.
 pub const UUV: SoakRow = SoakRow {
     name: "uuv",
     system: "uuv",
-    image: Some("edgekf-uuv-qemu"),
+    image: Some(UuvImage::NAME),
     what: "vehicle joint UKF of state and thruster health (20 states, 50 Hz)",
     drift: "main thruster's health 1–0.8 over 20 min, vertical's 1–0.9 over 30 min",
     error_of: "both health factors",
@@ -40,12 +45,12 @@ const DVL_EVERY: u32 = 10;
 pub fn uuv(n: u32) -> SoakFrame {
     let vehicle = Vehicle::default();
     let (Ok(mut est), Some(dynamics)) = (estimator(), ReducedDynamics::<f32>::new(&vehicle)) else {
-        return super::kalman::not_started(n);
+        return crate::soak::not_started(n);
     };
     let dt = 1.0 / f64::from(SAMPLE_RATE_HZ);
     let (k_t, k_v, bias, current) = match (LAYOUT.k_t(), LAYOUT.k_v(), LAYOUT.acc_bias(), LAYOUT.current()) {
         (Some(a), Some(b), Some(c), Some(d)) => (a, b, c, d),
-        _ => return super::kalman::not_started(n),
+        _ => return crate::soak::not_started(n),
     };
     let (depth, heading, rpm) = (10.0f32, core::f32::consts::FRAC_PI_4, 1500.0f32);
     let mut x = SVector::<f32, STATES>::zeros();

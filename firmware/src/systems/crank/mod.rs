@@ -1,7 +1,7 @@
 //! Slider-crank joint clearance on the node: the host's fast estimator (ten window features of
 //! the crank angular acceleration, a discriminant naming joint A, B or C, a regression per joint
 //! for the clearance) streaming in `f32`, with the model compiled in from
-//! `src/generated/clearance.rs` (`edgekf crank export --out firmware/src/generated/clearance.rs`;
+//! `generated/clearance.rs` (`edgekf crank export --out firmware/src/systems/crank/generated/clearance.rs`;
 //! a cross-crate test checks the file is what the built-in `fast_model.toml` gives).
 //!
 //! Input: `crank_alpha`, rad/s², at [`SAMPLE_RATE_HZ`]. Output: after every 0.25 s window, the
@@ -15,10 +15,15 @@ use crate::node::{Innovation, Node, NodeEstimator, Poll};
 use crate::source::ChannelSource;
 use edgekf::systems::crank::{ClearanceEstimate, ClearanceEstimator, ClearanceModel, FeatureError, FEATURES};
 
+#[cfg(all(target_os = "none", feature = "qemu"))]
+pub mod bench;
+pub mod images;
+pub mod soak;
+
 #[allow(missing_docs, clippy::excessive_precision, clippy::unreadable_literal)]
 mod constants {
     use edgekf::systems::crank::{ClearanceModel, ReleaseModel};
-    include!("../generated/clearance.rs");
+    include!("generated/clearance.rs");
 }
 
 /// The compiled-in model in `f64`, as exported (the host's `FastModel::builtin()`).

@@ -6,15 +6,20 @@
 //! statistics a fresh estimator gives on the same samples, and that the recording's features
 //! (`f32` running means) stay with the same means accumulated in `f64`.
 
-use super::{Blocks, Drift, Noise, SoakFrame, SoakRow};
-use crate::systems::crank::{Storage, MODEL, SAMPLE_RATE_HZ, WINDOW};
+use super::CrankImage;
+use crate::hil::HilImage;
+use super::{Storage, MODEL, SAMPLE_RATE_HZ, WINDOW};
+use crate::soak::{Blocks, Drift, Noise, SoakFrame, SoakRow};
 use edgekf::systems::crank::{ClearanceEstimator, CrankFeatures, CLEARANCE_RANGE, FEATURES};
+
+/// Its rows.
+pub const SOAKS: &[SoakRow] = &[CRANK];
 
 /// The clearance estimator's row.
 pub const CRANK: SoakRow = SoakRow {
     name: "crank",
     system: "crank",
-    image: Some("edgekf-crank-qemu"),
+    image: Some(CrankImage::NAME),
     what: "clearance estimator (window sums, 10 kHz, 0.25 s windows)",
     drift: "crank speed 10 Hz ±20 % over 15 min, impact amplitude ±30 % over 10 min",
     error_of: "a late window's statistics against a fresh estimator's",
@@ -72,13 +77,14 @@ impl CrankSignal {
         let k = self.k;
         self.k = k.wrapping_add(1);
         // 10 rev/s ±20 % over 15 minutes.
-        let step = |t: f64| core::f64::consts::TAU * 10.0 * super::swing(t, 0.2, 900.0) / f64::from(SAMPLE_RATE_HZ);
+        let step =
+            |t: f64| core::f64::consts::TAU * 10.0 * crate::soak::swing(t, 0.2, 900.0) / f64::from(SAMPLE_RATE_HZ);
         let (cd, sd) = (self.turn.0.at(k, |t| libm::cos(step(t))), self.turn.1.at(k, |t| libm::sin(step(t))));
         let (c, s) = self.phasor;
         let (c1, s1) = (c * cd - s * sd, s * cd + c * sd);
         let g = 1.5 - 0.5 * (c1 * c1 + s1 * s1);
         self.phasor = (c1 * g, s1 * g);
-        let size = 2000.0 * self.amplitude.at(k, |t| super::swing(t, 0.3, 600.0));
+        let size = 2000.0 * self.amplitude.at(k, |t| crate::soak::swing(t, 0.3, 600.0));
         if s < 0.0 && s1 >= 0.0 && c1 > 0.0 {
             self.impact = (0, size);
         } else if s > 0.0 && s1 <= 0.0 && c1 < 0.0 {
@@ -102,7 +108,7 @@ pub fn crank(n: u32) -> SoakFrame {
     let mut storage: Storage = [0.0; WINDOW - 1];
     let mut fresh_storage: Storage = [0.0; WINDOW - 1];
     let rate = f64::from(SAMPLE_RATE_HZ);
-    let Ok(mut est) = ClearanceEstimator::new(&MODEL, &mut storage, rate) else { return super::kalman::not_started(n) };
+    let Ok(mut est) = ClearanceEstimator::new(&MODEL, &mut storage, rate) else { return crate::soak::not_started(n) };
     let mut signal = CrankSignal::new();
     let mut window_start = signal;
     let mut blocks = Blocks::new(n, 1.0);

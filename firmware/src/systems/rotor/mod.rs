@@ -1,7 +1,7 @@
 //! Rotor virtual sensing on the node: the modally reduced rotor (8 modes, one rotating phasor
 //! per unbalance) and its augmented Kalman filter, computed on the host in `f64` and compiled in
 //! (`edgekf rotor export --config host-sim/configs/rotor_paper.toml --out
-//! firmware/src/generated/rotor.rs`; a cross-crate test checks the file is current).
+//! firmware/src/systems/rotor/generated/rotor.rs`; a cross-crate test checks the file is current).
 //!
 //! Inputs: the four proximity probes of the paper rotor (`n5_x, n5_y, n32_x, n32_y`, m).
 //! Outputs per sample: the x/y displacement of both disk nodes (12 and 23), which no sensor
@@ -18,10 +18,15 @@ use nalgebra::{ArrayStorage, SMatrix, SVector};
 
 pub mod accel;
 
+#[cfg(all(target_os = "none", feature = "qemu"))]
+pub mod bench;
+pub mod images;
+pub mod soak;
+
 /// The exported model, steady state, prior and start-up term, as the host wrote them (`f64`).
 #[allow(missing_docs, clippy::excessive_precision, clippy::unreadable_literal)]
 pub mod constants {
-    include!("../generated/rotor.rs");
+    include!("generated/rotor.rs");
 }
 
 /// States of the reduced model.
@@ -433,7 +438,7 @@ mod tests {
 
     #[test]
     fn sample_rate_is_the_generated_models() {
-        let header = include_str!("../generated/rotor.rs").lines().next().unwrap();
+        let header = include_str!("generated/rotor.rs").lines().next().unwrap();
         assert!(header.contains(&std::format!(" {SAMPLE_RATE_HZ} Hz.")), "{header}");
         assert_eq!(STEADY_AFTER, 500);
     }

@@ -1,0 +1,15 @@
+//! What the bench image's kernels share (QEMU images only). The kernels that belong to a system
+//! live in its folder (`systems/<name>/bench.rs`, gathered by [`crate::systems::bench`]); the
+//! shared core's own kernels stay in the bench binary.
+
+/// The measured section's markers. The bench binary defines them as `#[no_mangle]` functions
+/// (`bench_start`, `bench_end`) whose addresses the instruction-counting plugin is given; a
+/// kernel calls `M::start()` right before the step it measures and `M::end()` right after. A
+/// type parameter rather than function pointers, so that each call is a direct call, as when
+/// the kernels were in the binary, and no other image carries the markers.
+pub trait Markers {
+    /// Marks the start of the measured section.
+    fn start();
+    /// Marks its end.
+    fn end();
+}

@@ -1,0 +1,88 @@
+//! The oscillator image's kernels in the bench image (`edgekf-bench`): the harmonic-force step
+//! and the ADXL355 source's polls. Their budgets are in [`super::images`].
+
+use crate::bench::Markers;
+use crate::semihost::exit;
+
+/// Runs and reports each kernel once.
+pub fn run<M: Markers>() {
+    harmonic::<M>();
+    adxl_poll::<M>();
+}
+
+/// The ADXL355 source's poll on the virtual ADXL355, without the estimator: `adxl_poll`, an
+/// ordinary poll (the status read with the IDs, the 16-sample FIFO burst, screening and
+/// conversion); `adxl_poll_stall`, one that finds the FIFO empty although samples are due (a
+/// dropped period: plus the configuration read-back); `adxl_poll_reset`, the poll after a
+/// reset (plus the re-initialisation and 16 bridged samples). The virtual device's register
+/// emulation is in the counts, as the I²C driver's would be on the board.
+fn adxl_poll<M: Markers>() {
+    use crate::adxl355::{Adxl355, I2cInterface};
+    use crate::node::{Health, Recorded, SampleSource};
+    use crate::source::{Adxl355Settings, Adxl355Source};
+    use crate::virtual_adxl355::{FeedSample, SliceFeed, VirtualAdxl355};
+    let mut feed = [FeedSample::new([0.0, 0.0, 9.8]); 96];
+    for (k, s) in feed.iter_mut().enumerate() {
+        let x = k as f32;
+        s.accel = [0.5 * x - 20.0, 3.0 - 0.25 * x, 9.8 + 0.01 * x];
+    }
+    // Periods 0–2 ordinary, 3 dropped, 4 reset at its first sample, 5 ordinary.
+    for s in feed.get_mut(48..64).into_iter().flatten() {
+        s.dropped = true;
+    }
+    if let Some(s) = feed.get_mut(64) {
+        s.reset = true;
+    }
+    let sensor = Adxl355::new_i2c(VirtualAdxl355::new(SliceFeed::new(&feed)), 0x1D);
+    let mut health = Health::default();
+    let Ok(mut source) = Adxl355Source::start(sensor, Adxl355Settings::default(), &mut health) else {
+        defmt::error!("bench adxl_poll: the virtual part did not start");
+        exit(1)
+    };
+    type Source<'a> = Adxl355Source<I2cInterface<VirtualAdxl355<SliceFeed<'a>>>>;
+    // One period passes and the source reads it, counted if `label` says what it is.
+    fn poll<M: Markers>(source: &mut Source<'_>, health: &mut Health, label: Option<&str>) {
+        source.advance();
+        if label.is_some() {
+            M::start();
+        }
+        let read = source.read(health, |s| {
+            core::hint::black_box(s);
+        });
+        if let Some(label) = label {
+            M::end();
+            defmt::info!("bench {=str} n={=usize} m={=usize} read={=u16}", label, 16usize, 1usize, read);
+        }
+    }
+    poll::<M>(&mut source, &mut health, None);
+    poll::<M>(&mut source, &mut health, None);
+    poll::<M>(&mut source, &mut health, Some("adxl_poll"));
+    poll::<M>(&mut source, &mut health, Some("adxl_poll_stall"));
+    poll::<M>(&mut source, &mut health, Some("adxl_poll_reset"));
+    if (health.config_checks, health.resets, health.bridged) != (2, 1, 32) {
+        defmt::error!("bench adxl_poll: not the polls meant: {}", health);
+        exit(1)
+    }
+}
+
+/// The harmonic-force estimator's step (`harmonic_step`).
+fn harmonic<M: Markers>() {
+    use edgekf::systems::oscillator::{HarmonicForceEstimator, HarmonicForceParams};
+    let Ok(mut est) = HarmonicForceEstimator::<f32>::new(&HarmonicForceParams::default()) else {
+        defmt::error!("bench harmonic: no estimator");
+        exit(1)
+    };
+    for k in 0..3 {
+        est.step(Some(k as f32 * 0.1));
+    }
+    M::start();
+    core::hint::black_box(est.step(core::hint::black_box(Some(0.25))));
+    M::end();
+    defmt::info!(
+        "bench harmonic_step n={=usize} m={=usize} resets={=u32}",
+        4usize,
+        1usize,
+        est.counters().filter.covariance_resets
+    );
+}
+

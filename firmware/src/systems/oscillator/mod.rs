@@ -1,0 +1,291 @@
+//! The harmonic-force oscillator on the node: one ADXL355 axis, the single-mode model driven by
+//! a force at the running speed ([`edgekf::systems::oscillator`]), its block report and its HIL
+//! image.
+//!
+//! The model and its steady-state gain are computed on the host in `f64` and compiled in: no
+//! discretisation and no Riccati solve at start-up (which would cost about 15 KB of stack and a
+//! few hundred thousand software-`f64` operations on the Cortex-M4F). Regenerate after changing
+//! `NodeConfig::default().estimator` (a test below fails until then):
+//! `cargo run -p edgekf-sim -- oscillator export --out firmware/src/systems/oscillator/generated/harmonic.rs`.
+
+use crate::adxl355::{self, Adxl355, Interface};
+use crate::frame::FrameSink;
+use crate::hil::{HilError, HilImage, HilNode};
+use crate::line_feed::{ByteSource, LineFeed};
+use crate::node::{Health, Innovation, Node, NodeEstimator, Poll};
+use crate::source::{Adxl355Settings, Adxl355Source, VirtualSource};
+use crate::virtual_adxl355::VirtualAdxl355;
+use edgekf::export::{matrix, model};
+use edgekf::systems::oscillator::{EstimatorCounters, HarmonicForceEstimator, HarmonicForceParams, ModelError};
+
+#[cfg(all(target_os = "none", feature = "qemu"))]
+pub mod bench;
+pub mod images;
+pub mod soak;
+
+#[allow(missing_docs, clippy::excessive_precision, clippy::unreadable_literal)]
+mod constants {
+    include!("generated/harmonic.rs");
+}
+
+/// The estimator from the compiled-in model and gain, with `params` for the physical scaling
+/// (natural frequency, modal mass) and the gate.
+///
+/// ```
+/// use edgekf::systems::oscillator::HarmonicForceParams;
+/// let est = edgekf_firmware::systems::oscillator::compiled_estimator(&HarmonicForceParams::default()).unwrap();
+/// assert_eq!(est.counters().steps, 0);
+/// ```
+pub fn compiled_estimator(params: &HarmonicForceParams) -> Result<HarmonicForceEstimator<f32>, ModelError> {
+    use constants::*;
+    let m = model(&HARMONIC_A, &HARMONIC_C, &HARMONIC_Q, &HARMONIC_R);
+    HarmonicForceEstimator::from_gain(params, &m, &matrix(&HARMONIC_GAIN), &matrix(&HARMONIC_S))
+}
+
+/// Everything the oscillator node needs to start.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NodeConfig {
+    /// I²C address of the ADXL355 (0x1D with ASEL low).
+    pub address: u8,
+    /// How the ADXL355 is driven.
+    pub source: Adxl355Settings,
+    /// Estimator model and tuning.
+    pub estimator: HarmonicForceParams,
+}
+
+impl Default for NodeConfig {
+    /// ADXL355 at 0x1D, ±2 g, 1 kHz, 16-sample blocks, X axis, the default harmonic model.
+    fn default() -> Self {
+        let source = Adxl355Settings::default();
+        Self {
+            address: adxl355::ADDRESS_ASEL_LOW,
+            source,
+            estimator: HarmonicForceParams {
+                sample_rate_hz: source.sensor.odr.hz() as f64,
+                ..HarmonicForceParams::default()
+            },
+        }
+    }
+}
+
+crate::frame! {
+    /// What one poll produced: the estimate at the end of the block and block statistics.
+    #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+    pub struct BlockReport = "blk {=u32} {=u16} {=u16} {=f32} {=f32} {=f32} {=f32} {=f32} {=f32} {=f32}" {
+        /// Poll number, from 0.
+        pub block: u32,
+        /// Samples read from the FIFO in this poll.
+        pub read: u16,
+        /// Samples given to the estimator as missing (lost, saturated, stuck).
+        pub missing: u16,
+        /// Modal displacement, m.
+        pub displacement: f32,
+        /// Modal velocity, m/s.
+        pub velocity: f32,
+        /// In-phase force, N.
+        pub force_cos: f32,
+        /// Quadrature force, N.
+        pub force_sin: f32,
+        /// Force amplitude, N.
+        pub force_amplitude: f32,
+        /// RMS of this block's innovations, m/s² (0 if none).
+        pub innovation_rms: f32,
+        /// Mean NIS of this block's innovations (0 if none).
+        pub nis_mean: f32,
+    }
+}
+
+crate::frame! {
+    /// The estimator's counters at the end of a run.
+    #[derive(Eq)]
+    pub struct EstimatorFrame = "estimator {=u32} {=u32} {=u32} {=u32} {=u32}" {
+        /// Samples processed (present or missing).
+        pub steps: u32,
+        /// Samples that were missing.
+        pub missing: u32,
+        /// Samples rejected by the innovation gate.
+        pub gated: u32,
+        /// Covariance resets.
+        pub covariance_resets: u32,
+        /// Refused updates.
+        pub refused_updates: u32,
+    }
+}
+
+impl From<EstimatorCounters> for EstimatorFrame {
+    fn from(e: EstimatorCounters) -> Self {
+        Self {
+            steps: e.steps,
+            missing: e.missing,
+            gated: e.gated,
+            covariance_resets: e.filter.covariance_resets,
+            refused_updates: e.filter.refused_updates,
+        }
+    }
+}
+
+crate::frame! {
+    /// The node's settings, right after start-up.
+    pub struct StartFrame = "start odr={=f32} watermark={=u8}" {
+        /// Output data rate, Hz.
+        pub odr: f32,
+        /// FIFO watermark, entries.
+        pub watermark: u8,
+    }
+}
+
+impl NodeEstimator for HarmonicForceEstimator<f32> {
+    type Input = f32;
+    type Frame = BlockReport;
+
+    fn step(&mut self, input: Option<f32>) -> Innovation {
+        let s = HarmonicForceEstimator::step(self, input);
+        Innovation { residual: s.innovation, nis: s.nis }
+    }
+
+    fn report(&mut self, poll: &Poll) -> Option<BlockReport> {
+        let now = self.current();
+        Some(BlockReport {
+            block: poll.block,
+            read: poll.read,
+            missing: poll.missing,
+            displacement: now.displacement,
+            velocity: now.velocity,
+            force_cos: now.force_cos,
+            force_sin: now.force_sin,
+            force_amplitude: now.force_amplitude,
+            innovation_rms: poll.innovations.rms(),
+            nis_mean: poll.nis.mean(),
+        })
+    }
+}
+
+/// Why the node could not start.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum StartError<E> {
+    /// The accelerometer did not initialise within the attempt budget (last error kept).
+    Sensor(adxl355::Error<E>),
+    /// The estimator's model could not be built from the parameters.
+    Model(ModelError),
+}
+
+/// The oscillator node on an ADXL355 behind interface `IF`.
+pub type OscillatorNode<IF> = Node<Adxl355Source<IF>, HarmonicForceEstimator<f32>>;
+
+/// Builds the estimator from the compiled-in model ([`compiled_estimator`]; `config.estimator`
+/// supplies its scaling) and initialises the accelerometer (with retries). On failure the
+/// driver is handed back with the reason, so the caller can retry later.
+#[allow(clippy::type_complexity)]
+#[inline(never)] // start-up temporaries stay out of the caller's (main's) frame
+pub fn start<IF: Interface>(
+    sensor: Adxl355<IF>,
+    config: &NodeConfig,
+) -> Result<OscillatorNode<IF>, (StartError<IF::Error>, Adxl355<IF>)> {
+    let estimator = match compiled_estimator(&config.estimator) {
+        Ok(e) => e,
+        Err(e) => return Err((StartError::Model(e), sensor)),
+    };
+    let mut health = Health::default();
+    match Adxl355Source::start(sensor, config.source, &mut health) {
+        Ok(source) => Ok(Node::new(source, estimator, health)),
+        Err((e, sensor)) => Err((StartError::Sensor(e), sensor)),
+    }
+}
+
+crate::frame! {
+    /// The HIL input as the virtual device's feed saw it.
+    #[derive(Eq)]
+    pub struct FeedFrame = "feed {=u32} {=u32} {=u32}" {
+        /// Data lines read (good and bad).
+        pub lines: u32,
+        /// Data lines skipped.
+        pub bad_lines: u32,
+        /// Header columns the device ignored.
+        pub ignored_columns: u32,
+    }
+}
+
+crate::frame! {
+    /// What the virtual ADXL355 did: the faults it injected, for the test to check the node's
+    /// counts against.
+    #[derive(Eq)]
+    pub struct VirtualFrame = "virtual {=u32} {=u32} {=u32} {=u32} {=u32} {=u32} {=u32} {=u32}" {
+        /// Samples taken from the feed into the FIFO.
+        pub samples_loaded: u32,
+        /// Injected NACKs sent.
+        pub nacks_sent: u32,
+        /// FIFO entries discarded because the FIFO overflowed.
+        pub overrun_entries: u32,
+        /// Injected timeouts sent.
+        pub timeouts_sent: u32,
+        /// Garbage reads served.
+        pub garbage_sent: u32,
+        /// Samples dropped (not produced) while measuring.
+        pub samples_dropped: u32,
+        /// Resets injected.
+        pub resets: u32,
+        /// Samples lost to resets (cleared from the FIFO, or due in standby).
+        pub samples_discarded: u32,
+    }
+}
+
+impl From<crate::virtual_adxl355::VirtualCounters> for VirtualFrame {
+    fn from(v: crate::virtual_adxl355::VirtualCounters) -> Self {
+        Self {
+            samples_loaded: v.samples_loaded,
+            nacks_sent: v.nacks_sent,
+            overrun_entries: v.overrun_entries,
+            timeouts_sent: v.timeouts_sent,
+            garbage_sent: v.garbage_sent,
+            samples_dropped: v.samples_dropped,
+            resets: v.resets,
+            samples_discarded: v.samples_discarded,
+        }
+    }
+}
+
+/// The QEMU image `edgekf-qemu`: the real driver and loop on a virtual ADXL355 whose samples
+/// come from the HIL file (columns `t, ax, ay, az`, optional fault columns). Frames: `start`,
+/// one `blk` per poll, then `health`, `estimator`, `feed`, `virtual`.
+pub struct OscillatorImage;
+
+impl HilImage for OscillatorImage {
+    const NAME: &'static str = "edgekf-qemu";
+    const COLUMNS: &'static [&'static str] = &["t", "ax", "ay", "az"];
+    type Input = f32;
+    type Storage = ();
+    type Source<B: ByteSource> = VirtualSource<B>;
+    type Estimator<'s> = HarmonicForceEstimator<f32>;
+    type StartError = StartError<crate::virtual_adxl355::VirtualBusError>;
+
+    fn storage() {}
+
+    #[inline(never)] // start-up temporaries stay out of the caller's frame
+    fn start<B: ByteSource>(input: B, _: &mut ()) -> Result<HilNode<'_, Self, B>, HilError<Self::StartError>> {
+        let feed = LineFeed::new(input).map_err(HilError::Header)?;
+        let sensor = Adxl355::new_i2c(VirtualAdxl355::new(feed), NodeConfig::default().address);
+        start(sensor, &NodeConfig::default()).map_err(|(e, _)| HilError::Start(e))
+    }
+
+    fn started<B: ByteSource>(node: &HilNode<'_, Self, B>, sink: &mut impl FrameSink) {
+        let sensor = node.source().settings().sensor;
+        sink.frame(&StartFrame { odr: sensor.odr.hz(), watermark: sensor.fifo_watermark });
+    }
+
+    fn finish<B: ByteSource>(node: &HilNode<'_, Self, B>, sink: &mut impl FrameSink) {
+        sink.frame(&node.health());
+        sink.frame(&EstimatorFrame::from(node.estimator().counters()));
+        let device = node.source().device();
+        let feed = device.feed();
+        sink.frame(&FeedFrame {
+            lines: feed.lines(),
+            bad_lines: feed.bad_lines(),
+            ignored_columns: feed.columns().ignored() as u32,
+        });
+        sink.frame(&VirtualFrame::from(device.counters()));
+    }
+}
+
+#[cfg(test)]
+mod tests;

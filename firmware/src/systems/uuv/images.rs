@@ -1,0 +1,22 @@
+//! The underwater vehicle's firmware image, as `cargo xtask` builds, runs and checks it.
+
+use super::UuvImage;
+use crate::hil::HilImage;
+use crate::manifest::{Image, RealTime, Role};
+
+/// Its images. Budgets: the 20-state joint UKF at 50 Hz on an 84 MHz core has 1.68 M cycles a
+/// sample; the issue asks for 30 % headroom at one instruction a cycle, 1.2 M: a sample with
+/// the DVL within that, an ordinary one within 1.1 M.
+pub const IMAGES: &[Image] = &[Image {
+    bin: UuvImage::NAME,
+    flag: Some("--uuv"),
+    features: "qemu",
+    what: "the underwater-vehicle thruster-health QEMU image",
+    role: Role::Hil { env: "EDGEKF_UUV_ELF", tests: &["uuv_node"] },
+    budgets: &[("uuv_step", 20, 6, 1_100_000), ("uuv_step_dvl", 20, 6, 1_200_000)],
+    real_time: Some(RealTime {
+        rate_hz: 50,
+        phases: &[&[("uuv_step", 20, 6, 1)]],
+        spikes: &[("uuv_step_dvl", 20, 6)],
+    }),
+}];
