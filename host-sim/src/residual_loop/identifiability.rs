@@ -4,6 +4,7 @@
 
 use super::filter::Run;
 use super::fit::{Engine, Fitted};
+use super::optimize::ScalarRange;
 use super::report::NotIdentifiable;
 use super::system::LoopSystem;
 use super::vocabulary::{Applied, EffectKind, EffectLabel};
@@ -40,25 +41,25 @@ impl<S: LoopSystem> Engine<'_, S> {
     }
 
     /// Effects of [`LoopSystem::screened`] the data cannot see from the final model.
-    /// The component parameters the system declares ([`LoopSystem::declared`], kind
-    /// [`EffectKind::Parameter`]) that the data cannot see from the final model: halving and
-    /// doubling each changes the log-likelihood by less than its BIC cost. A trial whose
-    /// filter fails (diverges, cannot be built) counts as seen: the data reject it.
+    /// The declared effects ([`LoopSystem::declared`]) with a scalar that the data cannot see
+    /// from the final model: moving the scalar to its [`probes`] changes the log-likelihood by
+    /// less than the effect's BIC cost. A trial whose filter fails (diverges, cannot be built)
+    /// counts as seen: the data reject it.
     pub(super) fn screen(&self, effects: &[Applied<S::Effect>], run: &Run) -> Vec<NotIdentifiable> {
         let base = run.log_likelihood();
-        let mut out = Vec::new();
-        let screened: Vec<S::Effect> = self
+        let screened: Vec<(S::Effect, Probes)> = self
             .sys
             .declared()
             .into_iter()
-            .filter(|e| self.sys.label(e).kind == EffectKind::Parameter && !effects.iter().any(|x| x.effect == *e))
+            .filter(|e| !effects.iter().any(|x| x.effect == *e))
+            .filter_map(|e| Some((e, probes(self.sys.label(&e).kind, &self.sys.fitting(&e).scalar?.0))))
             .collect();
         let worsts: Vec<f64> = screened
             .par_iter()
-            .map(|e| {
+            .map(|(e, probes)| {
                 let penalty = self.bic(e, false);
                 let mut worst: f64 = 0.0;
-                for theta in PROBES.map(f64::ln) {
+                for &theta in &probes.thetas {
                     let mut trial = effects.to_vec();
                     trial.push(Applied::new(*e, theta));
                     let Ok((_, r)) = self.sys.run(&trial) else { return f64::INFINITY };
@@ -70,7 +71,8 @@ impl<S: LoopSystem> Engine<'_, S> {
                 worst
             })
             .collect();
-        for (e, worst) in screened.iter().zip(worsts) {
+        let mut out = Vec::new();
+        for ((e, probes), worst) in screened.iter().zip(worsts) {
             let penalty = self.bic(e, false);
             let label = self.sys.label(e);
             let what = label.detail.parameter.clone().unwrap_or_else(|| label.kind.to_string());
@@ -83,7 +85,8 @@ impl<S: LoopSystem> Engine<'_, S> {
                     statistic: "max_delta_log_likelihood".into(),
                     value: worst,
                     reason: format!(
-                        "halving or doubling it changes the log-likelihood by at most {worst:.2}, less than its BIC cost {penalty:.1}: these sensors cannot see it"
+                        "{} changes the log-likelihood by at most {worst:.2}, less than its BIC cost {penalty:.1}: these sensors cannot see it",
+                        probes.what
                     ),
                 });
             }
@@ -92,8 +95,26 @@ impl<S: LoopSystem> Engine<'_, S> {
     }
 }
 
-/// The factors a component parameter is screened at: halved and doubled.
-const PROBES: [f64; 2] = [0.5, 2.0];
+/// The scalars an effect is screened at, and how the report says so.
+struct Probes {
+    thetas: Vec<f64>,
+    what: String,
+}
+
+/// A component parameter (a factor `θ = ln f`) is screened halved and doubled: a model's
+/// declared value may be far off. Any other effect at the two ends of the range its system
+/// allows it (a sensor's setting within its tolerance), the neutral end left out.
+fn probes(kind: EffectKind, range: &ScalarRange) -> Probes {
+    if kind == EffectKind::Parameter {
+        return Probes { thetas: vec![0.5f64.ln(), 2f64.ln()], what: "halving or doubling it".into() };
+    }
+    let thetas = [range.low, range.high].into_iter().filter(|t| *t != range.neutral).collect();
+    let shown = |v: f64| if range.log { v.exp() } else { v };
+    Probes {
+        thetas,
+        what: format!("moving it over the range it may take ({:.4} … {:.4})", shown(range.low), shown(range.high)),
+    }
+}
 
 /// The family of an effect for identifiability: same kind and order, different location.
 fn family(l: &EffectLabel) -> (EffectKind, Option<u64>, Option<&str>) {

@@ -18,7 +18,8 @@
 //! * [`vocabulary`]: the effect kinds, their extra fields and [`Applied`] effects;
 //! * [`report`]: what a run reports (`report.json`'s layout);
 //! * [`onset`]: effects that start mid-run (the onset's placement, the halves after it);
-//! * [`signature`]: the innovations' statistics and what is left unexplained;
+//! * [`signature`]: the innovations' statistics and what is left unexplained; [`recording`]:
+//!   a system's data as the summaries and the report's traces read them;
 //! * [`baseline`]: a healthy baseline's source and the comparison of a record with it;
 //! * [`filter`]: a dynamic-size Kalman filter for the host search (time-varying gain until the
 //!   covariance converges, then frozen);
@@ -32,6 +33,7 @@ pub mod identifiability;
 pub mod modal_form;
 pub mod onset;
 pub mod optimize;
+pub mod recording;
 pub mod report;
 pub mod search;
 pub mod signature;
@@ -40,6 +42,7 @@ pub mod vocabulary;
 
 pub use fit::OUTSIDE;
 pub use optimize::ScalarRange;
+pub use recording::Recording;
 pub use report::{
     AddedEffect, LoopReport, NotIdentifiable, Refused, Source, SystemSection, Traces, Trial, SCHEMA_VERSION,
 };

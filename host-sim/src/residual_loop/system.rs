@@ -101,9 +101,9 @@ pub trait LoopSystem: Sync {
     /// The innovations' statistics and the virtual-sensing error of a run.
     fn summarise(&self, run: &Run) -> RunSummary;
     /// The effects whose place the configuration fixes (its component parameters, its
-    /// sensors' settings), in a stable order: the engine checks the component parameters
-    /// among them for what the data cannot see ([`EffectKind::Parameter`], as a factor
-    /// `θ = ln f`).
+    /// sensors' settings), in a stable order: the engine checks those with a scalar for what
+    /// the data cannot see on the final model (a component parameter, [`EffectKind::Parameter`]
+    /// as a factor `θ = ln f`, halved and doubled; any other over the range it may take).
     fn declared(&self) -> Vec<Self::Effect>;
     /// Candidates for the next effect, given the current model's `effects`, its `run` (and
     /// what it was made with, `model`) and the run's summary, in tiers: a later tier is tried

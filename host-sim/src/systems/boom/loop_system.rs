@@ -27,7 +27,8 @@ use super::simulate::MEASURED;
 use crate::io::data::DataFile;
 use crate::residual_loop::filter::Run;
 use crate::residual_loop::optimize::ScalarRange;
-use crate::residual_loop::signature::{summarise, ReferenceLines, SummaryContext, SEGMENT};
+use crate::residual_loop::signature::{ReferenceLines, SEGMENT};
+use crate::residual_loop::Recording;
 use crate::residual_loop::{
     search, Applied, Channel, EffectDetail, EffectKind, EffectLabel, Fitting, LoopOptions, LoopReport, LoopSystem,
     RunSummary, SystemSection, Traces,
@@ -160,8 +161,16 @@ impl<'a> BoomSystem<'a> {
         1.0 / (self.settings.dt * SEGMENT as f64)
     }
 
-    fn truth(&self) -> Vec<Option<&[f64]>> {
-        vec![self.data.column("truth_tip_vibration")]
+    /// The data as the engine reads them: the tip vibration's truth where simulated.
+    fn recording(&self) -> Recording<'_> {
+        let truth = vec![self.data.column("truth_tip_vibration")];
+        Recording {
+            t: &self.data.t,
+            channels: &self.channels,
+            rows: &self.rows,
+            truth,
+            sample_rate: 1.0 / self.settings.dt,
+        }
     }
 
     /// Each effect's scalar range and grid: factors within what a boom's settings can be off
@@ -242,20 +251,12 @@ impl LoopSystem for BoomSystem<'_> {
     }
 
     fn summarise(&self, run: &Run) -> RunSummary {
-        let truth = self.truth();
+        let rec = self.recording();
         let lines = ReferenceLines { naturals: self.naturals.clone(), ..ReferenceLines::default() };
-        let ctx = SummaryContext {
-            t: &self.data.t,
-            channels: &self.channels,
-            rows: &self.rows,
-            truth: &truth,
-            lines: &lines,
-            sample_rate: 1.0 / self.settings.dt,
-        };
         let mut o = self.options.signatures;
         o.settle = o.settle.max(SETTLE_S);
-        let mut s = summarise(run, &ctx, &o);
-        if let (Some(truth), Some(rate)) = (truth[0], self.data.column("truth_root_rate")) {
+        let mut s = rec.summarise(run, &lines, &o);
+        if let (Some(truth), Some(rate)) = (rec.truth[0], self.data.column("truth_root_rate")) {
             let p = peak_errors(&self.data.t, &run.outputs[0], truth, rate);
             if p.peaks > 0 {
                 s.metrics.insert("peak_error_pct".into(), p.mean_pct);
@@ -344,9 +345,17 @@ impl LoopSystem for BoomSystem<'_> {
         Fitting::scalar(parameters, range, grid)
     }
 
-    /// The stiffness and the platform's mass, the configuration's component parameters.
+    /// The configuration's component parameters (the sections' EI, the platform's mass) and
+    /// its sensors' settings (the inclinometer's lag and offset, the gyro's scale and drift).
     fn declared(&self) -> Vec<Effect> {
-        vec![Effect::Stiffness, Effect::PlatformMass]
+        vec![
+            Effect::Stiffness,
+            Effect::PlatformMass,
+            Effect::InclinometerLag,
+            Effect::InclinometerOffset,
+            Effect::GyroScale,
+            Effect::GyroDrift,
+        ]
     }
 
     /// The fitted lag (s) or offset (rad), or the factor.
@@ -360,7 +369,7 @@ impl LoopSystem for BoomSystem<'_> {
     }
 
     fn traces(&self) -> Traces {
-        Traces::new(&self.data.t, &self.channels, &self.rows, &self.truth())
+        self.recording().traces()
     }
 
     /// What the configuration declared of the sensors the effects act on.

@@ -18,7 +18,8 @@ use crate::io::data::DataFile;
 use crate::residual_loop::filter::{run_segments, Run, StateSpace};
 use crate::residual_loop::onset::settled_mean;
 use crate::residual_loop::optimize::ScalarRange;
-use crate::residual_loop::signature::{summarise, ReferenceLines, SummaryContext};
+use crate::residual_loop::signature::ReferenceLines;
+use crate::residual_loop::Recording;
 use crate::residual_loop::{
     search, Applied, Channel, EffectDetail, EffectKind, EffectLabel, Fitting, LoopOptions, LoopReport, LoopSystem,
     RunSummary, Traces,
@@ -64,6 +65,14 @@ pub struct OscillatorSystem<'a> {
 }
 
 impl<'a> OscillatorSystem<'a> {
+    /// The data as the engine reads them: the displacement's truth where simulated.
+    fn recording(&self) -> Recording<'_> {
+        let truth = vec![self.data.column("truth_x")];
+        let (t, channels, rows, sample_rate) =
+            (&self.data.t, &self.channels[..], &self.rows[..], self.params.sample_rate_hz);
+        Recording { t, channels, rows, truth, sample_rate }
+    }
+
     /// The model of `scenario` (mode, drive, sensor, filter tuning) on `data`'s `ax` channel.
     pub fn new(scenario: &Scenario, data: &'a DataFile, options: &LoopOptions) -> Result<Self> {
         let ax = data.column(CHANNEL).ok_or_else(|| anyhow!("the data file has no channel {CHANNEL}"))?.to_vec();
@@ -239,21 +248,12 @@ impl LoopSystem for OscillatorSystem<'_> {
     }
 
     fn summarise(&self, run: &Run) -> RunSummary {
-        let truth = [self.data.column("truth_x")];
         let lines = ReferenceLines {
             speed: self.params.drive_rad_s,
             naturals: vec![self.params.natural_freq_hz],
             named: vec![],
         };
-        let ctx = SummaryContext {
-            t: &self.data.t,
-            channels: &self.channels,
-            rows: &self.rows,
-            truth: &truth,
-            lines: &lines,
-            sample_rate: self.params.sample_rate_hz,
-        };
-        summarise(run, &ctx, &self.options.signatures)
+        self.recording().summarise(run, &lines, &self.options.signatures)
     }
 
     /// A bias when the innovations' mean is off; lines at 2× or 3× the drive name a force
@@ -317,9 +317,10 @@ impl LoopSystem for OscillatorSystem<'_> {
         Fitting { parameters, scalar, limit: None, may_start_mid_run: true }
     }
 
-    /// The mode's frequency and damping, the scenario's component parameters.
+    /// The mode's frequency and damping (the scenario's component parameters) and the
+    /// sensor's scale.
     fn declared(&self) -> Vec<Effect> {
-        vec![Effect::Frequency, Effect::Damping]
+        vec![Effect::Frequency, Effect::Damping, Effect::SensorScale]
     }
 
     /// A bias's mean, a force's amplitude (times the modal mass) once settled, or the fitted
@@ -339,7 +340,7 @@ impl LoopSystem for OscillatorSystem<'_> {
     }
 
     fn traces(&self) -> Traces {
-        Traces::new(&self.data.t, &self.channels, &self.rows, &[self.data.column("truth_x")])
+        self.recording().traces()
     }
 }
 

@@ -33,7 +33,7 @@ use crate::io::data::DataFile;
 use crate::residual_loop::filter::{run_state_space, Run, StateSpace};
 use crate::residual_loop::onset::settled_mean;
 use crate::residual_loop::signature::{Channel, NamedLine, ReferenceLines};
-use crate::residual_loop::{search, Applied, LoopOptions, LoopReport, LoopSystem};
+use crate::residual_loop::{search, Applied, LoopOptions, LoopReport, LoopSystem, Recording};
 use crate::systems::rotor::bearing_geometry::BearingLine;
 use crate::systems::rotor::estimate::Tuning;
 use crate::systems::rotor::estimate::{reduce, ReducedRotor};
@@ -321,6 +321,13 @@ impl<'a> RotorSystem<'a> {
         };
         let run = run_filter(&m, dt, &cols, &self.rows)?;
         Ok((m, run))
+    }
+
+    /// The data as the engine reads them: each displacement row's truth where simulated.
+    fn recording(&self) -> Recording<'_> {
+        let truth = self.row_names.iter().map(|n| self.data.column(&format!("truth_{n}"))).collect();
+        let (channels, rows) = (&self.channel_info[..], &self.row_info[..]);
+        Recording { t: &self.data.t, channels, rows, truth, sample_rate: self.red.sample_rate }
     }
 
     /// The running speed, Hz, and where it came from.

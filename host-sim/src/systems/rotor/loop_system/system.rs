@@ -6,7 +6,6 @@ use super::effects::{AugmentedModel, Effect, Parameter};
 use super::RotorSystem;
 use crate::residual_loop::filter::Run;
 use crate::residual_loop::onset::settled_mean;
-use crate::residual_loop::signature::{summarise, SummaryContext};
 use crate::residual_loop::{
     Applied, EffectDetail, EffectLabel, Fitting, LoopOptions, LoopSystem, PreStage, RunSummary, SystemSection, Traces,
 };
@@ -27,17 +26,7 @@ impl LoopSystem for RotorSystem<'_> {
     }
 
     fn summarise(&self, run: &Run) -> RunSummary {
-        let truth: Vec<Option<&[f64]>> =
-            self.row_names.iter().map(|n| self.data.column(&format!("truth_{n}"))).collect();
-        let ctx = SummaryContext {
-            t: &self.data.t,
-            channels: &self.channel_info,
-            rows: &self.row_info,
-            truth: &truth,
-            lines: &self.reference,
-            sample_rate: self.red.sample_rate,
-        };
-        summarise(run, &ctx, &self.options.signatures)
+        self.recording().summarise(run, &self.reference, &self.options.signatures)
     }
 
     /// Candidates named directly by a signature, then the structural ones, then the
@@ -127,9 +116,7 @@ impl LoopSystem for RotorSystem<'_> {
     }
 
     fn traces(&self) -> Traces {
-        let truth: Vec<Option<&[f64]>> =
-            self.row_names.iter().map(|n| self.data.column(&format!("truth_{n}"))).collect();
-        Traces::new(&self.data.t, &self.channel_info, &self.row_info, &truth)
+        self.recording().traces()
     }
 
     /// `running_speed`: the speed the loop used and where it came from; with a baseline, the

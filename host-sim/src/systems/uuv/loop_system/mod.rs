@@ -20,7 +20,8 @@ use crate::io::data::DataFile;
 use crate::residual_loop::filter::Run;
 use crate::residual_loop::onset::settled_mean;
 use crate::residual_loop::optimize::ScalarRange;
-use crate::residual_loop::signature::{summarise, ReferenceLines, SummaryContext};
+use crate::residual_loop::signature::ReferenceLines;
+use crate::residual_loop::Recording;
 use crate::residual_loop::{
     search, Applied, Channel, EffectDetail, EffectKind, EffectLabel, Fitting, LoopOptions, LoopReport, LoopSystem,
     RunSummary, SystemSection, Traces,
@@ -103,8 +104,17 @@ impl<'a> UuvSystem<'a> {
         v
     }
 
-    fn truth(&self) -> Vec<Option<&[f64]>> {
-        ["truth_k_t", "truth_k_v", "truth_u"].iter().map(|c| self.data.column(c)).collect()
+    /// The data as the engine reads them: the health factors' and the surge speed's truth
+    /// where simulated.
+    fn recording(&self) -> Recording<'_> {
+        let truth = ["truth_k_t", "truth_k_v", "truth_u"].iter().map(|c| self.data.column(c)).collect();
+        Recording {
+            t: &self.data.t,
+            channels: &self.channels,
+            rows: &self.rows,
+            truth,
+            sample_rate: 1.0 / self.settings.dt,
+        }
     }
 
     fn in_model(&self, e: Effect, effects: &[Applied<Effect>]) -> bool {
@@ -136,19 +146,9 @@ impl LoopSystem for UuvSystem<'_> {
     }
 
     fn summarise(&self, run: &Run) -> RunSummary {
-        let truth = self.truth();
-        let lines = ReferenceLines::default();
-        let ctx = SummaryContext {
-            t: &self.data.t,
-            channels: &self.channels,
-            rows: &self.rows,
-            truth: &truth,
-            lines: &lines,
-            sample_rate: 1.0 / self.settings.dt,
-        };
         let mut o = self.options.signatures;
         o.settle = o.settle.max(SETTLE_S);
-        summarise(run, &ctx, &o)
+        self.recording().summarise(run, &ReferenceLines::default(), &o)
     }
 
     /// First what the signatures name: an offset on a biased channel (on any IMU axis), the health of a thruster
@@ -248,7 +248,7 @@ impl LoopSystem for UuvSystem<'_> {
     }
 
     fn traces(&self) -> Traces {
-        Traces::new(&self.data.t, &self.channels, &self.rows, &self.truth())
+        self.recording().traces()
     }
 
     /// What the configuration declared: the base model's states beside the vehicle's.
