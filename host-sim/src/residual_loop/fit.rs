@@ -5,8 +5,8 @@
 use super::filter::Run;
 use super::onset;
 use super::optimize::maximise;
+use super::options::LoopOptions;
 use super::report::{Refused, Trial};
-use super::search::LoopOptions;
 use super::signature::Signature;
 use super::system::LoopSystem;
 use super::vocabulary::{Applied, EffectLabel};

@@ -12,7 +12,7 @@
 //!
 //! * [`system`]: the [`LoopSystem`] trait, how an effect is fitted ([`Fitting`]) and what a
 //!   system's first stage found ([`PreStage`]);
-//! * [`search`](mod@search): the loop and its options;
+//! * [`search`](mod@search): the loop; [`options`]: its settings;
 //! * [`fit`]: one candidate fitted (its scalar, its onset, its gains and costs);
 //! * [`identifiability`]: rivals a winner cannot be told from, parameters the data cannot see;
 //! * [`vocabulary`]: the effect kinds, their extra fields and [`Applied`] effects;
@@ -33,6 +33,7 @@ pub mod identifiability;
 pub mod modal_form;
 pub mod onset;
 pub mod optimize;
+pub mod options;
 pub mod recording;
 pub mod report;
 pub mod search;
@@ -42,11 +43,12 @@ pub mod vocabulary;
 
 pub use fit::OUTSIDE;
 pub use optimize::ScalarRange;
+pub use options::LoopOptions;
 pub use recording::Recording;
 pub use report::{
     AddedEffect, LoopReport, NotIdentifiable, Refused, Source, SystemSection, Traces, Trial, SCHEMA_VERSION,
 };
-pub use search::{search, LoopOptions};
+pub use search::search;
 pub use signature::{Channel, ChannelSignature, PeakSignature, RunSummary, Signature, SignatureOptions};
 pub use system::{Fitting, LoopSystem, PreStage};
 pub use vocabulary::{Applied, EffectDetail, EffectKind, EffectLabel};

@@ -10,52 +10,12 @@
 
 use super::filter::Run;
 use super::fit::{Engine, Fitted};
+use super::options::LoopOptions;
 use super::report::{AddedEffect, LoopReport, NotIdentifiable, Refused, Source, Traces, Trial, SCHEMA_VERSION};
-use super::signature::{unexplained, RunSummary, Signature, SignatureOptions};
+use super::signature::{unexplained, RunSummary, Signature};
 use super::system::{LoopSystem, PreStage};
 use super::vocabulary::{Applied, EffectKind, EffectLabel};
 use anyhow::Result;
-
-/// How the loop runs (the engine's own settings; a system's tuning is its own data).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct LoopOptions {
-    /// What counts as a signature.
-    pub signatures: SignatureOptions,
-    /// At most this many effects are added.
-    pub max_effects: usize,
-    /// Each half of the run must gain at least this fraction of an effect's BIC cost: an
-    /// effect that only helps part of the run is not a constant property of the machine.
-    pub half_gain: f64,
-    /// Log-likelihood per scalar measurement an effect must gain beyond its BIC cost: what a
-    /// healthy baseline's own record would still gain from its best next effect (0 without
-    /// a baseline). A change must be larger than what the healthy machine leaves unexplained.
-    /// It is scaled by the current model's NIS per channel (at least 1): on a record whose
-    /// innovations carry k times the power the model expects, a wrong effect gains about k
-    /// times more.
-    pub gain_floor: f64,
-    /// Two locations of the same kind whose log-likelihoods differ by less than this are
-    /// reported as not identifiable from each other.
-    pub identifiable_margin: f64,
-    /// Check at the end which component parameters the data cannot see (halving or doubling
-    /// each changes the log-likelihood by less than its BIC cost).
-    pub screen_parameters: bool,
-    /// Print progress to standard error.
-    pub progress: bool,
-}
-
-impl Default for LoopOptions {
-    fn default() -> Self {
-        Self {
-            signatures: SignatureOptions::default(),
-            max_effects: 4,
-            half_gain: 0.25,
-            gain_floor: 0.0,
-            identifiable_margin: 2.0,
-            screen_parameters: true,
-            progress: false,
-        }
-    }
-}
 
 /// An effect kept, with the lines it explained.
 struct Kept<E> {

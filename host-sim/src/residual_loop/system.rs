@@ -7,8 +7,8 @@
 
 use super::filter::Run;
 use super::optimize::ScalarRange;
+use super::options::LoopOptions;
 use super::report::{AddedEffect, Refused, SystemSection, Traces, Trial};
-use super::search::LoopOptions;
 use super::signature::RunSummary;
 use super::vocabulary::{Applied, EffectKind, EffectLabel};
 use anyhow::Result;

@@ -3,7 +3,7 @@
 //! panels, for figures whose legend says more than a name per series (a value per run, what
 //! each marker convention means).
 
-use super::series::{Marker, Stroke};
+use super::series::Key;
 use super::shapes::{draw_key, KEY_WIDTH};
 use super::{Area, FONT};
 use anyhow::Result;
@@ -22,19 +22,6 @@ const ROW_HEIGHT: i32 = 18;
 const PAD: i32 = 6;
 /// Colour of legend text.
 const TEXT: RGBColor = RGBColor(40, 40, 40);
-
-/// What a legend entry shows before its text.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Key {
-    /// A stretch of line.
-    Line(Stroke),
-    /// A marker.
-    Marker(Marker),
-    /// A stretch of line with a marker in its middle.
-    LineMarker(Stroke, Marker),
-    /// A band swatch: its fill, and its edges stroked.
-    Band(RGBColor, Stroke),
-}
 
 /// One entry of a [`LegendColumn`]: an optional key and lines of text (the first one larger).
 #[derive(Debug, Clone, PartialEq)]

@@ -42,9 +42,10 @@ pub use axis::{tick, Axis};
 pub use clip::clip;
 pub use decimate::{min_max, min_max_points};
 pub use figure::Figure;
-pub use legend::{Entry, Key, LegendColumn};
+pub use legend::{Entry, LegendColumn};
 pub use panel::{Mesh, Panel};
 pub use plotters::style::RGBColor;
+pub use series::Key;
 pub use series::{Band, Fill, Line, Marker, Markers, Shape, Stroke};
 
 /// Font family of the figures' text (rendered by the viewer).

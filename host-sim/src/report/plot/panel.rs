@@ -2,7 +2,8 @@
 //! then lines, then markers), with a legend in the corner that covers the fewest of its lines'
 //! points. Drawing clips every line to the axes and leaves out what the axes cannot place.
 
-use super::legend::{draw_box, Corner, Key};
+use super::legend::{draw_box, Corner};
+use super::series::Key;
 use super::series::{Band, Line, Markers};
 use super::shapes::draw_marker;
 use super::{clip, tick, Area, Axis, FONT};

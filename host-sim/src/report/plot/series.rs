@@ -229,3 +229,16 @@ mod tests {
         assert_eq!(placed[0].label, Some("b"));
     }
 }
+
+/// What a legend entry shows before its text.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Key {
+    /// A stretch of line.
+    Line(Stroke),
+    /// A marker.
+    Marker(Marker),
+    /// A stretch of line with a marker in its middle.
+    LineMarker(Stroke, Marker),
+    /// A band swatch: its fill, and its edges stroked.
+    Band(RGBColor, Stroke),
+}

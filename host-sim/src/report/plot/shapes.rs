@@ -2,8 +2,7 @@
 //! [`Fill`] at a point of any coordinate system (data coordinates in a panel, pixels in a
 //! legend), a stretch of stroke in pixels, and a legend [`Key`].
 
-use super::legend::Key;
-use super::series::{Fill, Marker, Shape, Stroke};
+use super::series::{Fill, Key, Marker, Shape, Stroke};
 use super::Area;
 use anyhow::Result;
 use plotters::coord::CoordTranslate;

@@ -4,7 +4,7 @@
 //! configuration the rotor is reduced from, [`parameter`](super::parameter)).
 
 use super::force::{self, Flexibility, Force};
-use super::{mode, sensor, Effect, EffectTuning};
+use super::{mode, sensor, Effect, EffectTuning, Parts};
 use crate::systems::rotor::estimate::ReducedRotor;
 use crate::systems::rotor::RotorModel;
 use anyhow::{bail, Result};
@@ -29,33 +29,6 @@ pub struct AugmentedModel {
     pub effects: Vec<(Effect, f64, usize)>,
     /// The unbalance forces' states (`F_x`, `F_y` per unbalance node, N).
     pub unbalance: std::ops::Range<usize>,
-}
-
-/// The matrices of the model being built, grown to every effect's states.
-pub(super) struct Parts {
-    pub a: DMatrix<f64>,
-    pub qc: DMatrix<f64>,
-    pub p0: DMatrix<f64>,
-    pub c: DMatrix<f64>,
-    pub displacement: DMatrix<f64>,
-}
-
-impl Parts {
-    /// `red`'s matrices with `ns` state columns (the new ones zero).
-    fn grown(red: &ReducedRotor, ns: usize) -> Self {
-        let grow = |mat: &DMatrix<f64>, rows: usize| {
-            let mut out = DMatrix::<f64>::zeros(rows, ns);
-            out.view_mut((0, 0), (mat.nrows(), mat.ncols())).copy_from(mat);
-            out
-        };
-        Self {
-            a: grow(&red.a, ns),
-            qc: grow(&red.qc, ns),
-            p0: grow(&red.p0, ns),
-            c: grow(&red.c, red.c.nrows()),
-            displacement: grow(&red.displacement, red.displacement.nrows()),
-        }
-    }
 }
 
 /// Builds `red` plus `effects`, each with its scalar (ignored by effects without one; a
@@ -129,4 +102,20 @@ fn accelerometers(p: &mut Parts, red: &ReducedRotor, new: std::ops::Range<usize>
             }
         }
     }
+}
+
+/// How a force at `node` at `order ×` the running speed enters `red` (augmented as
+/// [`augment`] would): its columns in the base model's dynamics (`B`, `red.states() × 2`,
+/// for `F_x`, `F_y`) and in the sensor rows (`D`, channels × 2). What
+/// [`locate`](crate::diagnostics::locate) ranks a force's or a mass's places with.
+pub fn force_columns(
+    red: &ReducedRotor,
+    model: &RotorModel,
+    flex: &Flexibility,
+    node: usize,
+    order: u32,
+) -> Result<(DMatrix<f64>, DMatrix<f64>)> {
+    let m = augment(red, model, flex, &[(Effect::HarmonicForce { node, order }, 0.0)], &EffectTuning::default())?;
+    let n0 = red.states();
+    Ok((m.a.view((0, n0), (n0, 2)).clone_owned(), m.c.view((0, n0), (m.c.nrows(), 2)).clone_owned()))
 }

@@ -2,14 +2,13 @@
 //! turning at that rate) or unknown (two fast random walks), entering the modal equations
 //! through the node's mode-shape rows with the static correction of the truncated modes.
 
-use super::augment::{augment, Parts};
-use super::{Effect, EffectTuning};
+use super::Parts;
 use crate::systems::rotor::estimate::ReducedRotor;
 use crate::systems::rotor::{dof, RotorModel, SensorKind};
 use anyhow::{bail, Context, Result};
 use nalgebra::DMatrix;
 
-/// What [`augment`] needs besides the reduced model: the static stiffness of the FE model (for
+/// What [`augment`](super::augment()) needs besides the reduced model: the static stiffness of the FE model (for
 /// the truncated modes' static correction of new forces).
 #[derive(Debug, Clone)]
 pub struct Flexibility {
@@ -102,20 +101,4 @@ fn add_force(
         }
     }
     Ok(())
-}
-
-/// How a force at `node` at `order ×` the running speed enters `red` (augmented as
-/// [`augment`] would): its columns in the base model's dynamics (`B`, `red.states() × 2`,
-/// for `F_x`, `F_y`) and in the sensor rows (`D`, channels × 2). What
-/// [`locate`](crate::diagnostics::locate) ranks a force's or a mass's places with.
-pub fn force_columns(
-    red: &ReducedRotor,
-    model: &RotorModel,
-    flex: &Flexibility,
-    node: usize,
-    order: u32,
-) -> Result<(DMatrix<f64>, DMatrix<f64>)> {
-    let m = augment(red, model, flex, &[(Effect::HarmonicForce { node, order }, 0.0)], &EffectTuning::default())?;
-    let n0 = red.states();
-    Ok((m.a.view((0, n0), (n0, 2)).clone_owned(), m.c.view((0, n0), (m.c.nrows(), 2)).clone_owned()))
 }

@@ -17,14 +17,43 @@ pub mod mode;
 pub mod parameter;
 pub mod sensor;
 
-pub use self::augment::{augment, AugmentedModel};
-pub use self::force::{force_columns, Flexibility};
+pub use self::augment::{augment, force_columns, AugmentedModel};
+pub use self::force::Flexibility;
 pub use self::parameter::{apply_parameters, Parameter};
 pub use crate::residual_loop::optimize::ScalarRange;
 use crate::residual_loop::EffectKind;
 use crate::systems::rotor::bearing_geometry::BearingLine;
 use crate::systems::rotor::bounds::Bounds;
+use crate::systems::rotor::estimate::ReducedRotor;
 use crate::systems::rotor::RotorConfig;
+use nalgebra::DMatrix;
+
+/// The matrices of the model being built, grown to every effect's states.
+pub(in crate::systems::rotor::loop_system) struct Parts {
+    pub a: DMatrix<f64>,
+    pub qc: DMatrix<f64>,
+    pub p0: DMatrix<f64>,
+    pub c: DMatrix<f64>,
+    pub displacement: DMatrix<f64>,
+}
+
+impl Parts {
+    /// `red`'s matrices with `ns` state columns (the new ones zero).
+    pub(super) fn grown(red: &ReducedRotor, ns: usize) -> Self {
+        let grow = |mat: &DMatrix<f64>, rows: usize| {
+            let mut out = DMatrix::<f64>::zeros(rows, ns);
+            out.view_mut((0, 0), (mat.nrows(), mat.ncols())).copy_from(mat);
+            out
+        };
+        Self {
+            a: grow(&red.a, ns),
+            qc: grow(&red.qc, ns),
+            p0: grow(&red.p0, ns),
+            c: grow(&red.c, red.c.nrows()),
+            displacement: grow(&red.displacement, red.displacement.nrows()),
+        }
+    }
+}
 
 /// One kind of model augmentation, at one place.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -2,8 +2,8 @@
 //! two states per channel oscillating at its frequency, driven by white noise; the same
 //! oscillator carries a baseline's resonances ([`healthy`](super::super::healthy)).
 
-use super::augment::Parts;
 use super::EffectTuning;
+use super::Parts;
 use crate::systems::rotor::estimate::ReducedRotor;
 use anyhow::{bail, Result};
 use nalgebra::DMatrix;

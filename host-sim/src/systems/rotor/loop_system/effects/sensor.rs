@@ -2,7 +2,7 @@
 //! output-side effects over the complete dynamics: a scale, a delay (`C e^{−Aτ}`), a
 //! first-order lag (a state the channel reads instead).
 
-use super::augment::Parts;
+use super::Parts;
 use super::{Effect, EffectTuning};
 use anyhow::{anyhow, bail, Result};
 use edgekf::linalg::expm;
