@@ -13,7 +13,7 @@ use core::fmt;
 use edgekf::csv_header::{fields, Header, HeaderError};
 use edgekf::decimal::parse_f32;
 
-use super::feed::FeedSample;
+use super::sample::FeedSample;
 
 /// Most columns a header may have (the column index is reported as a `u8`).
 pub const MAX_CSV_COLUMNS: usize = 64;

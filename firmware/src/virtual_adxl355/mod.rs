@@ -65,11 +65,13 @@
 
 mod csv;
 mod feed;
+mod sample;
 #[cfg(test)]
 mod tests;
 
 pub use csv::{CsvColumns, CsvError, FAULT_COLUMNS, MAX_CSV_COLUMNS};
-pub use feed::{CsvTextFeed, FeedSample, FnFeed, SampleFeed, SliceFeed};
+pub use feed::{CsvTextFeed, FnFeed, SampleFeed, SliceFeed};
+pub use sample::FeedSample;
 
 use core::fmt;
 
