@@ -65,26 +65,26 @@ pub fn uuv(n: u32) -> SoakFrame {
     put(&mut x, current + 1, -0.05);
     let process = ProcessNoise::default();
     let per_step = |density: f64| (density * libm::sqrt(dt)) as f32;
-    let sd: [f32; 10] = [
-        per_step(process.depth),
-        per_step(process.attitude),
-        per_step(process.attitude),
-        per_step(process.attitude),
-        per_step(process.velocity),
-        per_step(process.velocity),
-        per_step(process.velocity),
-        per_step(process.rate),
-        per_step(process.rate),
-        per_step(process.rate),
-    ];
+    // Per step: depth, the three attitudes, the three velocities, the three rates.
+    let (d, a, v, r) =
+        (per_step(process.depth), per_step(process.attitude), per_step(process.velocity), per_step(process.rate));
+    let sd: [f32; 10] = [d, a, a, a, v, v, v, r, r, r];
     let sensors = MeasurementNoise::default();
     let (acc_sd, gyro_sd) = (sensors.acc as f32, sensors.gyro as f32);
     let (depth_sd, heading_sd, dvl_sd) = (sensors.depth as f32, sensors.heading as f32, sensors.dvl as f32);
     let a = &vehicle.actuators;
-    let (fin_max, v_thrust, v_max) = (a.fin_max as f32, a.vertical_thrust as f32, a.vertical_max_rpm as f32);
-    let net = (vehicle.buoyancy - vehicle.weight) as f32;
+    let mut pilot = Autopilot {
+        depth,
+        heading,
+        rpm,
+        fin_max: a.fin_max as f32,
+        v_thrust: a.vertical_thrust as f32,
+        v_max: a.vertical_max_rpm as f32,
+        net: (vehicle.buoyancy - vehicle.weight) as f32,
+        dt: dt as f32,
+        integral: 0.0,
+    };
     let mut command = Command { n_t: rpm, n_v: 0.0, rudder: 0.0, elevator: 0.0 };
-    let mut integral = 0.0f32;
     let mut health = (Drift::new(dt), Drift::new(dt));
     let mut noise = Noise(0x50A4_0005);
     let mut blocks = Blocks::new(n, 8.0);
@@ -116,17 +116,7 @@ pub fn uuv(n: u32) -> SoakFrame {
         let z = x[0] + depth_sd * noise.unit();
         let psi = wrap(x[3] + heading_sd * noise.unit());
         // The autopilots (the host simulator's, on the truth), for the interval to come.
-        let (theta, w, q, r) = (x[2], x[VELOCITY + 2], x[VELOCITY + 4], x[VELOCITY + 5]);
-        let fin = |d: f32| d.max(-fin_max).min(fin_max);
-        let error = depth - x[0];
-        let push = net + 20.0 * error + 2.0 * integral - 40.0 * w;
-        let wanted = push.signum() * libm::sqrtf(push.abs() / v_thrust);
-        let n_v = wanted.max(-v_max).min(v_max);
-        if n_v == wanted {
-            integral += error * dt as f32;
-        }
-        command =
-            Command { n_t: rpm, n_v, rudder: fin(wrap(x[3] - heading) + r), elevator: fin(8.0 * theta + 4.0 * q) };
+        command = pilot.command(&x);
         let sample = Sample {
             acc: [reading[0], reading[1], reading[2]],
             gyro: [reading[3], reading[4], reading[5]],
@@ -167,6 +157,38 @@ pub fn uuv(n: u32) -> SoakFrame {
         }
     }
     blocks.finish(est.health())
+}
+
+/// The host simulator's autopilots on the truth: depth by the tunnel thruster (a PI law on
+/// the net buoyancy, its integral held while the thruster saturates), pitch by the elevator,
+/// heading by the rudder, at a constant main-thruster speed.
+struct Autopilot {
+    depth: f32,
+    heading: f32,
+    rpm: f32,
+    fin_max: f32,
+    v_thrust: f32,
+    v_max: f32,
+    net: f32,
+    dt: f32,
+    integral: f32,
+}
+
+impl Autopilot {
+    /// The commands for the interval to come, from the true state `x`.
+    fn command(&mut self, x: &SVector<f32, STATES>) -> Command<f32> {
+        let (theta, w, q, r) = (x[2], x[VELOCITY + 2], x[VELOCITY + 4], x[VELOCITY + 5]);
+        let fin_max = self.fin_max;
+        let fin = |d: f32| d.max(-fin_max).min(fin_max);
+        let error = self.depth - x[0];
+        let push = self.net + 20.0 * error + 2.0 * self.integral - 40.0 * w;
+        let wanted = push.signum() * libm::sqrtf(push.abs() / self.v_thrust);
+        let n_v = wanted.max(-self.v_max).min(self.v_max);
+        if n_v == wanted {
+            self.integral += error * self.dt;
+        }
+        Command { n_t: self.rpm, n_v, rudder: fin(wrap(x[3] - self.heading) + r), elevator: fin(8.0 * theta + 4.0 * q) }
+    }
 }
 
 /// `x[i]`, 0 out of range (no panic path).
