@@ -11,8 +11,9 @@
 //!   and recovers instead of panicking;
 //! * [`models`]: model builders that know no system: augmented Kalman filter models for unknown
 //!   inputs on structures, synthetic benchmark systems;
-//! * [`systems`]: each system's chip code, one folder per system: the harmonic-force oscillator
-//!   ([`systems::oscillator`]) and the slider-crank's joint clearance ([`systems::crank`]);
+//! * [`systems`]: each system's chip code that the host runs too, one folder per system (the
+//!   harmonic-force oscillator, the slider-crank's joint clearance, the vehicle's thruster
+//!   health, the boom's tip vibration: the list is in [`systems`]' own doc);
 //! * [`csv_header`]: the data contract's header rules (BOM, `t` first, no repeated names), one
 //!   parser for the host's reader and the node's, and [`csv_header::fields`], its panic-free
 //!   field splitter;
