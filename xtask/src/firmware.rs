@@ -65,10 +65,15 @@ fn surviving(image: &Image, elf: &Path, sites: &[crate::panics::Site]) -> Result
 pub fn build_with(image: &Image, proof: Proof) -> Result<PathBuf> {
     let root = workspace_root();
     let path = std::env::var("PATH").unwrap_or_default();
-    let features = match proof {
-        Proof::NoPanic => format!("{},no-panic-proof", image.features),
-        Proof::Ordinary => image.features.to_string(),
-    };
+    // The features of the systems behind one that this xtask's table holds (the firmware's
+    // manifest, `systems::FEATURES`): every image, the soak's and the bench's too, runs the
+    // same systems as the table.
+    let mut features = vec![image.features];
+    features.extend(edgekf_firmware::systems::FEATURES);
+    if proof == Proof::NoPanic {
+        features.push("no-panic-proof");
+    }
+    let features = features.join(",");
     let mut cmd = Command::new(DEBIAN_CARGO);
     cmd.current_dir(&root)
         .args(["build", "-p", "edgekf-firmware", "--bin", image.bin, "--features", &features])
