@@ -31,8 +31,8 @@
 //! `firmware/Cargo.toml` (turning on the shared crate's), `required-features` on its binary.
 //! The manifest gathers its rows only when the feature is on, lists it in [`OFF`] when it is
 //! off (so the folder check still finds it declared), and names the features on in
-//! [`FEATURES`], which `xtask` adds to every image it builds: the soak and bench images then
-//! run the same systems as the table `xtask` was built with. The tests crate turns the
+//! [`FEATURES`], which `xtask` adds to the soak and bench images it builds: they then run the
+//! same systems as the table `xtask` was built with. The tests crate turns the
 //! features on, so `cargo xtask test` builds and tests them.
 //!
 //! Nothing in `xtask`: its rows come from `images.rs`. Its HIL tests are a new file in

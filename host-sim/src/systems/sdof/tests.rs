@@ -79,14 +79,21 @@ fn bad_durations_are_refused() {
     }
 }
 
-/// `edgekf sdof simulate` then `estimate`, through the files; an estimate whose output is its
-/// input is refused before any work, and a file without `ax` names what is missing.
+/// `edgekf sdof simulate` then `estimate`, through the registry's row and the files; an
+/// estimate whose output is its input is refused before any work, and a file without `ax`
+/// names what is missing.
 #[test]
 fn the_command_line_simulates_and_estimates() {
     let dir = tempfile::tempdir().unwrap();
     let (data_csv, est_csv) = (dir.path().join("data.csv"), dir.path().join("est.csv"));
-    run(SdofCommand::Simulate { out: data_csv.clone(), duration: 2.0, seed: 4 }).unwrap();
-    run(SdofCommand::Estimate { data: data_csv.clone(), out: est_csv.clone(), precision: Precision::F32 }).unwrap();
+    let edgekf = |args: &[&std::path::Path]| {
+        let args = ["edgekf".as_ref(), "sdof".as_ref()].into_iter().chain(args.iter().copied());
+        crate::cli::run_with(crate::systems::REGISTRY, args.map(std::path::Path::as_os_str))
+    };
+    let arg = |s: &'static str| std::path::Path::new(s);
+    edgekf(&[arg("simulate"), arg("--out"), &data_csv, arg("--duration"), arg("2"), arg("--seed"), arg("4")]).unwrap();
+    edgekf(&[arg("estimate"), arg("--data"), &data_csv, arg("--out"), &est_csv, arg("--precision"), arg("f32")])
+        .unwrap();
     let (est, _) = data::read(&est_csv, &estimate::OUTPUT).unwrap();
     assert_eq!((est.len(), est.names.len()), (2000, 4));
     let same = run(SdofCommand::Estimate { data: data_csv.clone(), out: data_csv, precision: Precision::F64 });
