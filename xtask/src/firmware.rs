@@ -1,6 +1,6 @@
 //! Cross-building the firmware images and reporting their footprint.
 
-use crate::images::Image;
+use crate::images::{Image, Role};
 use crate::provision::DEBIAN_CARGO;
 use anyhow::{bail, Context, Result};
 use std::path::{Path, PathBuf};
@@ -65,10 +65,18 @@ fn surviving(image: &Image, elf: &Path, sites: &[crate::panics::Site]) -> Result
 pub fn build_with(image: &Image, proof: Proof) -> Result<PathBuf> {
     let root = workspace_root();
     let path = std::env::var("PATH").unwrap_or_default();
-    let features = match proof {
-        Proof::NoPanic => format!("{},no-panic-proof", image.features),
-        Proof::Ordinary => image.features.to_string(),
-    };
+    // The soak and bench images gather every system's rows: they are built with the features
+    // of the systems behind one that this xtask's table holds (the firmware manifest's
+    // `FEATURES`), so that they run the same systems as the table. A system's own image names
+    // its feature in its row; the others (a user's) carry no test system.
+    let mut features = vec![image.features];
+    if image.role == Role::Bench || image.bin == crate::images::SOAK_IMAGE {
+        features.extend(edgekf_firmware::systems::FEATURES);
+    }
+    if proof == Proof::NoPanic {
+        features.push("no-panic-proof");
+    }
+    let features = features.join(",");
     let mut cmd = Command::new(DEBIAN_CARGO);
     cmd.current_dir(&root)
         .args(["build", "-p", "edgekf-firmware", "--bin", image.bin, "--features", &features])

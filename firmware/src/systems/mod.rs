@@ -26,6 +26,15 @@
 //! 3. `pub mod <name>;` in `shared/src/systems/mod.rs`, if it has shared code;
 //! 4. one row in `host-sim/src/systems/mod.rs` (`REGISTRY`), which gives its command line.
 //!
+//! A test system (one that a user's build must not carry) sits behind a cargo feature of the
+//! firmware named like it: `#[cfg(feature = "<name>")] <name>` in the list, the feature in
+//! `firmware/Cargo.toml` (turning on the shared crate's), `required-features` on its binary.
+//! The manifest gathers its rows only when the feature is on, lists it in [`OFF`] when it is
+//! off (so the folder check still finds it declared), and names the features on in
+//! [`FEATURES`], which `xtask` adds to the soak and bench images it builds: they then run the
+//! same systems as the table `xtask` was built with. The tests crate turns the
+//! features on, so `cargo xtask test` builds and tests them.
+//!
 //! Nothing in `xtask`: its rows come from `images.rs`. Its HIL tests are a new file in
 //! `tests/tests/`, named by its image row, that finds its ELF with
 //! `edgekf_tests::qemu::image_elf`; its soak rows run in `tests/tests/soak.rs` and the soak
@@ -40,26 +49,36 @@
 //!   from four accelerometer axes: [`rotor::accel`]);
 //! * [`crank`]: slider-crank joint clearance from the crank angular acceleration;
 //! * [`uuv`]: an underwater vehicle's thruster health from its IMU, depth, compass and DVL;
-//! * [`boom`]: a telescoping boom's tip vibration from a tip gyro and a root inclinometer.
+//! * [`boom`]: a telescoping boom's tip vibration from a tip gyro and a root inclinometer;
+//! * `sdof` (feature `sdof`, a test system): a base-excited mount's relative motion from one
+//!   ADXL355 axis on its mass.
 
 use crate::manifest::{concat, count, Image};
 use crate::soak::SoakRow;
 
 /// The manifest: declares each system's module and gathers its rows, in the order given (the
-/// order of the soak rows and of `cargo xtask test`'s builds).
+/// order of the soak rows and of `cargo xtask test`'s builds). A system written
+/// `#[cfg(feature = "<name>")] <name>` is there only when the firmware's feature is on.
 macro_rules! systems {
-    ($($name:ident),+ $(,)?) => {
-        $(pub mod $name;)+
+    ($($(#[cfg(feature = $feature:literal)])? $name:ident),+ $(,)?) => {
+        $($(#[cfg(feature = $feature)])? pub mod $name;)+
 
-        /// Every system's module name, in the manifest's order.
-        pub const NAMES: &[&str] = &[$(stringify!($name)),+];
+        /// Every system's module name in this build, in the manifest's order.
+        pub const NAMES: &[&str] = &[$($(#[cfg(feature = $feature)])? stringify!($name)),+];
 
-        const SOAK_PARTS: &[&[SoakRow]] = &[$($name::soak::SOAKS),+];
+        /// The systems behind a feature that is off in this build.
+        pub const OFF: &[&str] = &[$($(#[cfg(not(feature = $feature))] stringify!($name),)?)+];
+
+        /// The features of the systems behind one that are on in this build: `xtask` builds
+        /// every image with them.
+        pub const FEATURES: &[&str] = &[$($(#[cfg(feature = $feature)] $feature,)?)+];
+
+        const SOAK_PARTS: &[&[SoakRow]] = &[$($(#[cfg(feature = $feature)])? $name::soak::SOAKS),+];
 
         /// Every system's soak rows, in the manifest's order.
         pub const SOAKS: [SoakRow; count(SOAK_PARTS)] = concat(SOAK_PARTS);
 
-        const IMAGE_PARTS: &[&[Image]] = &[$($name::images::IMAGES),+];
+        const IMAGE_PARTS: &[&[Image]] = &[$($(#[cfg(feature = $feature)])? $name::images::IMAGES),+];
 
         /// Every system's firmware images, in the manifest's order.
         pub const IMAGES: [Image; count(IMAGE_PARTS)] = concat(IMAGE_PARTS);
@@ -68,9 +87,17 @@ macro_rules! systems {
         /// order.
         #[cfg(all(target_os = "none", feature = "qemu"))]
         pub fn bench<M: crate::bench::Markers>() {
-            $($name::bench::run::<M>();)+
+            $($(#[cfg(feature = $feature)])? $name::bench::run::<M>();)+
         }
     };
 }
 
-systems!(oscillator, rotor, crank, uuv, boom);
+systems!(
+    oscillator,
+    rotor,
+    crank,
+    uuv,
+    boom,
+    #[cfg(feature = "sdof")]
+    sdof
+);

@@ -9,12 +9,15 @@
 //!   UKF and the fast estimator the node runs);
 //! * [`uuv`]: an underwater vehicle's thruster health (6-DOF reference, joint UKF of state and
 //!   health factors with a change detector);
-//! * [`boom`]: a long telescoping boom's tip vibration (FE reference with sliding sections).
+//! * [`boom`]: a long telescoping boom's tip vibration (FE reference with sliding sections);
+//! * `sdof` (feature `sdof`, a test system): a base-excited mount's relative motion.
 
 pub mod boom;
 pub mod crank;
 pub mod oscillator;
 pub mod rotor;
+#[cfg(feature = "sdof")]
+pub mod sdof;
 pub mod uuv;
 
 use crate::cli::registry::{dispatch, subcommands, DemoPart, LoopEntry, SystemEntry};
@@ -93,6 +96,15 @@ pub const REGISTRY: &[SystemEntry] = &[
             run: uuv::cli::close_loop,
             baseline: None,
         }),
+        demo: None,
+    },
+    #[cfg(feature = "sdof")]
+    SystemEntry {
+        name: "sdof",
+        about: "Base-excited mount (test system): simulate, estimate its relative displacement from the mass's acceleration",
+        command: subcommands::<sdof::cli::SdofCommand>,
+        run: |m| dispatch(m, sdof::cli::run),
+        close_loop: None,
         demo: None,
     },
 ];

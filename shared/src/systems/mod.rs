@@ -6,9 +6,13 @@
 //!   unbalance pattern of rotating machines), estimated from one accelerometer axis;
 //! * [`crank`]: a slider-crank's joint clearance from its crank angular acceleration;
 //! * [`uuv`]: an underwater vehicle's thruster health from its IMU, depth, heading and DVL;
-//! * [`boom`]: a long telescoping boom's tip vibration from a tip gyro and a root inclinometer.
+//! * [`boom`]: a long telescoping boom's tip vibration from a tip gyro and a root inclinometer;
+//! * `sdof` (feature `sdof`, a test system): a base-excited mount's relative motion from the
+//!   mass's absolute acceleration.
 
 pub mod boom;
 pub mod crank;
 pub mod oscillator;
+#[cfg(feature = "sdof")]
+pub mod sdof;
 pub mod uuv;
