@@ -12,6 +12,7 @@
 //! * [`boom`]: a long telescoping boom's tip vibration (FE reference with sliding sections).
 
 pub mod boom;
+pub mod common;
 pub mod crank;
 pub mod oscillator;
 pub mod rotor;
