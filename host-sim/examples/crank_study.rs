@@ -110,16 +110,12 @@ fn main() {
                 for initial in [0.01e-3, 0.1e-3, 0.2e-3] {
                     let run =
                         ukf::run(&cfg, &rec, &UkfOptions { initial, ..UkfOptions::default() }, &mut |_, _| {}).unwrap();
-                    let before = run.steps.last().unwrap();
                     let err = run.estimate / 0.25e-3 - 1.0;
                     errs.push(err);
                     println!(
-                        "recording {r}, from {:.2} mm: windows after the release {:.4} ± {:.4} mm; with the release window {:.4} ± {:.4} mm ({:+.1} %), {} simulations",
+                        "recording {r}, from {:.2} mm: {} ({:+.1} %), {} simulations",
                         initial * 1e3,
-                        before.clearance * 1e3,
-                        before.std * 1e3,
-                        run.estimate * 1e3,
-                        run.estimate_std * 1e3,
+                        run.release_effect(),
                         err * 100.0,
                         run.simulations
                     );

@@ -49,18 +49,16 @@ pub(super) fn train(args: TrainArgs) -> anyhow::Result<()> {
         for (r, f) in &tested.runs {
             let e = model.estimate_features(*f);
             println!(
-                "test {} {:.3} mm (release {:.1}°, radius ×{:.2}, seed {}): named {} {:.4} mm ({:+.1} %; first stage {:+.1} %{})",
-                r.joint,
-                r.clearance * 1e3,
-                r.release_deg,
-                r.radius,
-                r.seed,
+                "test {r}: named {} {:.4} mm ({:+.1} %; first stage {:+.1} %{})",
                 e.joint,
                 e.clearance[e.joint.index()] * 1e3,
                 (e.clearance[e.joint.index()] / r.clearance - 1.0) * 100.0,
                 (e.per_joint[r.joint.index()] / r.clearance - 1.0) * 100.0,
                 match e.release {
-                    Some(h) => format!(", release law {}", ["first contact", "second contact", "third contact", "fourth contact"][h.min(3)]),
+                    Some(h) => format!(
+                        ", release law {}",
+                        ["first contact", "second contact", "third contact", "fourth contact"][h.min(3)]
+                    ),
                     None => String::new(),
                 }
             );

@@ -32,6 +32,21 @@ pub struct Run {
     pub duration: f64,
 }
 
+impl std::fmt::Display for Run {
+    /// `A 0.300 mm (release 30.0°, radius ×1.00, seed 7)`: how a run is named in reports.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} {:.3} mm (release {:.1}°, radius ×{:.2}, seed {})",
+            self.joint,
+            self.clearance * 1e3,
+            self.release_deg,
+            self.radius,
+            self.seed
+        )
+    }
+}
+
 impl Run {
     /// The recording of this run from `base` (adaptive integrator).
     pub fn simulate(&self, base: &CrankConfig) -> anyhow::Result<Recording> {

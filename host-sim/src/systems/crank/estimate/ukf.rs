@@ -209,6 +209,20 @@ pub struct UkfRun {
 }
 
 impl UkfRun {
+    /// What the release window added, in mm: `windows after the release 0.2400 ± 0.0100 mm,
+    /// with the release window 0.2500 ± 0.0050 mm` (the last window's estimate, then the
+    /// whole-recording one).
+    pub fn release_effect(&self) -> String {
+        let before = self.steps.last().map_or((f64::NAN, f64::NAN), |s| (s.clearance, s.std));
+        format!(
+            "windows after the release {:.4} ± {:.4} mm, with the release window {:.4} ± {:.4} mm",
+            before.0 * 1e3,
+            before.1 * 1e3,
+            self.estimate * 1e3,
+            self.estimate_std * 1e3
+        )
+    }
+
     /// The estimate file's rows: one per window, then the whole-recording estimate (B and C
     /// are taken as tight: the paper's filter estimates A only).
     pub fn rows(&self) -> Vec<EstimateRow> {
