@@ -19,6 +19,7 @@ use edgekf_sim::systems::crank::estimate::Recording;
 use edgekf_sim::systems::crank::feature::window_features;
 use edgekf_sim::systems::crank::studies::identify2::{Analysis, Design};
 use edgekf_sim::systems::crank::{CrankConfig, Mechanism, SimOptions};
+use rayon::prelude::*;
 
 fn feats(c: f64, angle: f64, seed: u64, dur: f64) -> Vec<f64> {
     let mut cfg = CrankConfig::default();
@@ -28,23 +29,10 @@ fn feats(c: f64, angle: f64, seed: u64, dur: f64) -> Vec<f64> {
     window_features(&rec.crank_alpha, 1e4, 0.25).into_iter().map(|f| f.map_or(f64::NAN, |f| f.a)).collect()
 }
 
-/// `m` runs released at `angle + 0.002° · i`, on two threads.
+/// `m` runs released at `angle + 0.002° · i`, on two threads, in the order of `i`.
 fn ensemble(c: f64, angle: f64, m: usize, dur: f64) -> Vec<Vec<f64>> {
-    let mut out: Vec<(usize, Vec<f64>)> = std::thread::scope(|s| {
-        let hs: Vec<_> = (0..2)
-            .map(|h| {
-                s.spawn(move || {
-                    (h..m)
-                        .step_by(2)
-                        .map(|i| (i, feats(c, angle + 0.002 * i as f64, 100 + i as u64, dur)))
-                        .collect::<Vec<_>>()
-                })
-            })
-            .collect();
-        hs.into_iter().flat_map(|h| h.join().unwrap()).collect()
-    });
-    out.sort_by_key(|r| r.0);
-    out.into_iter().map(|r| r.1).collect()
+    let run = || (0..m).into_par_iter().map(|i| feats(c, angle + 0.002 * i as f64, 100 + i as u64, dur)).collect();
+    rayon::ThreadPoolBuilder::new().num_threads(2).build().expect("two threads").install(run)
 }
 
 fn mean_std(v: impl Iterator<Item = f64>) -> (f64, f64) {
@@ -122,16 +110,12 @@ fn main() {
                 for initial in [0.01e-3, 0.1e-3, 0.2e-3] {
                     let run =
                         ukf::run(&cfg, &rec, &UkfOptions { initial, ..UkfOptions::default() }, &mut |_, _| {}).unwrap();
-                    let before = run.steps.last().unwrap();
                     let err = run.estimate / 0.25e-3 - 1.0;
                     errs.push(err);
                     println!(
-                        "recording {r}, from {:.2} mm: windows after the release {:.4} ± {:.4} mm; with the release window {:.4} ± {:.4} mm ({:+.1} %), {} simulations",
+                        "recording {r}, from {:.2} mm: {} ({:+.1} %), {} simulations",
                         initial * 1e3,
-                        before.clearance * 1e3,
-                        before.std * 1e3,
-                        run.estimate * 1e3,
-                        run.estimate_std * 1e3,
+                        run.release_effect(),
                         err * 100.0,
                         run.simulations
                     );

@@ -44,14 +44,10 @@ fn ukf_from_three_starts(duration: f64, bound: f64) {
         let opts = UkfOptions { initial, ..UkfOptions::default() };
         let run = ukf::run(&cfg, &rec, &opts, &mut |_, _| {}).unwrap();
         let err = run.estimate / 0.25e-3 - 1.0;
-        let before = run.steps.last().unwrap();
         eprintln!(
-            "UKF {duration} s from {:.2} mm: windows after the release {:.4} ± {:.4} mm, with the release window {:.4} ± {:.4} mm ({:+.1} %, {} iterations), R std {:.1}, {} simulations, {} integration steps, {:.2} s",
+            "UKF {duration} s from {:.2} mm: {} ({:+.1} %, {} iterations), R std {:.1}, {} simulations, {} integration steps, {:.2} s",
             initial * 1e3,
-            before.clearance * 1e3,
-            before.std * 1e3,
-            run.estimate * 1e3,
-            run.estimate_std * 1e3,
+            run.release_effect(),
             err * 100.0,
             run.release_iterations,
             run.measurement_std,

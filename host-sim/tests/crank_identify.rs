@@ -28,12 +28,7 @@ fn evaluate_with(model: &FastModel, runs: &[Run]) -> (f64, f64, f64, usize) {
         let c = e.clearance[e.joint.index()];
         within += usize::from(e.joint == r.joint && (c / r.clearance - 1.0).abs() <= 0.03);
         eprintln!(
-            "{} {:.3} mm (release {:.1}°, radius ×{:.2}, seed {}): named {} {:.4} mm ({:+.1} %; window features {:+.1} %, release law {:?}), scores {:.1}/{:.1}/{:.1}, {} operations",
-            r.joint,
-            r.clearance * 1e3,
-            r.release_deg,
-            r.radius,
-            r.seed,
+            "{r}: named {} {:.4} mm ({:+.1} %; window features {:+.1} %, release law {:?}), scores {:.1}/{:.1}/{:.1}, {} operations",
             e.joint,
             c * 1e3,
             (c / r.clearance - 1.0) * 100.0,

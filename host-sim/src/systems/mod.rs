@@ -13,6 +13,7 @@
 //! * `sdof` (feature `sdof`, a test system): a base-excited mount's relative motion.
 
 pub mod boom;
+pub mod common;
 pub mod crank;
 pub mod oscillator;
 pub mod rotor;

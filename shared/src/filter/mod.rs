@@ -11,9 +11,11 @@
 //! counted in [`FilterHealth`], so a monitor can tell a healthy filter from one that keeps
 //! recovering.
 
+mod dims;
 mod joint;
 mod kalman;
 mod low_rank;
+mod sigma;
 mod steady;
 mod ukf;
 

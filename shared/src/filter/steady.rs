@@ -125,10 +125,13 @@ pub struct GenericSteadyStateFilter<T: Real, N: Dim, M: Dim>
 where
     DefaultAllocator: FilterAllocator<N, M>,
 {
+    /// The model's `A` and `C`: all the filter keeps of it, the gain being fixed.
     a: OMatrix<T, N, N>,
     c: OMatrix<T, M, N>,
+    /// The steady-state gain `K` and `S⁻¹` (for the innovations' NIS), computed once.
     gain: OMatrix<T, N, M>,
     s_inv: OMatrix<T, M, M>,
+    /// The state, and the start it returns to when it stops being finite ([`Self::resets`]).
     x: OVector<T, N>,
     x0: OVector<T, N>,
     resets: u32,

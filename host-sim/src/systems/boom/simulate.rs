@@ -49,16 +49,8 @@ pub const TRUTH: [&str; 6] = [
     "truth_gyro_bias",
 ];
 
-/// What to simulate.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct SimOptions {
-    /// The run.
-    pub scenario: Scenario,
-    /// Length of the recording, s.
-    pub duration: f64,
-    /// Seed of the sensors' noise.
-    pub seed: u64,
-}
+/// What to simulate: the boom's run, its length and the noise's seed.
+pub type SimOptions = crate::systems::common::SimOptions<Scenario>;
 
 /// A simulated recording: time, the [`MEASURED`] then [`TRUTH`] columns.
 #[derive(Debug, Clone, PartialEq)]
@@ -77,17 +69,12 @@ impl BoomRecording {
 
     /// The column `name`.
     pub fn column(&self, name: &str) -> Option<&[f64]> {
-        Self::names().iter().position(|n| *n == name).map(|i| self.columns[i].as_slice())
+        crate::systems::common::column_of(&Self::names(), &self.columns, name)
     }
 
     /// As a data file (what a reader of the CSV would get).
     pub fn to_data_file(&self) -> DataFile {
-        DataFile {
-            sha256: None,
-            names: Self::names().into_iter().map(String::from).collect(),
-            t: self.t.clone(),
-            columns: self.columns.clone(),
-        }
+        crate::systems::common::data_file(&Self::names(), &self.t, &self.columns)
     }
 
     /// The CSV text.

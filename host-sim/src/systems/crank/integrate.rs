@@ -239,50 +239,80 @@ fn deriv(mech: &Mechanism, y: &Y, memory: &[Option<f64>; 3]) -> (Y, Dynamics) {
     (dy, d)
 }
 
-// Dormand–Prince 5(4) (Hairer, Nørsett & Wanner, DOPRI5).
-const A21: f64 = 1.0 / 5.0;
-const A31: f64 = 3.0 / 40.0;
-const A32: f64 = 9.0 / 40.0;
-const A41: f64 = 44.0 / 45.0;
-const A42: f64 = -56.0 / 15.0;
-const A43: f64 = 32.0 / 9.0;
-const A51: f64 = 19372.0 / 6561.0;
-const A52: f64 = -25360.0 / 2187.0;
-const A53: f64 = 64448.0 / 6561.0;
-const A54: f64 = -212.0 / 729.0;
-const A61: f64 = 9017.0 / 3168.0;
-const A62: f64 = -355.0 / 33.0;
-const A63: f64 = 46732.0 / 5247.0;
-const A64: f64 = 49.0 / 176.0;
-const A65: f64 = -5103.0 / 18656.0;
-const B1: f64 = 35.0 / 384.0;
-const B3: f64 = 500.0 / 1113.0;
-const B4: f64 = 125.0 / 192.0;
-const B5: f64 = -2187.0 / 6784.0;
-const B6: f64 = 11.0 / 84.0;
-const E1: f64 = 71.0 / 57600.0;
-const E3: f64 = -71.0 / 16695.0;
-const E4: f64 = 71.0 / 1920.0;
-const E5: f64 = -17253.0 / 339200.0;
-const E6: f64 = 22.0 / 525.0;
-const E7: f64 = -1.0 / 40.0;
-const D1: f64 = -12715105075.0 / 11282082432.0;
-const D3: f64 = 87487479700.0 / 32700410799.0;
-const D4: f64 = -10690763975.0 / 1880347072.0;
-const D5: f64 = 701980252875.0 / 199316789632.0;
-const D6: f64 = -1453857185.0 / 822651844.0;
-const D7: f64 = 69997945.0 / 29380423.0;
+// Dormand–Prince 5(4) (Hairer, Nørsett & Wanner, DOPRI5), as rows of the Butcher tableau.
+/// Stage 2's weight of k1.
+const A2: [f64; 1] = [1.0 / 5.0];
+/// Stage 3's weights of k1, k2.
+const A3: [f64; 2] = [3.0 / 40.0, 9.0 / 40.0];
+/// Stage 4's weights of k1 … k3.
+const A4: [f64; 3] = [44.0 / 45.0, -56.0 / 15.0, 32.0 / 9.0];
+/// Stage 5's weights of k1 … k4.
+const A5: [f64; 4] = [19372.0 / 6561.0, -25360.0 / 2187.0, 64448.0 / 6561.0, -212.0 / 729.0];
+/// Stage 6's weights of k1 … k5.
+const A6: [f64; 5] = [9017.0 / 3168.0, -355.0 / 33.0, 46732.0 / 5247.0, 49.0 / 176.0, -5103.0 / 18656.0];
+/// The 5th-order solution's weights of k1, k3, k4, k5, k6 (k2's is zero).
+const B: [f64; 5] = [35.0 / 384.0, 500.0 / 1113.0, 125.0 / 192.0, -2187.0 / 6784.0, 11.0 / 84.0];
+/// The error estimate's weights of k1, k3 … k7.
+const E: [f64; 6] = [71.0 / 57600.0, -71.0 / 16695.0, 71.0 / 1920.0, -17253.0 / 339200.0, 22.0 / 525.0, -1.0 / 40.0];
+/// The dense output's weights of k1, k3 … k7.
+const D: [f64; 6] = [
+    -12715105075.0 / 11282082432.0,
+    87487479700.0 / 32700410799.0,
+    -10690763975.0 / 1880347072.0,
+    701980252875.0 / 199316789632.0,
+    -1453857185.0 / 822651844.0,
+    69997945.0 / 29380423.0,
+];
 
-/// `y + h Σ cᵢ kᵢ`.
-fn combine(y: &Y, h: f64, terms: &[(f64, &Y)]) -> Y {
+/// `y + h Σ cᵢ kᵢ`, the terms in the order given.
+fn combine(y: &Y, h: f64, weights: &[f64], ks: &[&Y]) -> Y {
     let mut out = *y;
-    for (c, k) in terms {
+    for (c, k) in weights.iter().zip(ks) {
         let hc = h * c;
         for i in 0..NY {
             out[i] += hc * k[i];
         }
     }
     out
+}
+
+/// One DOPRI5 trial step of size `h` from `y` (slope `k1`), the contact set frozen.
+struct Trial {
+    /// The stages k1 … k7 (k7 is the slope at `y1`: the next step's k1).
+    k: [Y; 7],
+    /// The 5th-order solution.
+    y1: Y,
+    /// The error estimate.
+    ev: Y,
+}
+
+impl Trial {
+    fn new(mech: &Mechanism, y: &Y, k1: &Y, h: f64, memory: &[Option<f64>; 3]) -> Self {
+        let stage = |a: &[f64], ks: &[&Y]| deriv(mech, &combine(y, h, a, ks), memory).0;
+        let k2 = stage(&A2, &[k1]);
+        let k3 = stage(&A3, &[k1, &k2]);
+        let k4 = stage(&A4, &[k1, &k2, &k3]);
+        let k5 = stage(&A5, &[k1, &k2, &k3, &k4]);
+        let k6 = stage(&A6, &[k1, &k2, &k3, &k4, &k5]);
+        let y1 = combine(y, h, &B, &[k1, &k3, &k4, &k5, &k6]);
+        let (k7, _) = deriv(mech, &y1, memory);
+        let ev = combine(&[0.0; NY], h, &E, &[k1, &k3, &k4, &k5, &k6, &k7]);
+        Self { k: [*k1, k2, k3, k4, k5, k6, k7], y1, ev }
+    }
+
+    /// The step's continuous extension from `y`.
+    fn dense(&self, y: &Y, h: f64) -> Dense {
+        let [k1, _, k3, k4, k5, k6, k7] = &self.k;
+        let ydiff: Y = std::array::from_fn(|i| self.y1[i] - y[i]);
+        let bspl: Y = std::array::from_fn(|i| h * k1[i] - ydiff[i]);
+        Dense {
+            y0: *y,
+            r1: ydiff,
+            r2: bspl,
+            r3: std::array::from_fn(|i| ydiff[i] - h * k7[i] - bspl[i]),
+            r4: combine(&[0.0; NY], h, &D, &[k1, k3, k4, k5, k6, k7]),
+        }
+    }
 }
 
 /// Hairer's continuous extension of one DOPRI5 step.
@@ -364,6 +394,95 @@ fn locate_event(mech: &Mechanism, dense: &Dense, memory: &[Option<f64>; 3]) -> O
     earliest
 }
 
+/// The error control of the adaptive steps: Hairer's PI controller on the RMS of the
+/// controlled components' errors, each relative to `tol` times its scale plus its size.
+struct StepControl {
+    scales: Y,
+    controlled: Vec<usize>,
+    tol: f64,
+    max_step: f64,
+    fac_old: f64,
+}
+
+impl StepControl {
+    fn new(mech: &Mechanism, tol: f64, max_step: f64) -> Self {
+        let scales = error_scales(mech);
+        let controlled: Vec<usize> = (0..NY).filter(|&i| scales[i] > 0.0).collect();
+        Self { scales, controlled, tol, max_step, fac_old: 1e-4 }
+    }
+
+    /// The next step's size if the trial from `y` is accepted; `None` after shrinking `h` for a
+    /// retry (an error above tolerance, or a non-finite one).
+    fn accept(&mut self, y: &Y, trial: &Trial, h: &mut f64, stats: &mut IntegrationStats) -> Option<f64> {
+        let y1 = &trial.y1;
+        let mut sum = 0.0;
+        for &i in &self.controlled {
+            let sc = self.tol * (self.scales[i] + y[i].abs().max(y1[i].abs()));
+            sum += (trial.ev[i] / sc).powi(2);
+        }
+        let err = (sum / self.controlled.len() as f64).sqrt();
+        if !(err.is_finite() && y1.iter().all(|v| v.is_finite())) {
+            *h *= 0.25;
+            stats.rejected += 1;
+            return None;
+        }
+        let fac11 = err.powf(0.17);
+        if err > 1.0 {
+            *h /= (fac11 / 0.9).min(5.0);
+            stats.rejected += 1;
+            return None;
+        }
+        let fac = (fac11 / self.fac_old.powf(0.04) / 0.9).clamp(0.1, 5.0);
+        self.fac_old = err.max(1e-4);
+        Some((*h / fac).min(self.max_step))
+    }
+}
+
+/// The sample instants `t₀ + k / rate`, `k = next … count−1`, still to deliver to the sink.
+struct Samples<'s> {
+    t0: f64,
+    period: f64,
+    count: usize,
+    next: usize,
+    sink: &'s mut dyn FnMut(&State, &Dynamics),
+}
+
+impl Samples<'_> {
+    /// Delivers the samples up to `seg_end` from a step's dense output (step from `t`, size `h`,
+    /// cut at `th_end`), each with one evaluation for its acceleration.
+    fn deliver(
+        &mut self,
+        mech: &Mechanism,
+        dense: &Dense,
+        (t, h, th_end, seg_end): (f64, f64, f64, f64),
+        memory: [Option<f64>; 3],
+        stats: &mut IntegrationStats,
+    ) {
+        while self.next < self.count {
+            let ts = self.t0 + self.next as f64 * self.period;
+            if ts > seg_end {
+                break;
+            }
+            let th = ((ts - t) / h).clamp(0.0, th_end);
+            let ys = dense.at(th);
+            let (_, d) = deriv(mech, &ys, &memory);
+            stats.evaluations += 1;
+            (self.sink)(&unpack(&ys, ts, memory), &d);
+            self.next += 1;
+        }
+    }
+
+    /// Delivers what rounding of the last sample instant left, at the final state `y`.
+    fn deliver_rest(&mut self, mech: &Mechanism, y: &Y, memory: [Option<f64>; 3], stats: &mut IntegrationStats) {
+        while self.next < self.count {
+            let (_, d) = deriv(mech, y, &memory);
+            stats.evaluations += 1;
+            (self.sink)(&unpack(y, self.t0 + self.next as f64 * self.period, memory), &d);
+            self.next += 1;
+        }
+    }
+}
+
 #[allow(clippy::too_many_arguments)]
 fn adaptive(
     mech: &Mechanism,
@@ -386,15 +505,13 @@ fn adaptive(
     if !k1.iter().all(|v| v.is_finite()) {
         return Err(diverged(t, "non-finite acceleration"));
     }
-    let mut next = 0usize;
+    let mut out = Samples { t0, period, count: samples, next: 0, sink };
     if samples > 0 {
-        sink(s, &d0);
-        next = 1;
+        (out.sink)(s, &d0);
+        out.next = 1;
     }
-    let scales = error_scales(mech);
-    let controlled: Vec<usize> = (0..NY).filter(|&i| scales[i] > 0.0).collect();
+    let mut control = StepControl::new(mech, tol, max_step);
     let mut h = 1e-5_f64.min(max_step).min(period);
-    let mut fac_old: f64 = 1e-4;
     // Events in a row that advanced time by less than a femtosecond: a journal grazing its
     // bearing so exactly that contact flips back and forth without progress.
     let mut stalled_events = 0u32;
@@ -410,46 +527,10 @@ fn adaptive(
             }
             return Err(diverged(t, "step size underflow"));
         }
-        let (k2, _) = deriv(mech, &combine(&y, h, &[(A21, &k1)]), &memory);
-        let (k3, _) = deriv(mech, &combine(&y, h, &[(A31, &k1), (A32, &k2)]), &memory);
-        let (k4, _) = deriv(mech, &combine(&y, h, &[(A41, &k1), (A42, &k2), (A43, &k3)]), &memory);
-        let (k5, _) = deriv(mech, &combine(&y, h, &[(A51, &k1), (A52, &k2), (A53, &k3), (A54, &k4)]), &memory);
-        let (k6, _) =
-            deriv(mech, &combine(&y, h, &[(A61, &k1), (A62, &k2), (A63, &k3), (A64, &k4), (A65, &k5)]), &memory);
-        let y1 = combine(&y, h, &[(B1, &k1), (B3, &k3), (B4, &k4), (B5, &k5), (B6, &k6)]);
-        let (k7, _) = deriv(mech, &y1, &memory);
+        let trial = Trial::new(mech, &y, &k1, h, &memory);
         stats.evaluations += 6;
-        let ev = combine(&[0.0; NY], h, &[(E1, &k1), (E3, &k3), (E4, &k4), (E5, &k5), (E6, &k6), (E7, &k7)]);
-        let mut sum = 0.0;
-        for &i in &controlled {
-            let sc = tol * (scales[i] + y[i].abs().max(y1[i].abs()));
-            sum += (ev[i] / sc).powi(2);
-        }
-        let err = (sum / controlled.len() as f64).sqrt();
-        if !(err.is_finite() && y1.iter().all(|v| v.is_finite())) {
-            h *= 0.25;
-            stats.rejected += 1;
-            continue;
-        }
-        let fac11 = err.powf(0.17);
-        if err > 1.0 {
-            h /= (fac11 / 0.9).min(5.0);
-            stats.rejected += 1;
-            continue;
-        }
-        let fac = (fac11 / fac_old.powf(0.04) / 0.9).clamp(0.1, 5.0);
-        fac_old = err.max(1e-4);
-        let h_new = (h / fac).min(max_step);
-
-        let ydiff: Y = std::array::from_fn(|i| y1[i] - y[i]);
-        let bspl: Y = std::array::from_fn(|i| h * k1[i] - ydiff[i]);
-        let dense = Dense {
-            y0: y,
-            r1: ydiff,
-            r2: bspl,
-            r3: std::array::from_fn(|i| ydiff[i] - h * k7[i] - bspl[i]),
-            r4: combine(&[0.0; NY], h, &[(D1, &k1), (D3, &k3), (D4, &k4), (D5, &k5), (D6, &k6), (D7, &k7)]),
-        };
+        let Some(h_new) = control.accept(&y, &trial, &mut h, stats) else { continue };
+        let dense = trial.dense(&y, h);
         let event = locate_event(mech, &dense, &memory);
         let th_end = event.unwrap_or(1.0);
         let seg_end = match event {
@@ -457,24 +538,14 @@ fn adaptive(
             None if reaching_end => t_end,
             None => t + h,
         };
-        while next < samples {
-            let ts = t0 + next as f64 * period;
-            if ts > seg_end {
-                break;
-            }
-            let th = ((ts - t) / h).clamp(0.0, th_end);
-            let ys = dense.at(th);
-            let (_, d) = deriv(mech, &ys, &memory);
-            stats.evaluations += 1;
-            sink(&unpack(&ys, ts, memory), &d);
-            next += 1;
-        }
+        out.deliver(mech, &dense, (t, h, th_end, seg_end), memory, stats);
         stats.note_step(th_end * h);
         if event.is_some() {
             stalled_events = if seg_end - t < 1e-15 { stalled_events + 1 } else { 0 };
             if stalled_events > 1000 {
                 return Err(diverged(t, "contact switching without progress (grazing contact)"));
             }
+            // The contact set switches at the event: the step restarts there.
             y = dense.at(th_end);
             t = seg_end;
             let mut st = unpack(&y, t, memory);
@@ -483,19 +554,13 @@ fn adaptive(
             k1 = deriv(mech, &y, &memory).0;
             stats.evaluations += 1;
         } else {
-            y = y1;
+            y = trial.y1;
             t = seg_end;
-            k1 = k7;
+            k1 = trial.k[6];
         }
         h = h_new;
     }
-    while next < samples {
-        // Only reachable through rounding of the last sample instant.
-        let (_, d) = deriv(mech, &y, &memory);
-        stats.evaluations += 1;
-        sink(&unpack(&y, t0 + next as f64 * period, memory), &d);
-        next += 1;
-    }
+    out.deliver_rest(mech, &y, memory, stats);
     *s = unpack(&y, t_end, memory);
     if !s.is_finite() {
         return Err(diverged(t, "non-finite state"));

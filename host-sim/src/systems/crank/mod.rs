@@ -76,6 +76,7 @@ pub mod estimate;
 pub mod feature;
 pub mod integrate;
 pub mod mechanism;
+mod parallel;
 pub mod simulate;
 pub mod spectrum;
 pub mod state;

@@ -44,16 +44,8 @@ pub const TRUTH: [&str; 22] = [
     "truth_gyro_bias_z",
 ];
 
-/// What to simulate.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct SimOptions {
-    /// Health timeline.
-    pub scenario: Scenario,
-    /// Length of the recording, s.
-    pub duration: f64,
-    /// Seed of the current and the sensors' noise and biases.
-    pub seed: u64,
-}
+/// What to simulate: the health timeline, its length and the noise's seed.
+pub type SimOptions = crate::systems::common::SimOptions<Scenario>;
 
 /// A simulated recording: time and the [`MEASURED`] then [`TRUTH`] columns.
 #[derive(Debug, Clone, PartialEq)]
@@ -73,17 +65,12 @@ impl UuvRecording {
 
     /// The column called `name`.
     pub fn column(&self, name: &str) -> Option<&[f64]> {
-        Self::names().iter().position(|n| *n == name).map(|i| self.columns[i].as_slice())
+        crate::systems::common::column_of(&Self::names(), &self.columns, name)
     }
 
     /// As a data file in memory, as `edgekf uuv estimate` would read it back.
     pub fn to_data_file(&self) -> crate::io::data::DataFile {
-        crate::io::data::DataFile {
-            sha256: None,
-            names: Self::names().iter().map(|n| n.to_string()).collect(),
-            t: self.t.clone(),
-            columns: self.columns.clone(),
-        }
+        crate::systems::common::data_file(&Self::names(), &self.t, &self.columns)
     }
 
     /// The CSV text, DVL cells empty between readings.

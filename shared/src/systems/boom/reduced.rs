@@ -195,11 +195,30 @@ impl BoomConstants {
             return Err(ReducedError::Constants);
         }
         let l = length;
+        let (pieces, np) = self.pieces(&self.sections[..n], l)?;
+        let pieces = pieces.get(..np).unwrap_or(&[]);
+        let shape = shapes(pieces, np)?;
+        let m = self.assemble(pieces, &shape, np, l, phi);
+        let modes = m.modes()?;
+        // Sag: K c = −g cos φ gm.
+        let kchol = crate::linalg::cholesky(&m.kk).ok_or(ReducedError::Singular)?;
+        let f = m.gm * (-self.gravity * libm::cos(phi));
+        let c = crate::linalg::solve_lower_transposed(&kchol, &crate::linalg::solve_lower(&kchol, &f));
+        Ok(ReducedBoom { length, modes, sag: m.tip_values(&c) })
+    }
+
+    /// The pieces of a boom of length `l` between the ends of every one of `sections` (the
+    /// first `count`, checked by the caller), in `ξ = x / l`: their bounds, EI and mass per
+    /// length (sums over the sections covering them), and how many there are.
+    // Inlined: the bound on `sections` that keeps `cuts[nc]` in range is the caller's check,
+    // which the firmware's link-time no-panic proof must see.
+    #[inline(always)]
+    fn pieces(&self, sections: &[BoomSection], l: f64) -> Result<([Piece; MAX_PIECES], usize), ReducedError> {
         let starts = self.starts(l);
         // Every section's ends, in ξ.
         let mut cuts = [0.0f64; 2 * MAX_SECTIONS + 2];
         let mut nc = 0;
-        for (start, section) in starts.iter().zip(&self.sections[..n]) {
+        for (start, section) in starts.iter().zip(sections) {
             for x in [*start, (start + section.length).min(l)] {
                 cuts[nc] = x / l;
                 nc += 1;
@@ -209,7 +228,6 @@ impl BoomConstants {
         nc += 1;
         let cuts = &mut cuts[..nc];
         cuts.sort_unstable_by(f64::total_cmp);
-        // The pieces: bounds, EI and m (sums over the sections covering them).
         let mut pieces = [(0.0f64, 0.0f64, 0.0f64, 0.0f64); MAX_PIECES];
         let mut np = 0;
         for w in cuts.windows(2) {
@@ -219,7 +237,7 @@ impl BoomConstants {
             }
             let x = 0.5 * (a + b) * l;
             let (mut ei, mut m) = (0.0, 0.0);
-            for (start, section) in starts.iter().zip(&self.sections[..n]) {
+            for (start, section) in starts.iter().zip(sections) {
                 if x >= *start && x < start + section.length {
                     ei += section.ei;
                     m += section.mass_per_length;
@@ -231,27 +249,12 @@ impl BoomConstants {
             pieces[np] = (a, b, ei, m);
             np += 1;
         }
-        let pieces = pieces.get(..np).unwrap_or(&[]);
-        // Each basis shape per piece: w'' = M / EI integrated twice from the clamped root, then
-        // scaled to a unit tip deflection.
-        let mut shape = [[[0.0; DEGREE + 1]; MAX_PIECES]; BASIS];
-        for (j, sh) in shape.iter_mut().enumerate() {
-            let moment = moment_of_load(j);
-            let (mut slope0, mut w0) = (0.0, 0.0);
-            for (piece, out) in pieces.iter().zip(sh.iter_mut()) {
-                let &(a, b, ei, _) = piece;
-                let slope = antiderivative(&scale(&moment, 1.0 / ei), a, slope0);
-                let w = antiderivative(&slope, a, w0);
-                (slope0, w0) = (eval(&slope, b), eval(&w, b));
-                *out = w;
-            }
-            if w0.is_nan() || w0 <= 0.0 {
-                return Err(ReducedError::Singular);
-            }
-            for p in sh.iter_mut().take(np) {
-                *p = scale(p, 1.0 / w0);
-            }
-        }
+        Ok((pieces, np))
+    }
+
+    /// The mass and stiffness matrices of the basis `shape` over `pieces` (`np` of them) at
+    /// length `l` and angle `phi`, the tip's platform included.
+    fn assemble(&self, pieces: &[Piece], shape: &Shapes, np: usize, l: f64, phi: f64) -> Assembled {
         let (g, sp) = (self.gravity, libm::sin(phi));
         let mut mm = SMatrix::<f64, BASIS, BASIS>::zeros();
         let mut kk = SMatrix::<f64, BASIS, BASIS>::zeros();
@@ -300,20 +303,70 @@ impl BoomConstants {
                 mm[(j, k)] += self.tip_mass + self.tip_inertia * tip_slope[j] * tip_slope[k];
             }
         }
-        let chol = crate::linalg::cholesky(&mm).ok_or(ReducedError::Singular)?;
-        let a = crate::linalg::solve_lower(&chol, &crate::linalg::solve_lower(&chol, &kk).transpose());
+        Assembled { mm, kk, r, gm, tip_slope }
+    }
+}
+
+/// One piece of the boom: `(ξ from, ξ to, EI, mass per length)`.
+type Piece = (f64, f64, f64, f64);
+
+/// Each basis shape's polynomial on each piece.
+type Shapes = [[Poly; MAX_PIECES]; BASIS];
+
+/// Each basis shape per piece: w'' = M / EI integrated twice from the clamped root, then
+/// scaled to a unit tip deflection.
+fn shapes(pieces: &[Piece], np: usize) -> Result<Shapes, ReducedError> {
+    let mut shape = [[[0.0; DEGREE + 1]; MAX_PIECES]; BASIS];
+    for (j, sh) in shape.iter_mut().enumerate() {
+        let moment = moment_of_load(j);
+        let (mut slope0, mut w0) = (0.0, 0.0);
+        for (piece, out) in pieces.iter().zip(sh.iter_mut()) {
+            let &(a, b, ei, _) = piece;
+            let slope = antiderivative(&scale(&moment, 1.0 / ei), a, slope0);
+            let w = antiderivative(&slope, a, w0);
+            (slope0, w0) = (eval(&slope, b), eval(&w, b));
+            *out = w;
+        }
+        if w0.is_nan() || w0 <= 0.0 {
+            return Err(ReducedError::Singular);
+        }
+        for p in sh.iter_mut().take(np) {
+            *p = scale(p, 1.0 / w0);
+        }
+    }
+    Ok(shape)
+}
+
+/// The reduced boom's matrices over the basis shapes: mass `mm`, stiffness `kk` (bending and
+/// the axial load's), the coupling to the root's rotation `r`, the gravity load `gm`, and each
+/// shape's tip slope.
+struct Assembled {
+    mm: SMatrix<f64, BASIS, BASIS>,
+    kk: SMatrix<f64, BASIS, BASIS>,
+    r: SVector<f64, BASIS>,
+    gm: SVector<f64, BASIS>,
+    tip_slope: [f64; BASIS],
+}
+
+impl Assembled {
+    /// The tip deflection and slope of the combination `c` of the basis shapes.
+    fn tip_values(&self, c: &SVector<f64, BASIS>) -> (f64, f64) {
+        let mut d = 0.0;
+        let mut s = 0.0;
+        for j in 0..BASIS {
+            d += c[j];
+            s += c[j] * self.tip_slope[j];
+        }
+        (d, s)
+    }
+
+    /// The first [`MODES`] modes, ascending: `K ψ = ω² M ψ` through the Cholesky factor of `M`.
+    fn modes(&self) -> Result<[Mode; MODES], ReducedError> {
+        let chol = crate::linalg::cholesky(&self.mm).ok_or(ReducedError::Singular)?;
+        let a = crate::linalg::solve_lower(&chol, &crate::linalg::solve_lower(&chol, &self.kk).transpose());
         let a = (a + a.transpose()) * 0.5;
         // Ascending (Jacobi rotations: no panic path on the chip).
         let (values, vectors) = crate::linalg::symmetric_eigen(&a);
-        let tip_values = |c: &SVector<f64, BASIS>| {
-            let mut d = 0.0;
-            let mut s = 0.0;
-            for j in 0..BASIS {
-                d += c[j];
-                s += c[j] * tip_slope[j];
-            }
-            (d, s)
-        };
         let mut modes = [Mode { omega: 0.0, tip_deflection: 0.0, tip_slope: 0.0, participation: 0.0 }; MODES];
         for (i, mode) in modes.iter_mut().enumerate() {
             let w2 = values.get(i).copied().unwrap_or(f64::NAN);
@@ -323,17 +376,13 @@ impl BoomConstants {
             // ψ = L⁻ᵀ u, mass-normalised; its tip deflection positive.
             let u = SVector::<f64, BASIS>::from_fn(|r, _| vectors.get((r, i)).copied().unwrap_or(f64::NAN));
             let mut psi = crate::linalg::solve_lower_transposed(&chol, &u);
-            if tip_values(&psi).0 < 0.0 {
+            if self.tip_values(&psi).0 < 0.0 {
                 psi = -psi;
             }
-            let (d, s) = tip_values(&psi);
-            *mode = Mode { omega: libm::sqrt(w2), tip_deflection: d, tip_slope: s, participation: psi.dot(&r) };
+            let (d, s) = self.tip_values(&psi);
+            *mode = Mode { omega: libm::sqrt(w2), tip_deflection: d, tip_slope: s, participation: psi.dot(&self.r) };
         }
-        // Sag: K c = −g cos φ gm.
-        let kchol = crate::linalg::cholesky(&kk).ok_or(ReducedError::Singular)?;
-        let f = gm * (-g * libm::cos(phi));
-        let c = crate::linalg::solve_lower_transposed(&kchol, &crate::linalg::solve_lower(&kchol, &f));
-        Ok(ReducedBoom { length, modes, sag: tip_values(&c) })
+        Ok(modes)
     }
 }
 

@@ -9,12 +9,11 @@ use super::model::{feature_vector, regressor, FastModel, FeatureVector, FEATURES
 use super::release::{missed_contacts, ReleaseFeatures, RELEASE_SPAN};
 use super::Recording;
 use crate::systems::crank::config::Method;
+use crate::systems::crank::parallel::map_in_order;
 use crate::systems::crank::{CrankConfig, Joint, Mechanism, SimOptions};
 use nalgebra::{DMatrix, DVector};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::Mutex;
 
 /// One simulated run.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -31,6 +30,21 @@ pub struct Run {
     pub seed: u64,
     /// Length, s.
     pub duration: f64,
+}
+
+impl std::fmt::Display for Run {
+    /// `A 0.300 mm (release 30.0°, radius ×1.00, seed 7)`: how a run is named in reports.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} {:.3} mm (release {:.1}°, radius ×{:.2}, seed {})",
+            self.joint,
+            self.clearance * 1e3,
+            self.release_deg,
+            self.radius,
+            self.seed
+        )
+    }
 }
 
 impl Run {
@@ -107,30 +121,18 @@ pub fn features_of(
     threads: usize,
     progress: &(dyn Fn(usize, &Run) + Sync),
 ) -> anyhow::Result<Vec<FeatureVector>> {
-    let next = AtomicUsize::new(0);
-    let out: Mutex<Vec<Option<anyhow::Result<FeatureVector>>>> = Mutex::new(runs.iter().map(|_| None).collect());
-    std::thread::scope(|s| {
-        for _ in 0..threads.max(1) {
-            s.spawn(|| loop {
-                let k = next.fetch_add(1, Ordering::Relaxed);
-                let Some(run) = runs.get(k) else { break };
-                let f = run.simulate_with_eccentricity(base).map(|(r, e)| {
-                    let mut f = feature_vector(&r.crank_alpha, r.sample_rate, window);
-                    f.missed = f
-                        .release
-                        .map(|x| missed_contacts(&e, run.clearance, (x.contact * r.sample_rate).round() as usize));
-                    f
-                });
-                progress(k, run);
-                out.lock().unwrap_or_else(|e| e.into_inner())[k] = Some(f);
-            });
-        }
-    });
-    out.into_inner()
-        .unwrap_or_else(|e| e.into_inner())
-        .into_iter()
-        .map(|f| f.unwrap_or_else(|| Err(anyhow::anyhow!("run not simulated"))))
-        .collect()
+    map_in_order(threads, runs, |k, run| {
+        let f = run.simulate_with_eccentricity(base).map(|(r, e)| {
+            let mut f = feature_vector(&r.crank_alpha, r.sample_rate, window);
+            f.missed =
+                f.release.map(|x| missed_contacts(&e, run.clearance, (x.contact * r.sample_rate).round() as usize));
+            f
+        });
+        progress(k, run);
+        f
+    })
+    .into_iter()
+    .collect()
 }
 
 /// Fits the model to runs and their features. `ridge`: added to the standardised covariance

@@ -8,7 +8,8 @@
 //!   `ξ² = 1 + γ`), weights of [`edgekf::filter::MerweSigmaPoints`], clamped to
 //!   [`UkfOptions::bounds`].
 //! * `h(cᵢ)`: the feature of the window simulated with clearance `cᵢ`, continuing from the
-//!   state the sigma point reached at the end of the previous window ([`Mechanism::transfer_state`]).
+//!   state the sigma point reached at the end of the previous window
+//!   ([`Mechanism::transfer_state`](crate::systems::crank::Mechanism::transfer_state)).
 //!
 //! What limits the filter, and the choices made here (figures from `cargo run --release -p
 //! edgekf-sim --features studies --example crank_study -- information | release-curve | ukf 10 3`):
@@ -64,8 +65,11 @@
 use super::{EstimateRow, Recording};
 use crate::systems::crank::feature::spectral_feature;
 use crate::systems::crank::integrate::Integrator;
-use crate::systems::crank::{CrankConfig, CrankError, Mechanism, SimOptions, State};
+use crate::systems::crank::{CrankConfig, CrankError};
 use edgekf::filter::MerweSigmaPoints;
+
+mod ensembles;
+use ensembles::{Carried, Ensembles, Simulator};
 
 /// Settings of the paper's UKF.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -208,6 +212,20 @@ pub struct UkfRun {
 }
 
 impl UkfRun {
+    /// What the release window added, in mm: `windows after the release 0.2400 ± 0.0100 mm,
+    /// with the release window 0.2500 ± 0.0050 mm` (the last window's estimate, then the
+    /// whole-recording one).
+    pub fn release_effect(&self) -> String {
+        let before = self.steps.last().map_or((f64::NAN, f64::NAN), |s| (s.clearance, s.std));
+        format!(
+            "windows after the release {:.4} ± {:.4} mm, with the release window {:.4} ± {:.4} mm",
+            before.0 * 1e3,
+            before.1 * 1e3,
+            self.estimate * 1e3,
+            self.estimate_std * 1e3
+        )
+    }
+
     /// The estimate file's rows: one per window, then the whole-recording estimate (B and C
     /// are taken as tight: the paper's filter estimates A only).
     pub fn rows(&self) -> Vec<EstimateRow> {
@@ -226,99 +244,6 @@ pub fn feature_spread(a: &[Option<f64>]) -> Option<f64> {
     (d.len() >= 2).then(|| (d.iter().map(|v| v * v).sum::<f64>() / d.len() as f64 / 2.0).sqrt())
 }
 
-/// One simulated member: its mechanism and where it stopped.
-type Carried = (Mechanism, State);
-
-/// A member's result: sigma point, member, feature, where it stopped, integration steps.
-type Member = (usize, usize, f64, Carried, u64);
-
-/// What the ensembles of the three sigma points gave for one window.
-struct Ensembles {
-    /// Mean feature per sigma point.
-    mean: [f64; 3],
-    /// Pooled variance of a member's feature about its sigma point's mean.
-    var: f64,
-    /// Final states, per sigma point, per member.
-    carried: Vec<Vec<Carried>>,
-    steps: u64,
-}
-
-struct Simulator<'a> {
-    config: &'a CrankConfig,
-    opts: &'a UkfOptions,
-    sample_rate: f64,
-    window_s: f64,
-    integrator: Integrator,
-}
-
-impl Simulator<'_> {
-    /// Simulates window `k` for sigma points `xs`, every member from its carried state (or
-    /// from its release state if `from` is `None`).
-    fn window(&self, k: usize, xs: [f64; 3], from: Option<&Vec<Vec<Carried>>>) -> Result<Ensembles, CrankError> {
-        let m = self.opts.members.max(1);
-        let jobs: Vec<(usize, usize)> = (0..3).flat_map(|i| (0..m).map(move |j| (i, j))).collect();
-        let threads = self.opts.threads.clamp(1, jobs.len());
-        let per = jobs.len().div_ceil(threads);
-        let results: Vec<Result<Member, CrankError>> = std::thread::scope(|scope| {
-            let handles: Vec<_> = jobs
-                .chunks(per)
-                .map(|chunk| {
-                    scope.spawn(move || {
-                        chunk
-                            .iter()
-                            .map(|&(i, j)| self.member(k, xs[i], i, j, from.map(|f| &f[i][j])))
-                            .collect::<Vec<_>>()
-                    })
-                })
-                .collect();
-            handles.into_iter().flat_map(|h| h.join().expect("sigma-point simulation panicked")).collect()
-        });
-        let mut feats = vec![vec![0.0; m]; 3];
-        let mut carried: Vec<Vec<Option<Carried>>> = (0..3).map(|_| (0..m).map(|_| None).collect()).collect();
-        let mut steps = 0;
-        for r in results {
-            let (i, j, a, c, st) = r?;
-            feats[i][j] = a;
-            carried[i][j] = Some(c);
-            steps += st;
-        }
-        let mean = [0, 1, 2].map(|i| feats[i].iter().sum::<f64>() / m as f64);
-        let var = if m > 1 {
-            (0..3).map(|i| feats[i].iter().map(|a| (a - mean[i]).powi(2)).sum::<f64>()).sum::<f64>()
-                / (3 * (m - 1)) as f64
-        } else {
-            0.0
-        };
-        let carried =
-            carried.into_iter().map(|v| v.into_iter().map(|c| c.expect("every member simulated")).collect()).collect();
-        Ok(Ensembles { mean, var, carried, steps })
-    }
-
-    fn member(&self, k: usize, c: f64, i: usize, j: usize, from: Option<&Carried>) -> Result<Member, CrankError> {
-        let mut cfg = *self.config;
-        cfg.release.crank_angle_deg += j as f64 * self.opts.member_spacing_deg;
-        let mech = Mechanism::new(&cfg, [Some(c), None, None])?;
-        let start = match from {
-            Some((m, st)) => mech.transfer_state(m, st),
-            None => mech.release_state(),
-        };
-        let sim = SimOptions {
-            duration: self.window_s,
-            sample_rate: self.sample_rate,
-            noise_std: cfg.sensor.noise_std,
-            // Common random numbers: member j has the same noise in every sigma point.
-            seed: 1 + k as u64 * 1000 + j as u64,
-            integrator: self.integrator,
-            initial: Some(start),
-        };
-        let out = mech.simulate(&sim)?;
-        let a = spectral_feature(&out.crank_alpha, self.sample_rate)
-            .map(|f| f.a)
-            .ok_or_else(|| CrankError::Diverged { t: out.final_state.t, reason: "no spectral feature".into() })?;
-        Ok((i, j, a, (mech, out.final_state), out.stats.steps))
-    }
-}
-
 /// Runs the paper's UKF over `rec` with the mechanism of `config` (clearance at A only, the
 /// configuration's integrator, release state and sensor noise). `progress(k, step)` is called
 /// after each window (and with `k` = the number of windows for the release-window update).
@@ -328,6 +253,32 @@ pub fn run(
     opts: &UkfOptions,
     progress: &mut dyn FnMut(usize, &UkfStep),
 ) -> Result<UkfRun, CrankError> {
+    let n = window_samples(rec, opts)?;
+    let filter = Filter::new(config, rec, opts, n)?;
+    let mut post = Posterior {
+        x: opts.initial.clamp(filter.lo, filter.hi),
+        p: opts.initial_std * opts.initial_std,
+        carried: None,
+        work: 0,
+        sims: 0,
+        r_sum: 0.0,
+    };
+    let mut steps = Vec::with_capacity(filter.measured.len());
+    for (k, y) in filter.measured.iter().enumerate() {
+        let step = filter.window_step(k, *y, &mut post)?;
+        progress(k, &step);
+        steps.push(step);
+    }
+    let (release, release_iterations) = match (opts.release_last, filter.measured[0], filter.measured.len() > 1) {
+        (true, Some(y0), true) => filter.release_update(y0, steps.len(), &mut post, progress)?,
+        _ => (None, 0),
+    };
+    Ok(finish(opts, steps, release, release_iterations, &post))
+}
+
+/// Samples per window, once the recording and the options are checked: whole windows of at
+/// least 4 samples, no sample missing from them, options in range.
+fn window_samples(rec: &Recording, opts: &UkfOptions) -> Result<usize, CrankError> {
     let n = rec.window_len(opts.window);
     if n < 4 || rec.crank_alpha.len() < n {
         return Err(CrankError::Options(format!(
@@ -350,50 +301,140 @@ pub fn run(
     {
         return Err(CrankError::Options(format!("invalid UKF options {opts:?}")));
     }
-    let w = opts.sigma.weights::<1>().map_err(|e| CrankError::Options(format!("sigma points: {e:?}")))?;
-    let wm = [w.mean_center, w.side, w.side];
-    let wc = [w.cov_center, w.side, w.side];
-    let measured: Vec<Option<f64>> =
-        rec.crank_alpha.chunks_exact(n).map(|x| spectral_feature(x, rec.sample_rate).map(|f| f.a)).collect();
-    let recording_spread = feature_spread(&measured).unwrap_or(37.0);
-    let m = opts.members.max(1) as f64;
-    // R: the given value; with one member, the recording's spread; else the ensembles' spread
-    // (a member's scatter about the ensemble mean) plus the ensemble mean's own error.
-    let r_var = |var: f64| match opts.measurement_std {
-        Some(s) => s * s,
-        None if opts.members <= 1 => recording_spread * recording_spread,
-        None => var * (1.0 + 1.0 / m),
-    };
-    let sim = Simulator {
-        config,
-        opts,
-        sample_rate: rec.sample_rate,
-        window_s: n as f64 / rec.sample_rate,
-        integrator: if opts.adaptive {
-            Integrator::Adaptive { tolerance: config.integrator.tolerance, max_step: config.integrator.max_step }
-        } else {
-            Integrator::from_config(&config.integrator)
-        },
-    };
-    let t0 = rec.t.first().copied().unwrap_or(0.0);
+    Ok(n)
+}
 
-    let mut x = opts.initial.clamp(lo, hi);
-    let mut p = opts.initial_std * opts.initial_std;
-    let mut carried: Option<Vec<Vec<Carried>>> = None;
-    let mut steps = Vec::with_capacity(measured.len());
-    let (mut work, mut sims, mut r_sum) = (0u64, 0u64, 0.0);
-    for (k, y) in measured.iter().enumerate() {
-        p += opts.process_std * opts.process_std;
-        let later = k == 0 && opts.release_last && measured.len() > 1;
-        let s = (w.spread * p).sqrt().max(if k > 0 { opts.min_spread } else { 0.0 });
-        let xs = [x, x + s, x - s].map(|v| v.clamp(lo, hi));
-        let ens = sim.window(k, xs, carried.as_ref())?;
-        work += ens.steps;
-        sims += 3 * opts.members as u64;
+/// What stays fixed over a run: the options, the sigma-point weights, the measured features
+/// and the simulator of the windows.
+struct Filter<'a> {
+    opts: &'a UkfOptions,
+    lo: f64,
+    hi: f64,
+    /// `1 + λ`: the squared spread of the side sigma points in prior stds.
+    spread: f64,
+    wm: [f64; 3],
+    wc: [f64; 3],
+    /// The recording's feature `a` per window.
+    measured: Vec<Option<f64>>,
+    /// `R`'s std when it comes from the recording ([`feature_spread`]).
+    recording_spread: f64,
+    sim: Simulator<'a>,
+    /// Start of the recording, s.
+    t0: f64,
+}
+
+/// Where the filter stands between windows, and what it has spent.
+struct Posterior {
+    x: f64,
+    p: f64,
+    /// The members' states at the end of the last window, per sigma point.
+    carried: Option<Vec<Vec<Carried>>>,
+    work: u64,
+    sims: u64,
+    /// Sum of the `R`s of the updates made.
+    r_sum: f64,
+}
+
+impl Posterior {
+    /// Counts a window's simulations.
+    fn spent(&mut self, ens: &Ensembles, members: usize) {
+        self.work += ens.steps;
+        self.sims += 3 * members as u64;
+    }
+}
+
+impl<'a> Filter<'a> {
+    fn new(config: &'a CrankConfig, rec: &Recording, opts: &'a UkfOptions, n: usize) -> Result<Self, CrankError> {
+        let w = opts.sigma.weights::<1>().map_err(|e| CrankError::Options(format!("sigma points: {e:?}")))?;
+        let measured: Vec<Option<f64>> =
+            rec.crank_alpha.chunks_exact(n).map(|x| spectral_feature(x, rec.sample_rate).map(|f| f.a)).collect();
+        let recording_spread = feature_spread(&measured).unwrap_or(37.0);
+        let sim = Simulator {
+            config,
+            opts,
+            sample_rate: rec.sample_rate,
+            window_s: n as f64 / rec.sample_rate,
+            integrator: if opts.adaptive {
+                Integrator::Adaptive { tolerance: config.integrator.tolerance, max_step: config.integrator.max_step }
+            } else {
+                Integrator::from_config(&config.integrator)
+            },
+        };
+        Ok(Self {
+            opts,
+            lo: opts.bounds.0,
+            hi: opts.bounds.1,
+            spread: w.spread,
+            wm: [w.mean_center, w.side, w.side],
+            wc: [w.cov_center, w.side, w.side],
+            measured,
+            recording_spread,
+            sim,
+            t0: rec.t.first().copied().unwrap_or(0.0),
+        })
+    }
+
+    /// R: the given value; with one member, the recording's spread; else the ensembles' spread
+    /// (a member's scatter about the ensemble mean) plus the ensemble mean's own error.
+    fn r_var(&self, var: f64) -> f64 {
+        let m = self.opts.members.max(1) as f64;
+        match self.opts.measurement_std {
+            Some(s) => s * s,
+            None if self.opts.members <= 1 => self.recording_spread * self.recording_spread,
+            None => var * (1.0 + 1.0 / m),
+        }
+    }
+
+    /// One window: predict, simulate the sigma points, and update with its feature `y` unless
+    /// it is the release window kept for last.
+    fn window_step(&self, k: usize, y: Option<f64>, post: &mut Posterior) -> Result<UkfStep, CrankError> {
+        let opts = self.opts;
+        post.p += opts.process_std * opts.process_std;
+        let later = k == 0 && opts.release_last && self.measured.len() > 1;
+        let s = (self.spread * post.p).sqrt().max(if k > 0 { opts.min_spread } else { 0.0 });
+        let x = post.x;
+        let xs = [x, x + s, x - s].map(|v| v.clamp(self.lo, self.hi));
+        let ens = self.sim.window(k, xs, post.carried.as_ref())?;
+        post.spent(&ens, opts.members);
         let z = ens.mean;
-        let r = r_var(ens.var);
-        // Statistical linear regression of h over the sigma points (the unscented update when
-        // their spread is √((1+λ)P); with the spread floor, the slope over the wider set).
+        let r = self.r_var(ens.var);
+        let (h, xm, zm, pzz) = self.regression(xs, z, post.p, r);
+        let mut gain = 0.0;
+        let y = if later { None } else { y };
+        if let Some(y) = y {
+            gain = post.p * h / pzz;
+            post.x += gain * (y - zm - h * (post.x - xm));
+            post.p = (post.p - gain * gain * pzz).max(1e-18);
+            post.r_sum += r;
+        }
+        post.x = post.x.clamp(self.lo, self.hi);
+        // Every sigma point continues from the centre's members: the states of the motion the
+        // estimate describes.
+        post.carried = Some(if opts.carry_own {
+            ens.carried
+        } else {
+            let centre = ens.carried.into_iter().next().expect("three sigma points");
+            vec![centre.clone(), centre.clone(), centre]
+        });
+        Ok(UkfStep {
+            t: self.t0 + (k + 1) as f64 * self.sim.window_s,
+            sigma: xs,
+            sigma_feature: z,
+            measured: y,
+            predicted: zm,
+            measurement_std: r.sqrt(),
+            gain,
+            clearance: post.x,
+            std: post.p.sqrt(),
+        })
+    }
+
+    /// Statistical linear regression of h over the sigma points (the unscented update when
+    /// their spread is √((1+λ)P); with the spread floor, the slope over the wider set): the
+    /// slope `h`, the weighted means of the sigma points and their features, and the
+    /// innovation variance for prior variance `p` and measurement variance `r`.
+    fn regression(&self, xs: [f64; 3], z: [f64; 3], p: f64, r: f64) -> (f64, f64, f64, f64) {
+        let (wm, wc) = (self.wm, self.wc);
         let xm: f64 = (0..3).map(|i| wm[i] * xs[i]).sum();
         let zm: f64 = (0..3).map(|i| wm[i] * z[i]).sum();
         let pxx: f64 = (0..3).map(|i| wc[i] * (xs[i] - xm).powi(2)).sum::<f64>().max(1e-30);
@@ -401,56 +442,34 @@ pub fn run(
         let pzz_s: f64 = (0..3).map(|i| wc[i] * (z[i] - zm).powi(2)).sum();
         let h = pxz / pxx;
         let omega = (pzz_s - h * h * pxx).max(0.0);
-        let pzz = h * h * p + omega + r;
-        let mut gain = 0.0;
-        let y = if later { None } else { *y };
-        if let Some(y) = y {
-            gain = p * h / pzz;
-            x += gain * (y - zm - h * (x - xm));
-            p = (p - gain * gain * pzz).max(1e-18);
-            r_sum += r;
-        }
-        x = x.clamp(lo, hi);
-        // Every sigma point continues from the centre's members: the states of the motion the
-        // estimate describes.
-        carried = Some(if opts.carry_own {
-            ens.carried
-        } else {
-            let centre = ens.carried.into_iter().next().expect("three sigma points");
-            vec![centre.clone(), centre.clone(), centre]
-        });
-        let step = UkfStep {
-            t: t0 + (k + 1) as f64 * sim.window_s,
-            sigma: xs,
-            sigma_feature: z,
-            measured: y,
-            predicted: zm,
-            measurement_std: r.sqrt(),
-            gain,
-            clearance: x,
-            std: p.sqrt(),
-        };
-        progress(k, &step);
-        steps.push(step);
+        (h, xm, zm, h * h * p + omega + r)
     }
-    let mut release = None;
-    let mut release_iterations = 0;
-    let (mut x_final, mut p_final) = (x, p);
-    if let (true, Some(y0), true) = (opts.release_last, measured[0], measured.len() > 1) {
-        // Iterated update (Gauss–Newton on the maximum-a-posteriori cost, derivative-free):
-        // the slope of h over sigma points ± release_delta about the iterate, applied to the
-        // prior, repeated until the estimate settles. Each step moves at most one prior std.
-        let (x0, p0) = (x, p);
+
+    /// The release window's delayed update, `y0` its feature: iterated (Gauss–Newton on the
+    /// maximum-a-posteriori cost, derivative-free): the slope of h over sigma points
+    /// ± release_delta about the iterate, applied to the prior, repeated until the estimate
+    /// settles. Each step moves at most one prior std. Returns the last iteration's step and
+    /// the iterations taken; `post` ends at the last iterate.
+    fn release_update(
+        &self,
+        y0: f64,
+        k: usize,
+        post: &mut Posterior,
+        progress: &mut dyn FnMut(usize, &UkfStep),
+    ) -> Result<(Option<UkfStep>, usize), CrankError> {
+        let (lo, hi) = (self.lo, self.hi);
+        let (x0, p0) = (post.x, post.p);
         let mut xi = x0;
         let mut pi = p0;
-        for it in 0..opts.release_iterations.max(1) {
-            let d = opts.release_delta.max(1e-9);
+        let mut release = None;
+        let mut release_iterations = 0;
+        for it in 0..self.opts.release_iterations.max(1) {
+            let d = self.opts.release_delta.max(1e-9);
             let xs = [xi, xi + d, xi - d].map(|v| v.clamp(lo, hi));
-            let ens = sim.window(0, xs, None)?;
-            work += ens.steps;
-            sims += 3 * opts.members as u64;
+            let ens = self.sim.window(0, xs, None)?;
+            post.spent(&ens, self.opts.members);
             let z = ens.mean;
-            let r = r_var(ens.var);
+            let r = self.r_var(ens.var);
             let h = (z[1] - z[2]) / (xs[1] - xs[2]).max(1e-12);
             let s_tot = h * h * p0 + r;
             let gain = p0 * h / s_tot;
@@ -460,7 +479,7 @@ pub fn run(
             release_iterations = it + 1;
             let moved = (x_new - xi).abs();
             let step = UkfStep {
-                t: t0 + sim.window_s,
+                t: self.t0 + self.sim.window_s,
                 sigma: xs,
                 sigma_feature: z,
                 measured: Some(y0),
@@ -470,7 +489,7 @@ pub fn run(
                 clearance: x_new,
                 std: p_new.sqrt(),
             };
-            progress(steps.len(), &step);
+            progress(k, &step);
             release = Some(step);
             xi = x_new;
             pi = p_new;
@@ -478,27 +497,39 @@ pub fn run(
                 break;
             }
         }
-        r_sum += release.map_or(0.0, |s| s.measurement_std.powi(2));
-        x_final = xi;
-        p_final = pi;
+        post.r_sum += release.map_or(0.0, |s: UkfStep| s.measurement_std.powi(2));
+        post.x = xi;
+        post.p = pi;
+        Ok((release, release_iterations))
     }
+}
+
+/// The run's result: the whole-recording estimate (the last, or the mean over the last
+/// [`UkfOptions::average_fraction`] of the windows) and what was spent.
+fn finish(
+    opts: &UkfOptions,
+    steps: Vec<UkfStep>,
+    release: Option<UkfStep>,
+    release_iterations: usize,
+    post: &Posterior,
+) -> UkfRun {
     let from = ((steps.len() as f64 * (1.0 - opts.average_fraction.clamp(0.0, 1.0))).floor() as usize)
         .min(steps.len().saturating_sub(1));
     let estimate = if opts.average_fraction > 0.0 {
         let tail = &steps[from..];
         tail.iter().map(|s| s.clearance).sum::<f64>() / tail.len() as f64
     } else {
-        x_final
+        post.x
     };
     let updates = steps.iter().filter(|s| s.measured.is_some()).count() + usize::from(release.is_some());
-    Ok(UkfRun {
+    UkfRun {
         steps,
         release,
         release_iterations,
         estimate,
-        estimate_std: p_final.sqrt(),
-        measurement_std: (r_sum / updates.max(1) as f64).sqrt(),
-        integration_steps: work,
-        simulations: sims,
-    })
+        estimate_std: post.p.sqrt(),
+        measurement_std: (post.r_sum / updates.max(1) as f64).sqrt(),
+        integration_steps: post.work,
+        simulations: post.sims,
+    }
 }
