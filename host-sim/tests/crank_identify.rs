@@ -6,7 +6,8 @@
 //! 0.1–0.5 mm × 4 draws; run it in release).
 
 use edgekf_sim::systems::crank::estimate::model::{FastModel, FEATURES};
-use edgekf_sim::systems::crank::estimate::train::{self, Run};
+use edgekf_sim::systems::crank::estimate::runs::{self, Run};
+use edgekf_sim::systems::crank::estimate::train;
 use edgekf_sim::systems::crank::{CrankConfig, Joint};
 
 fn long() -> bool {
@@ -60,7 +61,7 @@ fn evaluate_with(model: &FastModel, runs: &[Run]) -> (f64, f64, f64, usize) {
 /// clearance within ±3 % (the target).
 #[test]
 fn fast_model_names_the_joint_and_meets_3_percent() {
-    let runs = train::grid(&[0.1e-3, 0.2e-3, 0.3e-3, 0.4e-3, 0.5e-3], 1, 700_000, 10.0);
+    let runs = runs::grid(&[0.1e-3, 0.2e-3, 0.3e-3, 0.4e-3, 0.5e-3], 1, 700_000, 10.0);
     let (rate, worst, _, within) = evaluate(&runs);
     assert_eq!((rate, within), (1.0, runs.len()));
     assert!(worst <= 0.03, "{worst}");
@@ -70,7 +71,7 @@ fn fast_model_names_the_joint_and_meets_3_percent() {
 /// chaos limits to about 8 % RMS: the release stage is what meets ±3 %.
 #[test]
 fn without_the_release_stage_the_error_is_several_times_larger() {
-    let runs = train::grid(&[0.1e-3, 0.3e-3, 0.5e-3], 1, 710_000, 10.0);
+    let runs = runs::grid(&[0.1e-3, 0.3e-3, 0.5e-3], 1, 710_000, 10.0);
     let mut model = FastModel::builtin();
     model.release = None;
     let (_, worst_off, rms_off, _) = evaluate_with(&model, &runs);
@@ -91,7 +92,7 @@ fn fast_model_long_grid() {
         return;
     }
     let cs: Vec<f64> = (0..9).map(|k| (0.1 + 0.05 * k as f64) * 1e-3).collect();
-    let runs = train::grid(&cs, 4, 800_000, 10.0);
+    let runs = runs::grid(&cs, 4, 800_000, 10.0);
     let (rate, worst, _, within) = evaluate(&runs);
     assert!(rate >= 0.95, "{rate}");
     assert!(within as f64 >= 0.95 * runs.len() as f64 && worst <= 0.05, "{within} {worst}");
@@ -111,7 +112,7 @@ fn model_file_round_trip() {
 /// Features written and read back are the same; a fit on them reproduces the model's shape.
 #[test]
 fn features_file_round_trip_and_fit() {
-    let runs = train::grid(&[0.2e-3, 0.4e-3], 2, 5, 1.0);
+    let runs = runs::grid(&[0.2e-3, 0.4e-3], 2, 5, 1.0);
     let feats = train::features_of(&CrankConfig::default(), &runs, 0.25, 2, &|_, _| {}).unwrap();
     let path = std::env::temp_dir().join(format!("edgekf-crank-features-{}.csv", std::process::id()));
     train::write_features(&path, &runs, &feats).unwrap();

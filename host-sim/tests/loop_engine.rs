@@ -2,6 +2,8 @@
 //! effect library goes through the same [`search`] as the rotor, and the engine finds the
 //! undeclared effect in its data, sizes it, and adds nothing to clean data.
 
+use edgekf_sim::io::config_edit::{ConfigEdit, Op};
+use edgekf_sim::residual_loop::correction::{corrected_config, Correction};
 use edgekf_sim::residual_loop::filter::{discretise, run_state_space, Run, StateSpace};
 use edgekf_sim::residual_loop::onset::settled_mean;
 use edgekf_sim::residual_loop::optimize::ScalarRange;
@@ -167,6 +169,14 @@ impl LoopSystem for Oscillator {
         }
     }
 
+    fn correction(&self, e: &Applied<Effect>, value: f64) -> Correction {
+        match e.effect {
+            Effect::Bias => Correction::model([ConfigEdit::or_absent("probe.bias", Op::Add(value), 0.0)]),
+            Effect::Stiffness => Correction::model([ConfigEdit::new("spring.k", Op::Scale(value))]),
+            Effect::Mount => Correction::not_carried("the toy has no mount in its configuration"),
+        }
+    }
+
     fn traces(&self) -> Traces {
         let truth = vec![Some(self.truth.clone())];
         Traces { t: self.t.clone(), channels: vec![probe()], rows: vec![probe()], truth, ..Traces::default() }
@@ -220,6 +230,20 @@ fn engine_finds_a_wrong_stiffness_on_another_system() {
     let e = &r.effects_added[0];
     assert_eq!((e.kind.as_str(), e.detail.parameter.as_deref()), ("parameter", Some("stiffness")));
     assert!((e.value - 1.1).abs() < 0.01, "{}", e.value);
+}
+
+/// Each added effect's correction comes in the report beside it, and the corrected
+/// configuration carries the fitted stiffness under a comment naming the report.
+#[test]
+fn the_engine_writes_each_added_effect_into_the_configuration() {
+    let r = close(1.1, 0.0, 4);
+    assert_eq!(r.corrections.len(), r.effects_added.len());
+    assert_eq!(r.corrections[0].effect, "parameter at q");
+    let config = "# the toy\n[spring]\nk = 2.0 # N/m\n";
+    let out = corrected_config(config, &r.corrections, "out/report.json").unwrap();
+    let k = out.parse::<toml::Table>().unwrap()["spring"]["k"].as_float().unwrap();
+    assert!((k / 2.0 - r.effects_added[0].value).abs() < 1e-12, "{out}");
+    assert!(out.starts_with("# the toy") && out.contains("# N/m") && out.contains("out/report.json, parameter at q"));
 }
 
 #[test]

@@ -1,6 +1,7 @@
 //! The oscillator through the residual loop: the demo's mode and ADXL355 with something the
 //! scenario does not declare, and `edgekf loop oscillator` on the declared scenario.
 
+use edgekf_sim::residual_loop::correction::corrected_config;
 use edgekf_sim::residual_loop::{LoopOptions, LoopReport};
 use edgekf_sim::systems::oscillator::loop_system::close_loop;
 use edgekf_sim::systems::oscillator::scenario::Scenario;
@@ -52,6 +53,28 @@ fn the_loop_finds_a_wrong_natural_frequency() {
     assert!((e.value * 1.02 - 1.0).abs() < 0.002, "{}", e.value);
     let (b, a) = (r.before.error_rms["x"], r.after.error_rms["x"]);
     assert!(a < 0.5 * b, "displacement error {b:e} → {a:e}");
+}
+
+/// The corrected configuration carries the fitted frequency into `[mode]` (comments kept),
+/// and the loop run again with it on the same recording adds nothing and estimates as the
+/// first run's final model did.
+#[test]
+fn the_corrected_configuration_explains_the_recording_it_came_from() {
+    let mut actual = declared();
+    actual.mode.natural_freq_hz = 20.0 / 1.02;
+    let data = actual.simulate().to_data_file();
+    let options = LoopOptions { screen_parameters: false, ..LoopOptions::default() };
+    let text = "# the demo's mode, 4 s\nduration_s = 4.0\n\n[mode]\nnatural_freq_hz = 20.0 # Hz\n";
+    let first = close_loop(&Scenario::from_toml_str(text).unwrap(), &data, &options).unwrap();
+    assert_eq!(first.effects_added.len(), 1, "{:?}", first.effects_added);
+    let fixed = corrected_config(text, &first.corrections, "first/report.json").unwrap();
+    assert!(fixed.contains("# Hz") && fixed.contains("first/report.json, parameter at mode"), "{fixed}");
+    let corrected = Scenario::from_toml_str(&fixed).unwrap();
+    assert!((corrected.mode.natural_freq_hz * 1.02 / 20.0 - 1.0).abs() < 0.002, "{fixed}");
+    let again = close_loop(&corrected, &data, &options).unwrap();
+    assert!(again.effects_added.is_empty(), "{:?}", again.effects_added);
+    let (a, b) = (first.after.error_rms["x"], again.after.error_rms["x"]);
+    assert!((b / a - 1.0).abs() < 0.05, "displacement error {a:e} after the loop, {b:e} with the corrected model");
 }
 
 #[test]

@@ -225,11 +225,12 @@ fn a_mass_between_the_disks_is_a_point_mass_not_a_denser_shaft() {
 /// from it under `not_identifiable`, the true node among the place and its rivals.
 #[test]
 fn a_force_on_the_overhang_lists_its_location_rivals() {
-    use edgekf_sim::systems::rotor::loop_system::inject::inject_harmonic_force;
+    use edgekf_sim::systems::rotor::loop_system::inject::{inject_harmonic_force, HarmonicForce};
     let model = Case::declared().unwrap();
     let speed = model.config().operation.speed;
     let mut d = Case::Clean.data(41).unwrap();
-    inject_harmonic_force(&mut d, &model, speed, 35, 2.0, 1.5, 0.3).unwrap();
+    let force = HarmonicForce { node: 35, order: 2.0, amplitude: 1.5, phase_rad: 0.3 };
+    inject_harmonic_force(&mut d, &model, speed, &force).unwrap();
     let options = LoopOptions { screen_parameters: false, ..LoopOptions::default() };
     let r = close_loop(&model, &d, &options, &Default::default()).unwrap();
     println!("{}", summary_table(&r));

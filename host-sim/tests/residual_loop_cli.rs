@@ -32,9 +32,17 @@ fn loop_rotor_writes_the_report() {
     let csv = dir.join("data.csv");
     std::fs::write(&csv, data.to_csv_string().unwrap()).unwrap();
     let report = dir.join("report");
-    let out = edgekf_loop(PAPER, &csv, &report, &[]);
+    // The corrected configuration may not be an input: refused before any work.
+    let refused = edgekf_loop(PAPER, &csv, &report, &["--corrected-config", PAPER]);
+    assert!(!refused.status.success() && !report.exists());
+    let fixed = dir.join("fixed.toml");
+    let out = edgekf_loop(PAPER, &csv, &report, &["--corrected-config", fixed.to_str().unwrap()]);
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    // The rotor's model reads no sensor calibration: the bias is reported as not carried, and
+    // the corrected file is the configuration as it was.
+    assert!(stdout.contains("0 of 1 effects carried") && stdout.contains("not carried"), "{stdout}");
+    assert_eq!(std::fs::read_to_string(&fixed).unwrap(), std::fs::read_to_string(PAPER).unwrap());
     assert!(stdout.contains("sensor_bias") && stdout.contains("before") && stdout.contains("after"), "{stdout}");
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(report.join("report.json")).unwrap()).unwrap();
@@ -60,6 +68,8 @@ fn loop_rotor_writes_the_report() {
     assert!((v["after"]["nis_mean"].as_f64().unwrap() - 1.0).abs() < 0.1);
     assert!(v["before"]["nis_mean"].as_f64().unwrap() > 10.0);
     assert!(v["not_identifiable"].is_array() && v["unexplained"].is_array());
+    assert_eq!(v["corrections"][0]["effect"], "sensor_bias at n32_y");
+    assert_eq!(v["corrections"][0]["as"], "not_carried");
     let html = std::fs::read_to_string(report.join("report.html")).unwrap();
     assert!(html.contains("<html") && html.contains("sensor_bias"), "{}", &html[..200.min(html.len())]);
     assert!(html.matches("<svg").count() >= 3);

@@ -6,7 +6,7 @@
 //! in QEMU reports bit for bit what the node's code reports on the host.
 
 use edgekf_sim::systems::crank::estimate::model::{feature_vector, FastModel, FEATURES, FEATURE_NAMES};
-use edgekf_sim::systems::crank::estimate::train::Run;
+use edgekf_sim::systems::crank::estimate::runs::Run;
 use edgekf_sim::systems::crank::estimate::Recording;
 use edgekf_sim::systems::crank::{CrankConfig, Joint};
 use edgekf_tests::crank::{check_faulty_run, csv, faulty_csv, reference_features, run_host};

@@ -7,7 +7,7 @@ use edgekf_sim::report::plot::{
     tick, Axis, Entry, Figure, Key, LegendColumn, Line, Marker, Markers, Mesh, Panel, RGBColor, Shape, Stroke,
 };
 use edgekf_sim::systems::crank::estimate::model::{FastModel, ModelEstimate};
-use edgekf_sim::systems::crank::estimate::train::{grid, Run};
+use edgekf_sim::systems::crank::estimate::runs::{grid, Run};
 use edgekf_sim::systems::crank::{CrankConfig, Joint};
 use rayon::prelude::*;
 use std::path::Path;

@@ -28,7 +28,7 @@
 //!   the built-in model) as the chip runs it: the shared crate's streaming
 //!   `edgekf::systems::crank::ClearanceEstimator` in `f64`, which reports a running estimate after
 //!   every 0.25 s window. Nine unseen runs of 10 s
-//!   (`train::grid(&[0.1e-3, 0.3e-3, 0.5e-3], 1, 720_000, 10.0)`: joints A, B, C × three
+//!   (`runs::grid(&[0.1e-3, 0.3e-3, 0.5e-3], 1, 720_000, 10.0)`: joints A, B, C × three
 //!   clearances, random release angle and journal radius, noise seeds 720 000–720 008; the
 //!   built-in model was trained on seeds from 1 000 and, its release laws, from 500 000), simulated by the adaptive integrator on two threads. Writes
 //!   `OUTDIR/crank_fast_convergence.svg`: the relative clearance error of the running

@@ -4,10 +4,11 @@
 
 use super::registry::SystemEntry;
 use super::request::LoopRequest;
-use crate::io::output::check_folder;
+use crate::io::output::{check, check_folder, write_atomic};
 use crate::report::text::{summary_table, write_report, REPORT_FILES};
-use crate::residual_loop::{LoopOptions, LoopReport};
-use anyhow::Result;
+use crate::residual_loop::correction::corrected_config;
+use crate::residual_loop::{Correction, LoopOptions, LoopReport};
+use anyhow::{Context, Result};
 use clap::{ArgMatches, Args, FromArgMatches};
 use std::path::{Path, PathBuf};
 
@@ -26,6 +27,10 @@ pub struct LoopArgs {
     /// A healthy baseline (`edgekf baseline <system>`): the loop asks what changed since.
     #[arg(long, value_name = "TOML")]
     pub baseline: Option<PathBuf>,
+    /// Also write the configuration with every added model or calibration effect made a
+    /// declared part of it (its own keys, a comment per change); faults stay out of the model.
+    #[arg(long, value_name = "TOML")]
+    pub corrected_config: Option<PathBuf>,
     /// At most this many effects.
     #[arg(long, value_name = "N", default_value_t = 4)]
     pub max_effects: usize,
@@ -61,7 +66,9 @@ pub fn run(registry: &[SystemEntry], m: &ArgMatches, command_line: &str) -> Resu
         .and_then(|s| s.close_loop.as_ref())
         .expect("clap only accepts registered names");
     let args = LoopArgs::from_arg_matches(sub).map_err(|e| anyhow::anyhow!("{e}"))?;
-    check_folder(&args.report, &REPORT_FILES, &[Some(&args.data), Some(&args.config), args.baseline.as_deref()])?;
+    let inputs = [Some(args.data.as_path()), Some(args.config.as_path()), args.baseline.as_deref()];
+    check_folder(&args.report, &REPORT_FILES, &inputs)?;
+    check(&[args.corrected_config.as_deref()], &inputs)?;
     let request = LoopRequest {
         config: args.config.clone(),
         data: args.data.clone(),
@@ -74,6 +81,29 @@ pub fn run(registry: &[SystemEntry], m: &ArgMatches, command_line: &str) -> Resu
     print!("{}", summary_table(&report));
     write_report(&report, &args.report)?;
     println!("wrote {0}/report.json and {0}/report.html", args.report.display());
+    if let Some(path) = &args.corrected_config {
+        write_corrected(&report, &args.config, &args.report, path)?;
+    }
+    Ok(())
+}
+
+/// Writes `config` with the report's corrections to `out` (whole, or not at all), and says
+/// which effects it could not carry.
+fn write_corrected(report: &LoopReport, config: &Path, report_dir: &Path, out: &Path) -> Result<()> {
+    let text = std::fs::read_to_string(config).with_context(|| format!("{}: cannot read", config.display()))?;
+    let origin = report_dir.join("report.json").display().to_string();
+    let fixed = corrected_config(&text, &report.corrections, &origin)
+        .with_context(|| format!("{}: cannot write the corrections into it", config.display()))?;
+    write_atomic(out, fixed).with_context(|| format!("{}: cannot write", out.display()))?;
+    let carried = report.corrections.iter().filter(|c| matches!(c.correction, Correction::Model { .. })).count();
+    println!("wrote {} ({carried} of {} effects carried into the model)", out.display(), report.corrections.len());
+    for c in &report.corrections {
+        match &c.correction {
+            Correction::Indicator { note, .. } => println!("  {}: a fault, not modelled: {note}", c.effect),
+            Correction::NotCarried { reason } => println!("  {}: not carried: {reason}", c.effect),
+            Correction::Model { .. } => {}
+        }
+    }
     Ok(())
 }
 

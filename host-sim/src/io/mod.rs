@@ -1,6 +1,7 @@
 //! Files that `edgekf` reads and writes.
 
 pub mod config;
+pub mod config_edit;
 pub mod data;
 pub mod output;
 pub mod recording;

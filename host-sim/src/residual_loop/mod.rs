@@ -27,6 +27,7 @@
 //! * [`optimize`]: the one-dimensional maximum-likelihood fit of an effect's scalar.
 
 pub mod baseline;
+pub mod correction;
 pub mod filter;
 pub mod fit;
 pub mod identifiability;
@@ -41,6 +42,7 @@ pub mod signature;
 pub mod system;
 pub mod vocabulary;
 
+pub use correction::{Correction, EffectCorrection};
 pub use fit::OUTSIDE;
 pub use optimize::ScalarRange;
 pub use options::LoopOptions;

@@ -5,6 +5,7 @@
 use super::filter::Run;
 use super::report::Traces;
 use super::signature::{summarise, Channel, ReferenceLines, RunSummary, SignatureOptions, SummaryContext};
+use crate::io::data::DataFile;
 
 /// The data a system's runs are summarised against.
 ///
@@ -29,7 +30,34 @@ pub struct Recording<'a> {
     pub sample_rate: f64,
 }
 
-impl Recording<'_> {
+impl<'a> Recording<'a> {
+    /// The recording of `data` whose rows' truth is in the columns `truth` (absent where the
+    /// data have no such column).
+    ///
+    /// ```
+    /// use edgekf_sim::io::data::DataFile;
+    /// use edgekf_sim::residual_loop::{Channel, Recording};
+    /// let data = DataFile {
+    ///     names: vec!["truth_x".into()],
+    ///     t: vec![0.0, 0.01],
+    ///     columns: vec![vec![1.0, 2.0]],
+    ///     sha256: None,
+    /// };
+    /// let ch = [Channel::new("x", "m")];
+    /// let rec = Recording::of(&data, &ch, &ch, &["truth_x", "truth_y"], 100.0);
+    /// assert_eq!(rec.truth, vec![Some(&[1.0, 2.0][..]), None]);
+    /// ```
+    pub fn of(
+        data: &'a DataFile,
+        channels: &'a [Channel],
+        rows: &'a [Channel],
+        truth: &[&str],
+        sample_rate: f64,
+    ) -> Self {
+        let truth = truth.iter().map(|c| data.column(c)).collect();
+        Self { t: &data.t, channels, rows, truth, sample_rate }
+    }
+
     /// The innovations' statistics of `run` with its lines placed among `lines`.
     pub fn summarise(&self, run: &Run, lines: &ReferenceLines, options: &SignatureOptions) -> RunSummary {
         let ctx = SummaryContext {

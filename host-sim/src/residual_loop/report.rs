@@ -1,6 +1,7 @@
 //! What a loop run reports: [`LoopReport`] (`report.json`'s layout, [`SCHEMA_VERSION`]) and its
 //! parts, the same for every system.
 
+use super::correction::EffectCorrection;
 use super::filter::Run;
 use super::signature::{Channel, RunSummary, Signature};
 use super::vocabulary::{EffectDetail, EffectKind};
@@ -165,6 +166,9 @@ pub struct LoopReport {
     pub source: Source,
     /// Effects kept, in order.
     pub effects_added: Vec<AddedEffect>,
+    /// How each kept effect enters the configuration (`--corrected-config`), in the same
+    /// order.
+    pub corrections: Vec<EffectCorrection>,
     /// The base model.
     pub before: RunSummary,
     /// The final model.

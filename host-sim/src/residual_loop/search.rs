@@ -8,6 +8,7 @@
 //! acceptance rule, the identifiability verdicts and the report, so they read the same for a
 //! machine, a mechanism or a vehicle.
 
+use super::correction::EffectCorrection;
 use super::filter::Run;
 use super::fit::{Engine, Fitted};
 use super::options::LoopOptions;
@@ -191,7 +192,15 @@ pub fn search<S: LoopSystem>(sys: &mut S, options: &LoopOptions) -> Result<LoopR
     if options.screen_parameters {
         st.not_identifiable.extend(engine.screen(&st.effects, &st.run));
     }
-    let effects_added = first
+    let named = |e: &AddedEffect| format!("{} at {}", e.kind.as_str(), e.location);
+    let mut corrections: Vec<EffectCorrection> = first
+        .iter()
+        .map(|(e, a)| EffectCorrection {
+            effect: named(a),
+            correction: sys.correction(&Applied::new(*e, 0.0), a.value),
+        })
+        .collect();
+    let effects_added: Vec<AddedEffect> = first
         .into_iter()
         .map(|(_, a)| a)
         .chain(st.added.iter().map(|f| AddedEffect {
@@ -205,6 +214,9 @@ pub fn search<S: LoopSystem>(sys: &mut S, options: &LoopOptions) -> Result<LoopR
             bic_penalty: f.penalty,
         }))
         .collect();
+    for (f, e) in st.added.iter().zip(&effects_added[corrections.len()..]) {
+        corrections.push(EffectCorrection { effect: named(e), correction: sys.correction(&f.applied, e.value) });
+    }
     let unexplained = if st.summary.consistent {
         Vec::new()
     } else {
@@ -218,6 +230,7 @@ pub fn search<S: LoopSystem>(sys: &mut S, options: &LoopOptions) -> Result<LoopR
         system: sys.name().to_string(),
         source: Source { version: env!("CARGO_PKG_VERSION").into(), ..Source::default() },
         effects_added,
+        corrections,
         before,
         after: st.summary,
         not_identifiable: st.not_identifiable,

@@ -2,9 +2,10 @@
 //! ([`Fitting`]), and what a system's own first stage found before the search ([`PreStage`]).
 //!
 //! The trait is small on purpose: the runs, the summaries, the effects (declared, proposed,
-//! labelled, valued) and the report's traces are the system's; acceptance, identifiability and
+//! labelled, valued, written into the configuration) and the report's traces are the system's; acceptance, identifiability and
 //! the report are the engine's, so they read the same for every system.
 
+use super::correction::Correction;
 use super::filter::Run;
 use super::optimize::ScalarRange;
 use super::options::LoopOptions;
@@ -125,6 +126,10 @@ pub trait LoopSystem: Sync {
     /// The size the report gives `effect` in the model of `run` (a state's size over the
     /// settled part of the effect's stretch: [`settled_mean`](super::onset::settled_mean)).
     fn value(&self, model: &Self::Model, run: &Run, effect: &Applied<Self::Effect>) -> f64;
+    /// How `effect`, of size `value` in the final model ([`value`](Self::value)), enters the
+    /// configuration: the config's own keys for a model or calibration effect, a limit the
+    /// node tracks for a fault, or why no key holds it ([`Correction`]).
+    fn correction(&self, effect: &Applied<Self::Effect>, value: f64) -> Correction;
     /// Time, channels, virtual rows and truth for the report's plots (the engine fills in
     /// the runs before and after).
     fn traces(&self) -> Traces;

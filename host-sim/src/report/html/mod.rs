@@ -195,6 +195,7 @@ mod tests {
                 delta_log_likelihood: 100.0,
                 bic_penalty: 4.7,
             }],
+            corrections: Vec::new(),
             before: summary(2e-6, "1x & <friends>"),
             after: summary(1e-6, "natural 0"),
             not_identifiable: Vec::new(),

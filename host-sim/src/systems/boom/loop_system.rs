@@ -24,15 +24,16 @@ use super::config::BoomConfig;
 use super::estimate::model_settings;
 use super::peaks::peak_errors;
 use super::simulate::MEASURED;
+use crate::io::config_edit::{ConfigEdit, Op};
 use crate::io::data::DataFile;
 use crate::residual_loop::filter::Run;
 use crate::residual_loop::optimize::ScalarRange;
 use crate::residual_loop::signature::{ReferenceLines, SEGMENT};
-use crate::residual_loop::Recording;
 use crate::residual_loop::{
     search, Applied, Channel, EffectDetail, EffectKind, EffectLabel, Fitting, LoopOptions, LoopReport, LoopSystem,
     RunSummary, SystemSection, Traces,
 };
+use crate::residual_loop::{Correction, Recording};
 use anyhow::{anyhow, Context, Result};
 use edgekf::systems::boom::{Ar2, ExtraMode, ModelEstimator, ModelSettings};
 
@@ -163,14 +164,7 @@ impl<'a> BoomSystem<'a> {
 
     /// The data as the engine reads them: the tip vibration's truth where simulated.
     fn recording(&self) -> Recording<'_> {
-        let truth = vec![self.data.column("truth_tip_vibration")];
-        Recording {
-            t: &self.data.t,
-            channels: &self.channels,
-            rows: &self.rows,
-            truth,
-            sample_rate: 1.0 / self.settings.dt,
-        }
+        Recording::of(self.data, &self.channels, &self.rows, &["truth_tip_vibration"], 1.0 / self.settings.dt)
     }
 
     /// Each effect's scalar range and grid: factors within what a boom's settings can be off
@@ -365,6 +359,29 @@ impl LoopSystem for BoomSystem<'_> {
                 effect.theta
             }
             Effect::GyroScale | Effect::Stiffness | Effect::PlatformMass => effect.theta.exp(),
+        }
+    }
+
+    /// The boom's sections and tip, and the sensors as declared to the estimator (`[gyro]`,
+    /// `[inclinometer]`; `[sim.*]` are the simulator's).
+    fn correction(&self, effect: &Applied<Effect>, value: f64) -> Correction {
+        let scale = |path: &str| ConfigEdit::new(path, Op::Scale(value));
+        match effect.effect {
+            Effect::Stiffness => Correction::model([scale("section[*].ei")]),
+            Effect::PlatformMass => Correction::model([scale("tip.mass"), scale("tip.rotary_inertia")]),
+            Effect::InclinometerLag => {
+                Correction::model([ConfigEdit::or_absent("inclinometer.lag", Op::Set(value), 0.0)])
+            }
+            Effect::InclinometerOffset => {
+                Correction::model([ConfigEdit::or_absent("inclinometer.offset", Op::Add(value), 0.0)])
+            }
+            Effect::GyroScale => Correction::model([ConfigEdit::or_absent("gyro.scale", Op::Scale(value), 1.0)]),
+            Effect::GyroDrift => {
+                Correction::not_carried("the estimator's gyro has no declared bias drift (only the simulator's has)")
+            }
+            Effect::ExtraMode { .. } => {
+                Correction::not_carried("the reduced boom has no key for a mode beyond its own")
+            }
         }
     }
 

@@ -14,16 +14,17 @@
 //! node's estimator share the model's matrices but not their code path.
 
 use super::scenario::Scenario;
+use crate::io::config_edit::{ConfigEdit, Op};
 use crate::io::data::DataFile;
 use crate::residual_loop::filter::{run_segments, Run, StateSpace};
 use crate::residual_loop::onset::settled_mean;
 use crate::residual_loop::optimize::ScalarRange;
 use crate::residual_loop::signature::ReferenceLines;
-use crate::residual_loop::Recording;
 use crate::residual_loop::{
     search, Applied, Channel, EffectDetail, EffectKind, EffectLabel, Fitting, LoopOptions, LoopReport, LoopSystem,
     RunSummary, Traces,
 };
+use crate::residual_loop::{Correction, Recording};
 use anyhow::{anyhow, Result};
 use edgekf::systems::oscillator::HarmonicForceParams;
 use nalgebra::DMatrix;
@@ -336,6 +337,22 @@ impl LoopSystem for OscillatorSystem<'_> {
                 self.params.modal_mass_kg * settled_mean(&amplitude, from)
             }
             Effect::SensorScale | Effect::Frequency | Effect::Damping => effect.theta.exp(),
+        }
+    }
+
+    /// The mode's frequency and damping are the scenario's `[mode]` keys; the scenario's
+    /// `[sensor]` keys are the simulated sensor's, and the filter declares no second force.
+    fn correction(&self, effect: &Applied<Effect>, value: f64) -> Correction {
+        match effect.effect {
+            Effect::Frequency => Correction::model([ConfigEdit::new("mode.natural_freq_hz", Op::Scale(value))]),
+            Effect::Damping => Correction::model([ConfigEdit::new("mode.damping_ratio", Op::Scale(value))]),
+            Effect::SensorBias | Effect::SensorScale => Correction::not_carried(
+                "the scenario's [sensor] keys describe the simulated sensor; the filter has no key for a declared \
+                 calibration",
+            ),
+            Effect::HarmonicForce { .. } => {
+                Correction::not_carried("the filter carries one force, at the drive frequency; no key declares another")
+            }
         }
     }
 

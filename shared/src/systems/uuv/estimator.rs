@@ -7,9 +7,10 @@
 //! DVL when it has a new reading. The IMU innovation feeds each thruster's CUSUM
 //! ([`ThrusterMonitor`]).
 
-use super::detector::{signatures, watch, Status, ThrusterMonitor};
+use super::detector::{Status, ThrusterMonitor};
 use super::dynamics::{Attitude, Drive, ReducedDynamics};
 use super::settings::{EstimatorSettings, Layout, VELOCITY};
+use super::update::{start_vehicle, update, Detectors, Dvl, UpdateNoise};
 use super::vehicle::Vehicle;
 use crate::filter::{FilterHealth, MerweSigmaPoints, UkfError, UkfMeasurement, UkfModel, UnscentedKalmanFilter};
 use crate::Real;
@@ -200,24 +201,6 @@ impl<T: Real, const N: usize> UkfMeasurement<T, N, 8> for StepModel<'_, T> {
     }
 }
 
-/// Depth and heading.
-struct DepthHeading;
-
-impl<T: Real, const N: usize> UkfMeasurement<T, N, 2> for DepthHeading {
-    fn h(&self, x: &SVector<T, N>) -> SVector<T, 2> {
-        SVector::<T, 2>::new(x[0], x[3])
-    }
-}
-
-/// DVL bottom track: the body velocity over ground.
-struct Dvl;
-
-impl<T: Real, const N: usize> UkfMeasurement<T, N, 3> for Dvl {
-    fn h(&self, x: &SVector<T, N>) -> SVector<T, 3> {
-        x.fixed_rows::<3>(VELOCITY).into_owned()
-    }
-}
-
 /// The estimator with `N` states (`N` must equal the layout's [`Layout::len`]).
 ///
 /// ```
@@ -236,10 +219,7 @@ pub struct UuvEstimator<T: Real, const N: usize> {
     dynamics: ReducedDynamics<T>,
     settings: EstimatorSettings,
     points: MerweSigmaPoints<T>,
-    r_imu: SMatrix<T, 6, 6>,
-    r_depth_heading: SMatrix<T, 2, 2>,
-    r_imu_depth_heading: SMatrix<T, 8, 8>,
-    r_dvl: SMatrix<T, 3, 3>,
+    r: UpdateNoise<T>,
     ukf: Option<UnscentedKalmanFilter<T, N, 6>>,
     command: Command<T>,
     monitors: [ThrusterMonitor<T>; 2],
@@ -276,28 +256,11 @@ impl<T: Real, const N: usize> UuvEstimator<T, N> {
         if values.iter().any(|v| !(v.is_finite() && *v > 0.0)) {
             return Err(EstimatorError::Settings);
         }
-        let var = |s: f64| T::of_f64(s * s);
-        let imu = [n.acc, n.acc, n.acc, n.gyro, n.gyro, n.gyro].map(var);
         Ok(Self {
             dynamics,
             settings: *settings,
             points: MerweSigmaPoints { alpha: T::of_f64(0.5), beta: T::of_f64(2.0), kappa: T::zero() },
-            r_imu: SMatrix::<T, 6, 6>::from_diagonal(&SVector::<T, 6>::from(imu)),
-            r_depth_heading: SMatrix::<T, 2, 2>::from_diagonal(&SVector::<T, 2>::new(
-                T::of_f64(n.depth * n.depth),
-                T::of_f64(n.heading * n.heading),
-            )),
-            r_imu_depth_heading: SMatrix::<T, 8, 8>::from_diagonal(&SVector::<T, 8>::from([
-                imu[0],
-                imu[1],
-                imu[2],
-                imu[3],
-                imu[4],
-                imu[5],
-                var(n.depth),
-                var(n.heading),
-            ])),
-            r_dvl: SMatrix::<T, 3, 3>::identity() * T::of_f64(n.dvl * n.dvl),
+            r: UpdateNoise::new(n),
             ukf: None,
             command: Command { n_t: T::zero(), n_v: T::zero(), rudder: T::zero(), elevator: T::zero() },
             monitors: [ThrusterMonitor::new(&settings.detector); 2],
@@ -344,41 +307,7 @@ impl<T: Real, const N: usize> UuvEstimator<T, N> {
         let init = &self.settings.initial;
         let mut x = SVector::<T, N>::zeros();
         let mut sd = [0.0f64; N];
-        let known = |v: T, fallback: f64, spread: f64, wide: f64| {
-            if v.is_finite() {
-                (v, spread)
-            } else {
-                (T::of_f64(fallback), wide)
-            }
-        };
-        let noise = &self.settings.noise;
-        (x[0], sd[0]) = known(s.depth, 0.0, noise.depth, 100.0);
-        (x[3], sd[3]) = known(s.heading, 0.0, noise.heading, 3.0);
-        // Roll and pitch from the specific force, as if steady.
-        let f = s.acc.map(|v| v.as_f64());
-        if f.iter().all(|v| v.is_finite()) && f[2] < 0.0 {
-            x[1] = T::of_f64(libm::atan2(-f[1], -f[2]));
-            x[2] = T::of_f64(libm::atan2(f[0], libm::sqrt(f[1] * f[1] + f[2] * f[2])));
-        }
-        sd[1] = init.attitude;
-        sd[2] = init.attitude;
-        // Velocity from the DVL, else the cruise speed of the main thruster's command.
-        match s.dvl.filter(|d| d.iter().all(|v| v.is_finite())) {
-            Some(d) => {
-                for i in 0..3 {
-                    x[VELOCITY + i] = d[i];
-                    sd[VELOCITY + i] = noise.dvl.max(0.05);
-                }
-            }
-            None => {
-                x[VELOCITY] = T::of_f64(self.dynamics.cruise_speed(s.command.n_t.as_f64()));
-                sd[VELOCITY..VELOCITY + 3].fill(init.velocity);
-            }
-        }
-        for i in 0..3 {
-            let g = s.gyro[i];
-            (x[7 + i], sd[7 + i]) = known(g, 0.0, init.rate, 0.5);
-        }
+        start_vehicle(&self.dynamics, &self.settings, s, &mut x, &mut sd);
         for i in [layout.k_t(), layout.k_v()].into_iter().flatten() {
             if let (Some(xi), Some(si)) = (x.get_mut(i), sd.get_mut(i)) {
                 *xi = T::one();
@@ -394,7 +323,7 @@ impl<T: Real, const N: usize> UuvEstimator<T, N> {
         // `new` would put two copies of the filter (6.6 KB each at 20 `f32` states) on this frame,
         // which runs within the loop's stack.
         let q = process_noise(&self.settings);
-        let _ = UnscentedKalmanFilter::new_in(&mut self.ukf, self.points, &q, &self.r_imu, &x, &p0);
+        let _ = UnscentedKalmanFilter::new_in(&mut self.ukf, self.points, &q, &self.r.imu, &x, &p0);
     }
 
     /// Predict and update; the IMU update's NIS if it was applied.
@@ -404,39 +333,10 @@ impl<T: Real, const N: usize> UuvEstimator<T, N> {
         let model = StepModel { dynamics: &self.dynamics, layout, dt: self.dt, command: self.command };
         let ukf = self.ukf.as_mut()?;
         ukf.predict(&model);
-        let imu = [s.acc[0], s.acc[1], s.acc[2], s.gyro[0], s.gyro[1], s.gyro[2]];
-        let imu_ok = imu.iter().all(|v| v.is_finite());
-        let dh_ok = s.depth.is_finite() && s.heading.is_finite();
-        // The heading on the branch of the estimate, so the innovation is the short way round.
-        let psi = ukf.state()[3];
-        let heading = psi + wrap(s.heading - psi);
         let factors = [layout.k_t(), layout.k_v()];
         let reopen = T::of_f64(self.settings.detector.reopen);
-        let mut nis = None;
-        if imu_ok && dh_ok {
-            let y = SVector::<T, 8>::from([imu[0], imu[1], imu[2], imu[3], imu[4], imu[5], s.depth, heading]);
-            let r = &self.r_imu_depth_heading;
-            let signatures = signatures(|x| UkfMeasurement::<T, N, 8>::h(&model, x), ukf.state(), factors);
-            if let Ok(inn) = ukf.update_with(&model, &y, r) {
-                nis = Some(inn.nis);
-                watch(ukf, &mut self.monitors, &inn, &signatures, factors, reopen);
-            }
-        } else {
-            if imu_ok {
-                let signatures = signatures(|x| UkfModel::<T, N, 6>::h(&model, x), ukf.state(), factors);
-                if let Ok(inn) = ukf.update(&model, &SVector::<T, 6>::from(imu)) {
-                    nis = Some(inn.nis);
-                    watch(ukf, &mut self.monitors, &inn, &signatures, factors, reopen);
-                }
-            }
-            if dh_ok {
-                // A refused update is counted in the filter's health; nothing else to do here.
-                let _ = ukf.update_with(&DepthHeading, &SVector::<T, 2>::new(s.depth, heading), &self.r_depth_heading);
-            }
-        }
-        if let Some(d) = s.dvl {
-            let _ = ukf.update_with(&Dvl, &SVector::<T, 3>::from(d), &self.r_dvl);
-        }
+        let detectors = Detectors { monitors: &mut self.monitors, factors, reopen };
+        let nis = update(ukf, (&model, &Dvl), s, &self.r, detectors, &mut ());
         // Dead reckoning on the updated velocity over ground.
         let x = ukf.state();
         let earth = Attitude::new(x[1], x[2], x[3]).to_earth() * x.fixed_rows::<3>(VELOCITY);

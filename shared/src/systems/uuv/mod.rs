@@ -15,6 +15,7 @@ mod detector;
 mod dynamics;
 mod estimator;
 mod settings;
+mod update;
 mod vehicle;
 
 pub use detector::{open, signatures, watch, Status, ThrusterMonitor};
@@ -24,4 +25,5 @@ pub use settings::{
     DetectorSettings, EstimatorSettings, InitialSpread, Layout, MeasurementNoise, ProcessNoise, VEHICLE_STATES,
     VELOCITY,
 };
+pub use update::{start_vehicle, update, DepthHeading, Detectors, Dvl, UpdateNoise, UpdateObserver};
 pub use vehicle::{Actuators, Hydro, Vehicle};

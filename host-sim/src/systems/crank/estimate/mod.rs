@@ -50,6 +50,7 @@ pub mod chip;
 pub mod fast;
 pub mod model;
 pub mod release;
+pub mod runs;
 pub mod train;
 pub mod trained_for;
 pub mod training;

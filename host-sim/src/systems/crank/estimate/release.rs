@@ -12,7 +12,7 @@
 //! grid of short runs ([`super::train::release_grid`]), many more than the window features' 10 s
 //! runs: 1 080 runs of 0.1 s cost less than one 10 s run per joint and clearance.
 
-use super::train::Run;
+use super::runs::Run;
 use crate::systems::crank::Joint;
 use edgekf::systems::crank::{release_regressors, ReleaseModel, RELEASE_HYPOTHESES, RELEASE_TERMS};
 use serde::{Deserialize, Serialize};

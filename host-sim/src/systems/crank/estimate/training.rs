@@ -5,7 +5,8 @@
 
 use super::model::{FastModel, FeatureVector};
 use super::release::ReleaseStage;
-use super::train::{self, Run};
+use super::runs::{self, Run};
+use super::train;
 use super::trained_for::TrainedFor;
 use crate::systems::crank::CrankConfig;
 use anyhow::{bail, Context, Result};
@@ -114,7 +115,7 @@ pub struct Tested {
 /// Trains the fast model of `config` by `plan`; `progress` gets one line per run simulated.
 pub fn train(config: &CrankConfig, plan: &TrainPlan, progress: &(dyn Fn(String) + Sync)) -> Result<Trained> {
     plan.validate()?;
-    let grid = train::grid(&plan.clearances, plan.variants, plan.seed_base, plan.duration);
+    let grid = runs::grid(&plan.clearances, plan.variants, plan.seed_base, plan.duration);
     let total = grid.len();
     let show = |k: usize, r: &Run| {
         progress(format!(
@@ -148,7 +149,7 @@ pub fn train(config: &CrankConfig, plan: &TrainPlan, progress: &(dyn Fn(String) 
         if plan.squares { ", with squares" } else { "" }
     );
     let mut model = train::fit(&runs, &feats, WINDOW_S, plan.ridge, plan.squares, desc);
-    model.trained_for = Some(TrainedFor::new(config, train::RELEASE_RANGE_DEG, train::RADIUS_RANGE));
+    model.trained_for = Some(TrainedFor::new(config, runs::RELEASE_RANGE_DEG, runs::RADIUS_RANGE));
     if plan.release_variants > 0 {
         let (stage, note) = release_stage(config, plan, &model, (&runs, &feats), progress)?;
         model.trained_on += &note;
@@ -215,7 +216,7 @@ pub fn test(config: &CrankConfig, model: &FastModel, plan: &TrainPlan) -> Result
     let (test, tf) = match &plan.load_test_features {
         Some(path) => train::read_features(path)?,
         None => {
-            let test = train::grid(&plan.test_clearances, plan.test_variants, plan.test_seed_base, plan.duration);
+            let test = runs::grid(&plan.test_clearances, plan.test_variants, plan.test_seed_base, plan.duration);
             let tf = train::features_of(config, &test, WINDOW_S, plan.threads, &|_, _| {})?;
             (test, tf)
         }

@@ -9,7 +9,7 @@
 //! ```
 
 use super::effects::Parameter;
-use super::inject::{inject_bias, inject_delay, inject_harmonic_force, inject_scale};
+use super::inject::{inject_bias, inject_delay, inject_harmonic_force, inject_scale, HarmonicForce};
 use crate::io::data::DataFile;
 use crate::systems::rotor::config::PointMassConfig;
 use crate::systems::rotor::{RotorConfig, RotorModel, SimOptions};
@@ -121,13 +121,13 @@ impl Case {
         };
         match self {
             Case::Bias => inject_bias(&mut d, "n5_x", 20e-6)?,
-            Case::TwoX => inject_harmonic_force(&mut d, &declared, speed, 12, 2.0, 1.5, 0.3)?,
-            Case::OffDisk => inject_harmonic_force(&mut d, &declared, speed, 17, 2.0, 1.5, 0.3)?,
-            Case::ThreeX => inject_harmonic_force(&mut d, &declared, speed, 23, 3.0, 1.0, -1.0)?,
+            Case::TwoX => inject_harmonic_force(&mut d, &declared, speed, &force(12, 2.0, 1.5, 0.3))?,
+            Case::OffDisk => inject_harmonic_force(&mut d, &declared, speed, &force(17, 2.0, 1.5, 0.3))?,
+            Case::ThreeX => inject_harmonic_force(&mut d, &declared, speed, &force(23, 3.0, 1.0, -1.0))?,
             Case::Scale => inject_scale(&mut d, "n32_y", 1.05, None)?,
             Case::Two => {
                 inject_bias(&mut d, "n32_x", -25e-6)?;
-                inject_harmonic_force(&mut d, &declared, speed, 23, 2.0, 2.0, 1.0)?;
+                inject_harmonic_force(&mut d, &declared, speed, &force(23, 2.0, 2.0, 1.0))?;
             }
             Case::GainSwitch => inject_scale(&mut d, "n5_x", 1.15, Some(1.5))?,
             Case::Delay => inject_delay(&mut d, "n32_x", 2e-3)?,
@@ -135,4 +135,9 @@ impl Case {
         }
         Ok(d)
     }
+}
+
+/// A [`HarmonicForce`] at `node`, `order`, `amplitude` (N) and `phase_rad`.
+fn force(node: usize, order: f64, amplitude: f64, phase_rad: f64) -> HarmonicForce {
+    HarmonicForce { node, order, amplitude, phase_rad }
 }

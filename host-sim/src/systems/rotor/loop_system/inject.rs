@@ -19,17 +19,24 @@ pub fn inject_bias(data: &mut DataFile, channel: &str, value: f64) -> Result<()>
     Ok(())
 }
 
-/// Steady complex response of every DOF to a force rotating forward at `order × speed` at
-/// `node`: `F_x = A cos(ωt + φ)`, `F_y = A sin(ωt + φ)`, `ω = order·speed`, from
-/// `(K − ω² M + iω (C + Ω G)) Q̂ = F̂` (the gyroscopic matrix scales with the spin speed Ω).
-pub fn harmonic_response(
-    model: &RotorModel,
-    speed: f64,
-    node: usize,
-    order: f64,
-    amplitude: f64,
-    phase_rad: f64,
-) -> Result<Vec<c64>> {
+/// A force rotating forward at `order × speed` at `node`: `F_x = A cos(ωt + φ)`, `F_y = A
+/// sin(ωt + φ)`, `ω = order·speed`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HarmonicForce {
+    /// The node it acts at.
+    pub node: usize,
+    /// Its frequency in orders of the running speed.
+    pub order: f64,
+    /// Its amplitude `A`, N.
+    pub amplitude: f64,
+    /// Its phase `φ` at `t = 0`, rad.
+    pub phase_rad: f64,
+}
+
+/// Steady complex response of every DOF to `force`, from `(K − ω² M + iω (C + Ω G)) Q̂ = F̂`
+/// (the gyroscopic matrix scales with the spin speed Ω).
+pub fn harmonic_response(model: &RotorModel, speed: f64, force: &HarmonicForce) -> Result<Vec<c64>> {
+    let HarmonicForce { node, order, amplitude, phase_rad } = *force;
     if node >= model.n_nodes() {
         bail!("no node {node}");
     }
@@ -64,17 +71,9 @@ pub fn harmonic_response(
 /// By linearity that is the steady response (see [`harmonic_response`]) minus the free
 /// response of the FE model from the steady response's initial state, `e^{A t} x_ss(0)`
 /// (exact, through the matrix exponential of the first-order state matrix).
-pub fn inject_harmonic_force(
-    data: &mut DataFile,
-    model: &RotorModel,
-    speed: f64,
-    node: usize,
-    order: f64,
-    amplitude: f64,
-    phase_rad: f64,
-) -> Result<()> {
-    let q = harmonic_response(model, speed, node, order, amplitude, phase_rad)?;
-    let w = order * speed;
+pub fn inject_harmonic_force(data: &mut DataFile, model: &RotorModel, speed: f64, force: &HarmonicForce) -> Result<()> {
+    let q = harmonic_response(model, speed, force)?;
+    let w = force.order * speed;
     let t = data.t.clone();
     let t0 = t.first().copied().unwrap_or(0.0);
     let n = q.len();

@@ -4,10 +4,12 @@
 
 use super::effects::{AugmentedModel, Effect, Parameter};
 use super::RotorSystem;
+use crate::io::config_edit::{ConfigEdit, Op};
 use crate::residual_loop::filter::Run;
 use crate::residual_loop::onset::settled_mean;
 use crate::residual_loop::{
-    Applied, EffectDetail, EffectLabel, Fitting, LoopOptions, LoopSystem, PreStage, RunSummary, SystemSection, Traces,
+    Applied, Correction, EffectDetail, EffectLabel, Fitting, LoopOptions, LoopSystem, PreStage, RunSummary,
+    SystemSection, Traces,
 };
 use anyhow::Result;
 
@@ -102,6 +104,28 @@ impl LoopSystem for RotorSystem<'_> {
             Effect::SensorDelay { .. } | Effect::ExtraMode { .. } => applied.theta,
             // Valued by the envelope stage, which fits it.
             Effect::BearingDefect { .. } => f64::NAN,
+        }
+    }
+
+    /// A component parameter is its keys in the configuration, a point mass a new `[[mass]]`;
+    /// a bearing's defect is a fault
+    /// the node tracks by its envelope; the sensors', forces' and modes' effects have no key
+    /// the rotor's model reads yet.
+    fn correction(&self, applied: &Applied<Effect>, value: f64) -> Correction {
+        match applied.effect {
+            Effect::Parameter(p) => {
+                Correction::model(p.keys(self.cfg).into_iter().map(|k| ConfigEdit::new(k, Op::Scale(value))))
+            }
+            Effect::PointMass { node } => {
+                Correction::model([ConfigEdit::or_absent(format!("mass[+node={node}].mass"), Op::Set(value), 0.0)])
+            }
+            Effect::BearingDefect { .. } => {
+                Correction::indicator([], "a bearing defect is a fault: its envelope line is tracked, not modelled")
+            }
+            e => Correction::not_carried(format!(
+                "the rotor's configuration has no key its model reads for a {}",
+                e.kind().as_str()
+            )),
         }
     }
 

@@ -12,8 +12,8 @@ use crate::residual_loop::filter::Run;
 use anyhow::{anyhow, Result};
 use edgekf::filter::{Innovation, MerweSigmaPoints, UkfMeasurement, UkfModel, UnscentedKalmanFilter};
 use edgekf::systems::uuv::{
-    open, signatures, watch, wrap, Command, Drive, EstimatorSettings, ReducedDynamics, Sample, ThrusterMonitor,
-    Vehicle, VEHICLE_STATES, VELOCITY,
+    open, start_vehicle, update, Command, Detectors, Drive, EstimatorSettings, ReducedDynamics, Sample,
+    ThrusterMonitor, UpdateNoise, UpdateObserver, Vehicle, VEHICLE_STATES, VELOCITY,
 };
 use nalgebra::{SMatrix, SVector};
 use std::ops::Range;
@@ -108,15 +108,6 @@ impl UkfMeasurement<f64, STATES, 8> for Model<'_> {
     }
 }
 
-/// Depth and heading alone.
-struct DepthHeading;
-
-impl UkfMeasurement<f64, STATES, 2> for DepthHeading {
-    fn h(&self, x: &X) -> SVector<f64, 2> {
-        SVector::<f64, 2>::new(x[0], x[3])
-    }
-}
-
 /// The DVL, with its biases where on.
 struct Dvl<'a>(&'a Model<'a>);
 
@@ -132,9 +123,9 @@ struct Record<'a> {
     k: usize,
 }
 
-impl Record<'_> {
+impl UpdateObserver<f64> for Record<'_> {
     /// Stores an update's innovations on `channels`.
-    fn add<const K: usize>(&mut self, inn: &Innovation<f64, K>, channels: [usize; K]) {
+    fn seen<const K: usize>(&mut self, inn: &Innovation<f64, K>, channels: [usize; K]) {
         let log_det =
             edgekf::linalg::cholesky(&inn.s).map_or(f64::NAN, |l| 2.0 * (0..K).map(|i| l[(i, i)].ln()).sum::<f64>());
         for (i, &c) in channels.iter().enumerate() {
@@ -183,17 +174,9 @@ pub fn run(plan: &Plan<'_>, samples: &[Sample<f64>]) -> Result<Run> {
     }
     let diag = |v: [f64; STATES]| SMatrix::<f64, STATES, STATES>::from_diagonal(&X::from(v));
     let points = MerweSigmaPoints { alpha: 0.5, beta: 2.0, kappa: 0.0 };
-    let noise = &settings.noise;
+    let r = UpdateNoise::<f64>::new(&settings.noise);
     let var = |s: f64| s * s;
-    let r_imu = SMatrix::<f64, 6, 6>::from_diagonal(&SVector::<f64, 6>::from(
-        [noise.acc, noise.acc, noise.acc, noise.gyro, noise.gyro, noise.gyro].map(var),
-    ));
-    let mut r8 = SMatrix::<f64, 8, 8>::zeros();
-    r8.fixed_view_mut::<6, 6>(0, 0).copy_from(&r_imu);
-    (r8[(6, 6)], r8[(7, 7)]) = (var(noise.depth), var(noise.heading));
-    let r_dh = SMatrix::<f64, 2, 2>::from_diagonal(&SVector::<f64, 2>::new(var(noise.depth), var(noise.heading)));
-    let r_dvl = SMatrix::<f64, 3, 3>::identity() * var(noise.dvl);
-    let mut ukf = UnscentedKalmanFilter::new(points, diag(q.map(|s| s * s * dt)), r_imu, x0, diag(sd.map(var)))
+    let mut ukf = UnscentedKalmanFilter::new(points, diag(q.map(|s| s * s * dt)), r.imu, x0, diag(sd.map(var)))
         .map_err(|e| anyhow!("the loop's filter refused its start: {e:?}"))?;
     let mut monitors = [ThrusterMonitor::<f64>::new(&settings.detector); 2];
     let reopen = settings.detector.reopen;
@@ -218,39 +201,9 @@ pub fn run(plan: &Plan<'_>, samples: &[Sample<f64>]) -> Result<Run> {
         }
         let model = Model { dynamics: &dynamics, on, dt, command };
         ukf.predict(&model);
-        let imu = [s.acc[0], s.acc[1], s.acc[2], s.gyro[0], s.gyro[1], s.gyro[2]];
-        let imu_ok = imu.iter().all(|v| v.is_finite());
-        let dh_ok = s.depth.is_finite() && s.heading.is_finite();
-        let psi = ukf.state()[3];
-        let heading = psi + wrap(s.heading - psi);
         let factors = slot::HEALTH.map(|i| on[i].then_some(i));
-        let mut rec = Record { run: &mut run, k };
-        if imu_ok && dh_ok {
-            let y = SVector::<f64, 8>::from([imu[0], imu[1], imu[2], imu[3], imu[4], imu[5], s.depth, heading]);
-            let sig = signatures(|x| UkfMeasurement::<f64, STATES, 8>::h(&model, x), ukf.state(), factors);
-            if let Ok(inn) = ukf.update_with(&model, &y, &r8) {
-                rec.add(&inn, [0, 1, 2, 3, 4, 5, 6, 7]);
-                watch(&mut ukf, &mut monitors, &inn, &sig, factors, reopen);
-            }
-        } else {
-            if imu_ok {
-                let sig = signatures(|x| UkfModel::<f64, STATES, 6>::h(&model, x), ukf.state(), factors);
-                if let Ok(inn) = ukf.update(&model, &SVector::<f64, 6>::from(imu)) {
-                    rec.add(&inn, [0, 1, 2, 3, 4, 5]);
-                    watch(&mut ukf, &mut monitors, &inn, &sig, factors, reopen);
-                }
-            }
-            if dh_ok {
-                if let Ok(inn) = ukf.update_with(&DepthHeading, &SVector::<f64, 2>::new(s.depth, heading), &r_dh) {
-                    rec.add(&inn, [6, 7]);
-                }
-            }
-        }
-        if let Some(d) = s.dvl {
-            if let Ok(inn) = ukf.update_with(&Dvl(&model), &SVector::<f64, 3>::from(d), &r_dvl) {
-                rec.add(&inn, [8, 9, 10]);
-            }
-        }
+        let detectors = Detectors { monitors: &mut monitors, factors, reopen };
+        update(&mut ukf, (&model, &Dvl(&model)), s, &r, detectors, &mut Record { run: &mut run, k });
         record_outputs(&mut run, k, ukf.state(), &on);
         command = command.held(&s.command);
     }
@@ -264,32 +217,9 @@ pub fn run(plan: &Plan<'_>, samples: &[Sample<f64>]) -> Result<Run> {
 /// The start from the first sample, as the node's estimator makes it; slots at their neutral
 /// value (health 1, the rest 0) and inert.
 fn start(dynamics: &ReducedDynamics<f64>, settings: &EstimatorSettings, s: &Sample<f64>) -> (X, [f64; STATES]) {
-    let (init, noise) = (&settings.initial, &settings.noise);
     let mut x = X::zeros();
     let mut sd = [INERT_SD; STATES];
-    let known = |v: f64, spread: f64, wide: f64| if v.is_finite() { (v, spread) } else { (0.0, wide) };
-    (x[0], sd[0]) = known(s.depth, noise.depth, 100.0);
-    (x[3], sd[3]) = known(s.heading, noise.heading, 3.0);
-    let f = s.acc;
-    if f.iter().all(|v| v.is_finite()) && f[2] < 0.0 {
-        x[1] = (-f[1]).atan2(-f[2]);
-        x[2] = f[0].atan2(f[1].hypot(f[2]));
-    }
-    (sd[1], sd[2]) = (init.attitude, init.attitude);
-    match s.dvl.filter(|d| d.iter().all(|v| v.is_finite())) {
-        Some(d) => {
-            for i in 0..3 {
-                (x[VELOCITY + i], sd[VELOCITY + i]) = (d[i], noise.dvl.max(0.05));
-            }
-        }
-        None => {
-            x[VELOCITY] = dynamics.cruise_speed(s.command.n_t);
-            sd[VELOCITY..VELOCITY + 3].fill(init.velocity);
-        }
-    }
-    for i in 0..3 {
-        (x[7 + i], sd[7 + i]) = known(s.gyro[i], init.rate, 0.5);
-    }
+    start_vehicle(dynamics, settings, s, &mut x, &mut sd);
     for i in slot::HEALTH {
         x[i] = 1.0;
     }

@@ -16,16 +16,17 @@ pub mod filter;
 
 use super::config::UuvConfig;
 use super::estimate::samples;
+use crate::io::config_edit::{ConfigEdit, Op};
 use crate::io::data::DataFile;
 use crate::residual_loop::filter::Run;
 use crate::residual_loop::onset::settled_mean;
 use crate::residual_loop::optimize::ScalarRange;
 use crate::residual_loop::signature::ReferenceLines;
-use crate::residual_loop::Recording;
 use crate::residual_loop::{
     search, Applied, Channel, EffectDetail, EffectKind, EffectLabel, Fitting, LoopOptions, LoopReport, LoopSystem,
     RunSummary, SystemSection, Traces,
 };
+use crate::residual_loop::{Correction, Recording};
 use anyhow::Result;
 use edgekf::systems::uuv::{EstimatorSettings, Sample, Vehicle};
 use effect::{Effect, Parameter, Sensor, Thruster, CHANNELS};
@@ -107,14 +108,8 @@ impl<'a> UuvSystem<'a> {
     /// The data as the engine reads them: the health factors' and the surge speed's truth
     /// where simulated.
     fn recording(&self) -> Recording<'_> {
-        let truth = ["truth_k_t", "truth_k_v", "truth_u"].iter().map(|c| self.data.column(c)).collect();
-        Recording {
-            t: &self.data.t,
-            channels: &self.channels,
-            rows: &self.rows,
-            truth,
-            sample_rate: 1.0 / self.settings.dt,
-        }
+        let truth = ["truth_k_t", "truth_k_v", "truth_u"];
+        Recording::of(self.data, &self.channels, &self.rows, &truth, 1.0 / self.settings.dt)
     }
 
     fn in_model(&self, e: Effect, effects: &[Applied<Effect>]) -> bool {
@@ -244,6 +239,29 @@ impl LoopSystem for UuvSystem<'_> {
                 settled_mean(&speed, from)
             }
             Effect::Parameter(_) => effect.theta.exp(),
+        }
+    }
+
+    /// The vehicle's constants are `[vehicle]`'s; the node's estimator carries the IMU's biases
+    /// and the current as whole switches of `[estimator]`, and a thruster's health is a fault
+    /// its detector tracks.
+    fn correction(&self, effect: &Applied<Effect>, value: f64) -> Correction {
+        match effect.effect {
+            Effect::Parameter(Parameter::Mass) => {
+                Correction::model([ConfigEdit::new("vehicle.weight", Op::Scale(value))])
+            }
+            Effect::Parameter(Parameter::SurgeDrag) => {
+                Correction::model([ConfigEdit::new("vehicle.hydro.x_uu", Op::Scale(value))])
+            }
+            Effect::Bias(Sensor::Acc(_) | Sensor::Gyro(_)) => {
+                Correction::model([ConfigEdit::or_absent("estimator.sensor_biases", Op::Switch(true), 0.0)])
+            }
+            Effect::Current => Correction::model([ConfigEdit::or_absent("estimator.current", Op::Switch(true), 0.0)]),
+            Effect::Bias(Sensor::Dvl(_)) => Correction::not_carried("the node's estimator carries no DVL bias"),
+            Effect::Health(_) => Correction::indicator(
+                [],
+                "a thruster's health is tracked by the node's detector ([estimator] health, [estimator.detector])",
+            ),
         }
     }
 

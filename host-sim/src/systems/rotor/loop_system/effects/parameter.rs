@@ -72,6 +72,37 @@ impl Parameter {
         }
     }
 
+    /// The configuration's keys that [`apply`](Self::apply) multiplies, as key paths of
+    /// [`config_edit`](crate::io::config_edit) (a disk's declared inertias follow its mass).
+    ///
+    /// ```
+    /// use edgekf_sim::systems::rotor::loop_system::effects::Parameter;
+    /// use edgekf_sim::systems::rotor::RotorConfig;
+    /// let text = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/configs/rotor_paper.toml"));
+    /// let cfg = RotorConfig::from_toml_str(text).unwrap();
+    /// assert_eq!(Parameter::DiskMass(0).keys(&cfg), vec!["disk[node=12].mass".to_string()]);
+    /// assert_eq!(Parameter::BearingKyy(1).keys(&cfg), vec!["bearing[node=33].kyy".to_string()]);
+    /// ```
+    pub fn keys(self, cfg: &RotorConfig) -> Vec<String> {
+        let bearing = |i: usize, key: &str| cfg.bearings.get(i).map(|b| format!("bearing[node={}].{key}", b.node));
+        match self {
+            Parameter::DiskMass(i) => cfg.disks.get(i).map_or_else(Vec::new, |d| {
+                let declared = [("mass", Some(d.mass)), ("ip", d.ip), ("id", d.id)];
+                declared
+                    .iter()
+                    .filter(|(_, v)| v.is_some())
+                    .map(|(k, _)| format!("disk[node={}].{k}", d.node))
+                    .collect()
+            }),
+            Parameter::ShaftYoung => vec!["shaft.young".into()],
+            Parameter::ShaftDensity => vec!["shaft.density".into()],
+            Parameter::BearingKxx(i) => bearing(i, "kxx").into_iter().collect(),
+            Parameter::BearingKyy(i) => bearing(i, "kyy").into_iter().collect(),
+            Parameter::BearingCxx(i) => bearing(i, "cxx").into_iter().collect(),
+            Parameter::BearingCyy(i) => bearing(i, "cyy").into_iter().collect(),
+        }
+    }
+
     /// Multiplies the parameter in `cfg` by `factor`.
     pub fn apply(self, cfg: &mut RotorConfig, factor: f64) -> Result<()> {
         if !(factor.is_finite() && factor > 0.0) {
