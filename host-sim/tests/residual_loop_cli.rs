@@ -103,3 +103,26 @@ fn loop_rotor_estimates_the_speed() {
     assert!((s["declared_hz"].as_f64().unwrap() - 30.0).abs() < 1e-3);
     assert_eq!(v["effects_added"].as_array().unwrap().len(), 0, "{}", v["effects_added"]);
 }
+
+/// `--baseline` on a system without baselines is a usage error before any work, not a flag
+/// silently ignored and recorded in the report.
+#[test]
+fn a_baseline_is_refused_where_it_would_be_ignored() {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("residual-loop-cli-baseline");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let demo = concat!(env!("CARGO_MANIFEST_DIR"), "/configs/oscillator_demo.toml");
+    let out = Command::new(env!("CARGO_BIN_EXE_edgekf"))
+        .args(["loop", "oscillator", "--config", demo, "--data"])
+        .arg(dir.join("no-such.csv"))
+        .arg("--report")
+        .arg(dir.join("report"))
+        .arg("--baseline")
+        .arg(dir.join("no-such.toml"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{stderr}");
+    assert!(stderr.contains("--baseline would be ignored") && stderr.contains("rotor"), "{stderr}");
+    assert!(!dir.join("report").exists());
+}

@@ -25,6 +25,7 @@ pub struct LoopArgs {
     #[arg(long, value_name = "DIR")]
     pub report: PathBuf,
     /// A healthy baseline (`edgekf baseline <system>`): the loop asks what changed since.
+    /// Refused on a system that has no baselines.
     #[arg(long, value_name = "TOML")]
     pub baseline: Option<PathBuf>,
     /// Also write the configuration with every added model or calibration effect made a
@@ -66,6 +67,17 @@ pub fn run(registry: &[SystemEntry], m: &ArgMatches, command_line: &str) -> Resu
         .and_then(|s| s.close_loop.as_ref())
         .expect("clap only accepts registered names");
     let args = LoopArgs::from_arg_matches(sub).map_err(|e| anyhow::anyhow!("{e}"))?;
+    if args.baseline.is_some() && entry.baseline.is_none() {
+        let with: Vec<&str> = registry
+            .iter()
+            .filter(|s| s.close_loop.as_ref().is_some_and(|l| l.baseline.is_some()))
+            .map(|s| s.name)
+            .collect();
+        anyhow::bail!(
+            "edgekf loop {name}: --baseline would be ignored: {name} has no baselines yet (systems with baselines: {})",
+            with.join(", ")
+        );
+    }
     let inputs = [Some(args.data.as_path()), Some(args.config.as_path()), args.baseline.as_deref()];
     check_folder(&args.report, &REPORT_FILES, &inputs)?;
     check(&[args.corrected_config.as_deref()], &inputs)?;
