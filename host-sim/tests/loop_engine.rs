@@ -135,7 +135,9 @@ impl LoopSystem for Oscillator {
             named.push(Effect::Bias);
         }
         if !s.channels[0].peaks.is_empty() || !s.nis_consistent {
-            named.push(Effect::Stiffness);
+            // The mount too, as a careless system would: the engine must not both refuse it and
+            // say the data cannot see it.
+            named.extend([Effect::Stiffness, Effect::Mount]);
         }
         vec![named]
     }
@@ -200,6 +202,9 @@ fn the_engine_screens_every_declared_parameter_for_what_the_data_cannot_see() {
     let unseen: Vec<_> = r.not_identifiable.iter().map(|n| n.parameter.as_deref()).collect();
     assert_eq!(unseen, vec![Some("mount")], "{:?}", r.not_identifiable);
     assert_eq!(r.not_identifiable[0].value, 0.0);
+    // Tried, the mount's flat likelihood runs its fit to an edge of its range; it has one
+    // verdict all the same: not identifiable, not also refused "at the edge".
+    assert!(r.refused.iter().all(|f| f.parameter.as_deref() != Some("mount")), "{:?}", r.refused);
     // Without the stiffness error nothing is added, and the stiffness is seen all the same.
     let clean = close_with(1.0, 0.0, 4, LoopOptions::default());
     let unseen: Vec<_> = clean.not_identifiable.iter().map(|n| n.parameter.as_deref()).collect();

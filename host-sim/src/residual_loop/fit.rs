@@ -265,12 +265,11 @@ impl<S: LoopSystem> Engine<'_, S> {
                 Ok(f) => results.push(f),
                 Err(e) => {
                     self.progress(|| format!("  {} at {}: {e:#}", label.kind, label.location));
-                    refused.push(Refused {
-                        kind: label.kind,
-                        location: label.location.clone(),
-                        value: e.downcast_ref::<OutOfBounds>().map(|o| o.value),
-                        reason: format!("{e:#}"),
-                    });
+                    refused.push(Refused::of(
+                        &label,
+                        e.downcast_ref::<OutOfBounds>().map(|o| o.value),
+                        format!("{e:#}"),
+                    ));
                 }
             }
         }
@@ -313,11 +312,10 @@ impl<S: LoopSystem> Engine<'_, S> {
 
     /// The refusal of an effect that pays over the whole run but not in both halves.
     pub(super) fn refused_in_halves(&self, f: &Fitted<S::Effect, S::Model>) -> Refused {
-        Refused {
-            kind: f.label.kind,
-            location: f.label.location.clone(),
-            value: self.reported_value(f),
-            reason: format!(
+        Refused::of(
+            &f.label,
+            self.reported_value(f),
+            format!(
                 "pays over the whole run (Δ log-likelihood {:.1} against a BIC cost of {:.1}) but not in {} ({:.1} / {:.1}): it helps only part of the run",
                 f.delta,
                 f.penalty,
@@ -325,6 +323,6 @@ impl<S: LoopSystem> Engine<'_, S> {
                 f.halves[0],
                 f.halves[1]
             ),
-        }
+        )
     }
 }

@@ -4,7 +4,7 @@
 use super::correction::EffectCorrection;
 use super::filter::Run;
 use super::signature::{Channel, RunSummary, Signature};
-use super::vocabulary::{EffectDetail, EffectKind};
+use super::vocabulary::{EffectDetail, EffectKind, EffectLabel};
 use serde::Serialize;
 
 /// The version of `report.json`'s layout: raised when a field changes meaning or goes away
@@ -43,10 +43,31 @@ pub struct Refused {
     pub kind: EffectKind,
     /// Where.
     pub location: String,
+    /// The component parameter, for a `parameter` effect (`mass`, `kxx`, `x_uu`…).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub parameter: Option<String>,
     /// The fitted value, as an added effect would report it, where the fit gave one.
     pub value: Option<f64>,
     /// Why it was refused (at a bound of its range, one half of the run only, no usable model).
     pub reason: String,
+}
+
+impl Refused {
+    /// The refusal of the effect `label` names, with its fitted `value` if any.
+    pub fn of(label: &EffectLabel, value: Option<f64>, reason: impl Into<String>) -> Self {
+        Self {
+            kind: label.kind,
+            location: label.location.clone(),
+            parameter: label.detail.parameter.clone(),
+            value,
+            reason: reason.into(),
+        }
+    }
+
+    /// Whether it is about the same effect as `n` (kind, place and parameter).
+    pub fn is_about(&self, n: &NotIdentifiable) -> bool {
+        (self.kind, &self.location, &self.parameter) == (n.kind, &n.location, &n.parameter)
+    }
 }
 
 /// Where a report came from, so that it can be traced and rerun.

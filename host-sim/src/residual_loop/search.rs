@@ -49,7 +49,7 @@ fn explained(before: &RunSummary, after: &RunSummary) -> Vec<f64> {
 fn excluded<S: LoopSystem>(sys: &S, e: &S::Effect, excludes: &[(EffectKind, String)]) -> Option<Refused> {
     let label = sys.label(e);
     let (_, reason) = excludes.iter().find(|(kind, _)| *kind == label.kind)?;
-    Some(Refused { kind: label.kind, location: label.location, value: None, reason: reason.clone() })
+    Some(Refused::of(&label, None, reason.clone()))
 }
 
 /// Where the search stands: the current model and what has been decided so far.
@@ -192,6 +192,10 @@ pub fn search<S: LoopSystem>(sys: &mut S, options: &LoopOptions) -> Result<LoopR
     if options.screen_parameters {
         st.not_identifiable.extend(engine.screen(&st.effects, &st.run));
     }
+    // One verdict per effect: what the data cannot see is not also refused (a fit that ran to
+    // the edge of a flat likelihood says nothing about a bound).
+    let unseen = &st.not_identifiable;
+    st.refused.retain(|r| !unseen.iter().any(|n| r.is_about(n)));
     let named = |e: &AddedEffect| format!("{} at {}", e.kind.as_str(), e.location);
     let mut corrections: Vec<EffectCorrection> = first
         .iter()

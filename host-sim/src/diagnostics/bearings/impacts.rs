@@ -180,15 +180,14 @@ impl<E: Copy + PartialEq, L: Fn(&E) -> EffectLabel> Stage<'_, E, L> {
                             .iter()
                             .any(|r| r.location == label.location && r.reason.contains(&format!("on {order}x")))
                         {
-                            refused.push(Refused {
-                                kind: label.kind,
-                                location: label.location,
-                                value: None,
-                                reason: format!(
+                            refused.push(Refused::of(
+                                &label,
+                                None,
+                                format!(
                                     "its line is in the envelope at {:.2} Hz, on {order}x the running speed: impacts cannot be told from a synchronous modulation there",
                                     evidence.hz
                                 ),
-                            });
+                            ));
                         }
                     }
                     None => seen.push((*line, evidence)),
@@ -312,7 +311,7 @@ impl<E: Copy + PartialEq, L: Fn(&E) -> EffectLabel> Stage<'_, E, L> {
                 continue;
             };
             if !out.refused.iter().any(|r| r.location == label.location && r.reason == reason) {
-                out.refused.push(Refused { kind: label.kind, location: label.location, value: Some(value), reason });
+                out.refused.push(Refused::of(&label, Some(value), reason));
             }
         }
     }
