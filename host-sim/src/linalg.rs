@@ -1,6 +1,7 @@
 //! Dense host linear algebra beyond what [`faer`] offers directly: balancing, the matrix
 //! exponential of large systems (the rotor's ~300 states), their free response in modal form
-//! ([`free_response`]), and solves that report failure instead of producing NaN.
+//! ([`free_response`]) on the one real modal basis builder ([`modal_basis`]), and solves that
+//! report failure instead of producing NaN.
 //!
 //! This is the reference simulator's own linear algebra, used only by the full finite-element
 //! rotor (`systems::rotor::{simulate, modal, response}` and `loop_system::inject`, which drives
@@ -8,7 +9,9 @@
 //! ([`edgekf::linalg`]: [6/6] Padé, the chip's arithmetic). The two are kept apart on purpose: a
 //! reference must not share code with the reduced model it checks, or a fault in that code would
 //! agree with itself. A different algorithm here (balancing, [13/13] Padé, faer's products) is
-//! what makes the comparison an independent one.
+//! what makes the comparison an independent one. The exception is [`modal_basis`], which the
+//! residual loop's filter also uses: there it is only a change of coordinates for speed (an exact
+//! similarity, checked when built), so the filter's estimates do not depend on it beyond rounding.
 //!
 //! Why balancing: a rotor's first-order matrix `[[0, I], [−M⁻¹K, −M⁻¹C]]` mixes metres and
 //! metres per second, radians and newtons; its entries span twenty orders of magnitude (the
@@ -19,6 +22,7 @@
 //! exponential from ~40 to ~15.
 
 pub mod free_response;
+pub mod modal_basis;
 
 use faer::linalg::solvers::Solve;
 use faer::{Accum, Mat, MatRef, Par};
