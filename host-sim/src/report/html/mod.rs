@@ -26,7 +26,7 @@ use crate::residual_loop::{LoopReport, RunSummary};
 use anyhow::Result;
 use figures::plots;
 use format::capitalised;
-use tables::{comparison, effects, not_identifiable, trials, unexplained};
+use tables::{comparison, corrections, effects, not_identifiable, refused, trials, unexplained};
 
 /// The page's style sheet (inline).
 const STYLE: &str = r#"body{font-family:system-ui,-apple-system,"Segoe UI",Roboto,Helvetica,Arial,sans-serif;margin:0;color:#222;background:#fff;line-height:1.4}
@@ -63,7 +63,9 @@ pub fn render(report: &LoopReport) -> Result<String> {
     effects(&mut html, &report.effects_added);
     comparison(&mut html, report);
     plots(&mut html, report)?;
+    corrections(&mut html, &report.corrections);
     not_identifiable(&mut html, &report.not_identifiable);
+    refused(&mut html, &report.refused);
     unexplained(&mut html, &report.unexplained);
     trials(&mut html, &report.trials);
     html.push_str(&format!(
@@ -195,7 +197,13 @@ mod tests {
                 delta_log_likelihood: 100.0,
                 bic_penalty: 4.7,
             }],
-            corrections: Vec::new(),
+            corrections: vec![crate::residual_loop::EffectCorrection {
+                effect: "sensor_scale at n5_x".into(),
+                correction: crate::residual_loop::Correction::model([crate::io::config_edit::ConfigEdit::new(
+                    "sensor[node=5].scale",
+                    crate::io::config_edit::Op::Scale(1.05),
+                )]),
+            }],
             before: summary(2e-6, "1x & <friends>"),
             after: summary(1e-6, "natural 0"),
             not_identifiable: Vec::new(),
@@ -206,7 +214,13 @@ mod tests {
                 value: 20.0,
                 description: "a \"line\" <here>".into(),
             }],
-            refused: Vec::new(),
+            refused: vec![crate::residual_loop::report::Refused {
+                kind: EffectKind::Parameter,
+                location: "disk 12".into(),
+                parameter: Some("mass".into()),
+                value: Some(1.3),
+                reason: "at the bound <1.3>".into(),
+            }],
             trials: Vec::new(),
             stopped: "the innovations are white".into(),
             section: Default::default(),
@@ -232,6 +246,9 @@ mod tests {
         assert!(html.contains("<td>a &quot;line&quot; &lt;here&gt;</td>"));
         assert!(html.contains("<td class=\"num\">1.050 (+5.0 %)</td>"));
         assert!(html.contains("from 2.400 s"), "a change-point effect shows its onset");
+        // What was refused and how each effect enters the configuration are on the page too.
+        assert!(html.contains("<td>at the bound &lt;1.3&gt;</td>") && html.contains("<td>mass</td>"));
+        assert!(html.contains("<td>sensor[node=5].scale ×1.050</td>") && html.contains("<td>into the model</td>"));
         assert!(html.contains("<td class=\"num\">2.000</td><td class=\"num better\">1.000</td>"));
         assert!(!html.contains("<script") && !html.contains("src=") && !html.contains("href="));
     }

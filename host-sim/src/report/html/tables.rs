@@ -5,10 +5,14 @@
 
 use super::format::{fixed, num, order, p_value, value_with_unit};
 use super::{h2, para};
+use crate::io::config_edit::{ConfigEdit, Op};
 use crate::report::escape::escape as esc;
 use crate::report::text::shown;
+use crate::residual_loop::report::Refused;
 use crate::residual_loop::signature::{ChannelSignature, Signature};
-use crate::residual_loop::{AddedEffect, LoopReport, NotIdentifiable, RunSummary, Traces, Trial};
+use crate::residual_loop::{
+    AddedEffect, Correction, EffectCorrection, LoopReport, NotIdentifiable, RunSummary, Traces, Trial,
+};
 
 /// A table cell: text (escaped when written) and a class.
 struct Cell {
@@ -279,6 +283,55 @@ pub(super) fn not_identifiable(out: &mut String, list: &[NotIdentifiable]) {
         .collect();
     let head = ["kind", "location", "parameter", "statistic", "value", "why"];
     table_section(out, "Not identifiable", "Nothing was found that the data cannot resolve.", &head, &rows);
+}
+
+/// Candidates fitted and not kept, with the reason.
+pub(super) fn refused(out: &mut String, list: &[Refused]) {
+    let rows: Vec<Vec<Cell>> = list
+        .iter()
+        .map(|r| {
+            vec![
+                Cell::text(r.kind.as_str()),
+                Cell::text(&r.location),
+                Cell::text(r.parameter.clone().unwrap_or_else(|| "–".into())),
+                Cell::num(r.value.map_or("–".into(), num), ""),
+                Cell::text(&r.reason),
+            ]
+        })
+        .collect();
+    let head = ["kind", "location", "parameter", "value", "why not kept"];
+    table_section(out, "Refused", "No candidate was refused.", &head, &rows);
+}
+
+/// How each added effect enters the configuration (`--corrected-config`).
+pub(super) fn corrections(out: &mut String, list: &[EffectCorrection]) {
+    let rows: Vec<Vec<Cell>> = list
+        .iter()
+        .map(|c| {
+            let (verdict, what) = match &c.correction {
+                Correction::Model { edits } => ("into the model", edits_text(edits)),
+                Correction::Indicator { edits, note } if edits.is_empty() => ("a fault the node tracks", note.clone()),
+                Correction::Indicator { edits, note } => {
+                    ("a fault the node tracks", format!("{note}; {}", edits_text(edits)))
+                }
+                Correction::NotCarried { reason } => ("not carried", reason.clone()),
+            };
+            vec![Cell::text(&c.effect), Cell::text(verdict), Cell::text(what)]
+        })
+        .collect();
+    let head = ["effect", "as", "keys or why"];
+    table_section(out, "Into the configuration", "No effect was added.", &head, &rows);
+}
+
+/// `path ×1.1, path +0.01`: a correction's edits as people read them.
+fn edits_text(edits: &[ConfigEdit]) -> String {
+    let one = |e: &ConfigEdit| match e.op {
+        Op::Scale(f) => format!("{} ×{}", e.path, num(f)),
+        Op::Add(d) => format!("{} +{}", e.path, num(d)),
+        Op::Set(v) => format!("{} = {}", e.path, num(v)),
+        Op::Switch(on) => format!("{} = {on}", e.path),
+    };
+    edits.iter().map(one).collect::<Vec<_>>().join(", ")
 }
 
 /// Signatures that no effect of the library explains.
