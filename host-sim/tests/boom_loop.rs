@@ -3,6 +3,7 @@
 //! and brings the peak error back near the matched configuration's; on matched data it adds
 //! nothing.
 
+use edgekf_sim::residual_loop::correction::corrected_config;
 use edgekf_sim::residual_loop::{LoopOptions, LoopReport};
 use edgekf_sim::systems::boom::estimate::{gyro_model, INCLINOMETER_NOISE};
 use edgekf_sim::systems::boom::loop_system::close_loop;
@@ -96,6 +97,28 @@ fn an_undeclared_load_on_the_platform_is_named_as_its_mass() {
     assert!((mass / (4.0 / 3.0) - 1.0).abs() <= 0.1, "factor {mass}");
     assert!(peak_error(&r, "after") <= 1.5 * peak_error(&matched, "before"), "{r:?}");
     assert!(peak_error(&r, "before") > 2.0 * peak_error(&r, "after"), "{r:?}");
+}
+
+/// The platform's load carried back: the corrected configuration (the shipped file, comments
+/// kept) declares the fitted tip mass and inertia, and the loop run again with it on the same
+/// recording adds nothing and keeps the first run's peak error.
+#[test]
+fn the_corrected_configuration_declares_the_platforms_load() {
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/configs/boom_ladder30.toml")).unwrap();
+    let declared = BoomConfig::from_toml_str(&text).unwrap();
+    let mut truth = declared.clone();
+    truth.tip.mass = 400.0;
+    truth.tip.rotary_inertia = 100.0;
+    let first = loop_on(&truth, &declared, 120.0, 2);
+    let fixed = corrected_config(&text, &first.corrections, "first/report.json").unwrap();
+    let corrected = BoomConfig::from_toml_str(&fixed).unwrap();
+    eprintln!("tip {} kg, {} kg m² after {:?}", corrected.tip.mass, corrected.tip.rotary_inertia, first.effects_added);
+    assert!((corrected.tip.mass / 400.0 - 1.0).abs() <= 0.1, "{fixed}");
+    assert!(fixed.starts_with("# Our test boom") && fixed.contains("first/report.json, parameter at tip"));
+    let again = loop_on(&truth, &corrected, 120.0, 2);
+    assert!(again.effects_added.is_empty(), "{:?}", again.effects_added);
+    let (a, b) = (peak_error(&first, "after"), peak_error(&again, "before"));
+    assert!(b <= 1.1 * a, "peak error {a:.2} % after the loop, {b:.2} % with the corrected configuration");
 }
 
 /// Every section 5 % less stiff than declared (the off-declaration boom): named as the
