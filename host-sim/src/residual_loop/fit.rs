@@ -43,6 +43,15 @@ pub(super) struct Fitted<E, M> {
     pub(super) label: EffectLabel,
 }
 
+/// Where in the search a set of candidates is fitted: the iteration, and the tier of the
+/// system's candidates (a later tier is tried only when no candidate of an earlier one is
+/// kept), so that progress reads "iteration 1, tier 2: candidate 1/2".
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Round {
+    pub(super) iteration: usize,
+    pub(super) tier: usize,
+}
+
 /// The engine's view of a system during one search.
 pub(super) struct Engine<'a, S: LoopSystem> {
     pub(super) sys: &'a S,
@@ -240,7 +249,7 @@ impl<S: LoopSystem> Engine<'_, S> {
     /// Fits every candidate of `cands` on top of `effects`.
     pub(super) fn fit_all(
         &self,
-        iteration: usize,
+        at: Round,
         effects: &[Applied<S::Effect>],
         cands: Vec<S::Effect>,
         base: &Run,
@@ -253,7 +262,9 @@ impl<S: LoopSystem> Engine<'_, S> {
             .map(|(i, cand)| {
                 let label = self.sys.label(cand);
                 self.progress(|| {
-                    format!("iteration {iteration}: candidate {}/{total}: {} at {}", i + 1, label.kind, label.location)
+                    let Round { iteration, tier } = at;
+                    let which = format!("candidate {}/{total}", i + 1);
+                    format!("iteration {iteration}, tier {tier}: {which}: {} at {}", label.kind, label.location)
                 });
                 self.fit(effects, *cand, base)
             })

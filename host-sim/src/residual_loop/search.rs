@@ -10,7 +10,7 @@
 
 use super::correction::EffectCorrection;
 use super::filter::Run;
-use super::fit::{Engine, Fitted};
+use super::fit::{Engine, Fitted, Round};
 use super::options::LoopOptions;
 use super::report::{AddedEffect, LoopReport, NotIdentifiable, Refused, Source, Traces, Trial, SCHEMA_VERSION};
 use super::signature::{unexplained, RunSummary, Signature};
@@ -75,7 +75,7 @@ impl<S: LoopSystem> Engine<'_, S> {
         self.nis_scale = if st.summary.nis_mean.is_finite() { st.summary.nis_mean.max(1.0) } else { 1.0 };
         let mut chosen = None;
         let mut evaluated = Vec::new();
-        for tier in sys.candidates(&st.summary, &st.run, &st.model, &st.effects) {
+        for (tier_index, tier) in sys.candidates(&st.summary, &st.run, &st.model, &st.effects).into_iter().enumerate() {
             let mut fresh: Vec<S::Effect> = Vec::new();
             for e in tier {
                 if st.effects.iter().any(|x| x.effect == e) || fresh.contains(&e) {
@@ -90,7 +90,8 @@ impl<S: LoopSystem> Engine<'_, S> {
             if chosen.is_some() || fresh.is_empty() {
                 continue;
             }
-            let mut results = self.fit_all(iteration, &st.effects, fresh, &st.run, &mut st.refused);
+            let at = Round { iteration, tier: tier_index + 1 };
+            let mut results = self.fit_all(at, &st.effects, fresh, &st.run, &mut st.refused);
             for f in results.iter().filter(|f| f.delta > f.penalty && !self.pays_in_halves(f)) {
                 st.partial.push(self.partial(f));
                 st.refused.push(self.refused_in_halves(f));
