@@ -72,12 +72,7 @@ fn harmonic<M: Markers>() {
         defmt::error!("bench harmonic: no estimator");
         exit(1)
     };
-    for k in 0..3 {
-        est.step(Some(k as f32 * 0.1));
-    }
-    M::start();
-    core::hint::black_box(est.step(core::hint::black_box(Some(0.25))));
-    M::end();
+    crate::bench::one_step::<M, _>(|y| est.step(y));
     defmt::info!(
         "bench harmonic_step n={=usize} m={=usize} resets={=u32}",
         4usize,
@@ -85,4 +80,3 @@ fn harmonic<M: Markers>() {
         est.counters().filter.covariance_resets
     );
 }
-

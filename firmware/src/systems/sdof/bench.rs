@@ -15,12 +15,7 @@ pub fn run<M: Markers>() {
         exit(1)
     };
     defmt::info!("bench sdof_start n={=usize} m={=usize}", 2usize, 1usize);
-    for k in 0..3 {
-        est.step(Some(k as f32 * 0.1));
-    }
-    M::start();
-    core::hint::black_box(est.step(core::hint::black_box(Some(0.25))));
-    M::end();
+    crate::bench::one_step::<M, _>(|y| est.step(y));
     defmt::info!(
         "bench sdof_step n={=usize} m={=usize} resets={=u32}",
         2usize,
