@@ -152,13 +152,18 @@ mod ix {
     pub const N_UUDR: usize = 44;
 }
 
-/// `start + c₀·a₀·b₀·d₀ + … + c₆·a₆·b₆·d₆`, multiplied and added left to right as the equations
-/// of motion read written out (the same bits; `d = 1` for a product of two, which is exact).
-/// The sway and yaw equations add the same seven products of the velocities, and so do the
-/// heave and pitch equations, each with its own coefficients `c`.
+/// The seven hydrodynamic products that one pair of the equations of motion shares (sway and
+/// yaw, or heave and pitch): six of two velocities, and the control surface's `u_r·u_r·δ`.
+type Products<T> = ([[T; 2]; 6], [T; 3]);
+
+/// `start + c₀·a₀·b₀ + … + c₅·a₅·b₅ + c₆·u_r·u_r·δ`: one equation's coefficients `c` on its
+/// pair's products `p`, multiplied and added left to right as the equation written out (the
+/// same operations in the same order, so the same bits and the same instructions).
 #[inline(always)]
-fn hydrodynamic<T: Real>(start: T, c: [T; 7], products: &[[T; 3]; 7]) -> T {
-    c.iter().zip(products).fold(start, |sum, (&ci, &[a, b, d])| sum + ci * a * b * d)
+fn hydrodynamic<T: Real>(start: T, c: [T; 7], p: &Products<T>) -> T {
+    let [c0, c1, c2, c3, c4, c5, c6] = c;
+    let ([[a0, b0], [a1, b1], [a2, b2], [a3, b3], [a4, b4], [a5, b5]], [u0, u1, d]) = *p;
+    start + c0 * a0 * b0 + c1 * a1 * b1 + c2 * a2 * b2 + c3 * a3 * b3 + c4 * a4 * b4 + c5 * a5 * b5 + c6 * u0 * u1 * d
 }
 
 impl<T: Real> ReducedDynamics<T> {
@@ -251,25 +256,8 @@ impl<T: Real> ReducedDynamics<T> {
             + c.kt * main
             - c.m * (w * q - v * r + c.zg * p * r);
         // Sway and yaw share their seven hydrodynamic products, heave and pitch theirs.
-        let one = T::one();
-        let lateral = [
-            [vr, vr.abs(), one],
-            [r, r.abs(), one],
-            [ur, r, one],
-            [wr, p, one],
-            [p, q, one],
-            [ur, vr, one],
-            [ur, ur, dr],
-        ];
-        let vertical = [
-            [wr, wr.abs(), one],
-            [q, q.abs(), one],
-            [ur, q, one],
-            [vr, p, one],
-            [r, p, one],
-            [ur, wr, one],
-            [ur, ur, ds],
-        ];
+        let lateral = ([[vr, vr.abs()], [r, r.abs()], [ur, r], [wr, p], [p, q], [ur, vr]], [ur, ur, dr]);
+        let vertical = ([[wr, wr.abs()], [q, q.abs()], [ur, q], [vr, p], [r, p], [ur, wr]], [ur, ur, ds]);
         let y = hydrodynamic(wb * ct * sf, [h[Y_VV], h[Y_RR], h[Y_UR], h[Y_WP], h[Y_PQ], h[Y_UV], h[Y_UUDR]], &lateral)
             - c.m * (u * r - w * p + c.zg * q * r);
         let z =
