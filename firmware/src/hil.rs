@@ -4,8 +4,9 @@
 //! through [`run`], so a HIL run and its host run are the same code on the same bytes.
 
 use crate::frame::FrameSink;
-use crate::line_feed::{ByteSource, FeedError};
+use crate::line_feed::{ByteSource, ChannelReader, FeedError};
 use crate::node::{Node, NodeEstimator, Recorded, SampleSource};
+use crate::source::{ChannelSource, MAX_GAP_S};
 
 /// Why a HIL image could not start (exit codes 3 and 4 under QEMU).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -55,6 +56,28 @@ pub trait HilImage {
 
     /// Frames after the last poll: counters and final estimates.
     fn finish<B: ByteSource>(node: &HilNode<'_, Self, B>, sink: &mut impl FrameSink);
+}
+
+/// The channel source of an image whose samples come `rate_hz` a second: lines missing from the
+/// file are bridged for up to [`MAX_GAP_S`] (see [`ChannelSource::with_clock`]), as the host
+/// bridges them. One start-up for every image that reads a system's channels from its file.
+///
+/// ```
+/// use edgekf_firmware::hil::clocked_source;
+/// use edgekf_firmware::line_feed::ChannelReader;
+/// use edgekf_firmware::node::{Health, Recorded, SampleSource};
+/// // At 10 Hz the line at t = 0.1 is missing: it is stepped as a missing sample.
+/// let text = b"t,a\n0,1\n0.2,2\n";
+/// let mut src = clocked_source(ChannelReader::new(&text[..], ["a"]).unwrap(), 10);
+/// let mut got = Vec::new();
+/// while src.advance() {
+///     src.read(&mut Health::default(), |s| got.push(s));
+/// }
+/// assert_eq!(got, [Some([1.0]), None, Some([2.0])]);
+/// ```
+pub fn clocked_source<B: ByteSource, const M: usize>(reader: ChannelReader<B, M>, rate_hz: u32) -> ChannelSource<B, M> {
+    let max_gap = MAX_GAP_S * f64::from(rate_hz);
+    ChannelSource::new(reader).with_clock(1.0 / f64::from(rate_hz), max_gap as u32)
 }
 
 /// Polls `node` until its input has run out, every report to `sink`, then the image's

@@ -2,8 +2,8 @@
 //! instruction counts under QEMU: `cargo xtask bench`.
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
-use edgekf::filter::{KalmanFilter, MerweSigmaPoints, SteadyState, SteadyStateFilter, UnscentedKalmanFilter};
-use edgekf::models::synthetic::{dense_model, CubicModel, Lcg};
+use edgekf::filter::{KalmanFilter, MerweSigmaPoints, SteadyStateFilter, UnscentedKalmanFilter};
+use edgekf::models::synthetic::{dense_model, some_steady_state, CubicModel, Lcg};
 use edgekf::systems::oscillator::{HarmonicForceEstimator, HarmonicForceParams};
 use edgekf::Real;
 use nalgebra::{SMatrix, SVector};
@@ -24,13 +24,7 @@ fn kalman<T: Real, const N: usize, const M: usize>(c: &mut Criterion, name: &str
 fn steady<const N: usize, const M: usize>(c: &mut Criterion) {
     let mut rng = Lcg(11);
     let model = dense_model::<N, M>(&mut rng);
-    let ss = SteadyState {
-        predicted: SMatrix::identity(),
-        filtered: SMatrix::identity(),
-        gain: SMatrix::from_fn(|_, _| 0.01 * rng.next()),
-        innovation: SMatrix::identity(),
-        iterations: 0,
-    };
+    let ss = some_steady_state::<N, M>(&mut rng);
     let mut f = SteadyStateFilter::<f32, N, M>::from_steady_state(&model, &ss, SVector::zeros()).expect("filter");
     let y = SVector::<f32, M>::from_fn(|_, _| rng.next() as f32);
     c.bench_function(&format!("f32 steady-state step n={N} m={M}"), |b| {

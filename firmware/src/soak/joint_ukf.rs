@@ -1,7 +1,7 @@
 //! The soak of the shared core's joint UKF on a mode's state and stiffness: no node runs it as
 //! such (its row's system is `"core"`, not a system of [`crate::systems`]).
 
-use super::{not_started, psd_root, swing, Blocks, Drift, Noise, SoakFrame, SoakRow};
+use super::engine::{not_started, psd_root, swing, Blocks, Drift, Noise, SoakFrame, SoakRow};
 use edgekf::filter::{JointModel, MerweSigmaPoints, ParametricModel, UnscentedKalmanFilter};
 use edgekf::linalg::van_loan;
 use nalgebra::{Matrix1, Matrix2, Vector1, Vector2};

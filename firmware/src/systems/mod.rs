@@ -3,7 +3,7 @@
 //! A system's chip code lives in `systems/<name>/`:
 //! * `mod.rs`: its [`crate::node::NodeEstimator`], report frames and [`crate::hil::HilImage`]
 //!   (further files of the folder as it needs them, e.g. [`rotor::accel`]);
-//! * `soak.rs`: its filters' numerical soak rows, `SOAKS` (the engine is [`crate::soak`]);
+//! * `soak.rs`: its filters' numerical soak rows, `SOAKS` (the engine is [`crate::soak::engine`]);
 //! * `bench.rs`: its kernels in the bench image (`edgekf-bench`, QEMU only), whose counts its
 //!   image rows' budgets bound;
 //! * `images.rs`: its firmware images as `cargo xtask` builds, runs and checks them, `IMAGES`
@@ -54,7 +54,7 @@
 //!   ADXL355 axis on its mass.
 
 use crate::manifest::{concat, count, Image};
-use crate::soak::SoakRow;
+use crate::soak::engine::SoakRow;
 
 /// The manifest: declares each system's module and gathers its rows, in the order given (the
 /// order of the soak rows and of `cargo xtask test`'s builds). A system written

@@ -131,27 +131,30 @@ impl fmt::Display for VirtualBusError {
     }
 }
 
-/// What the virtual device has done so far, for the test to check against the feed.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct VirtualCounters {
-    /// Samples taken from the feed into the FIFO.
-    pub samples_loaded: u32,
-    /// Injected NACKs sent (wrong-address NACKs are not counted).
-    pub nacks_sent: u32,
-    /// FIFO entries (axes) discarded because the FIFO overflowed.
-    pub overrun_entries: u32,
-    /// Injected timeouts sent.
-    pub timeouts_sent: u32,
-    /// Garbage reads served (transactions answered with `0xFF` bytes).
-    pub garbage_sent: u32,
-    /// Samples the feed marked `dropped` that were due while measuring (nothing loaded).
-    pub samples_dropped: u32,
-    /// Resets injected by the feed.
-    pub resets: u32,
-    /// Samples lost to a reset: in the FIFO when it was cleared, or due while the part sat in
-    /// standby after it.
-    pub samples_discarded: u32,
+crate::frame! {
+    /// What the virtual device has done so far, for the test to check against the feed; also the
+    /// `virtual` frame the oscillator image reports them in, so that the counts are listed once.
+    #[derive(Eq)]
+    #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+    pub struct VirtualCounters = "virtual {=u32} {=u32} {=u32} {=u32} {=u32} {=u32} {=u32} {=u32}" {
+        /// Samples taken from the feed into the FIFO.
+        pub samples_loaded: u32,
+        /// Injected NACKs sent (wrong-address NACKs are not counted).
+        pub nacks_sent: u32,
+        /// FIFO entries (axes) discarded because the FIFO overflowed.
+        pub overrun_entries: u32,
+        /// Injected timeouts sent.
+        pub timeouts_sent: u32,
+        /// Garbage reads served (transactions answered with `0xFF` bytes).
+        pub garbage_sent: u32,
+        /// Samples the feed marked `dropped` that were due while measuring (nothing loaded).
+        pub samples_dropped: u32,
+        /// Resets injected by the feed.
+        pub resets: u32,
+        /// Samples lost to a reset: in the FIFO when it was cleared, or due while the part sat in
+        /// standby after it.
+        pub samples_discarded: u32,
+    }
 }
 
 /// A software ADXL355 on a virtual I2C bus. See the [module docs](self) for the model.

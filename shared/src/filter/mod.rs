@@ -27,9 +27,10 @@ pub use kalman::{
     GenericSequentialInnovation, Innovation, KalmanFilter, LinearModel, SequentialInnovation,
 };
 pub use low_rank::{LowRankDesign, LowRankFit, LowRankKalmanFilter};
+pub use sigma::{MerweSigmaPoints, SigmaWeights, UkfError};
 pub use steady::{
     solve_riccati, GenericSteadyState, GenericSteadyStateFilter, RiccatiError, SteadyState, SteadyStateFilter,
 };
 #[cfg(feature = "alloc")]
 pub use steady::{DSteadyState, DSteadyStateFilter};
-pub use ukf::{MerweSigmaPoints, SigmaWeights, UkfError, UkfMeasurement, UkfModel, UnscentedKalmanFilter};
+pub use ukf::{UkfMeasurement, UkfModel, UnscentedKalmanFilter};

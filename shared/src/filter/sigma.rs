@@ -1,7 +1,21 @@
-//! Van der Merwe's scaled sigma points and their weights, as the unscented filter uses them.
+//! Van der Merwe's scaled sigma points and their weights, as the unscented filter uses them,
+//! and [`UkfError`], which their weights and the filter's constructor share: it lives here, below
+//! the filter, so that this module needs nothing of `ukf.rs`.
 
-use super::ukf::UkfError;
 use crate::Real;
+
+/// Why an unscented filter could not be built.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum UkfError {
+    /// `α`, `β` or `κ` not finite, `α ≤ 0`, `n + κ ≤ 0` (no real spread), or a centre weight
+    /// `|Wm₀|` so large that the means would keep fewer than four significant digits in the
+    /// precision in use (see [`MerweSigmaPoints`]).
+    SigmaPoints,
+    /// The initial state or covariance is not finite, or `(n + λ) P₀` has no Cholesky factor:
+    /// `P₀` is also the value the covariance guard resets to, so it must be positive definite.
+    InitialCovariance,
+}
 
 /// Van der Merwe's scaled sigma points (filterpy's `MerweScaledSigmaPoints`).
 ///

@@ -6,7 +6,7 @@
 //! element; `shared/tests/filterpy.rs` does that.
 
 use super::kalman::{FilterError, FilterHealth, Innovation};
-pub use super::sigma::{MerweSigmaPoints, SigmaWeights};
+use super::sigma::{MerweSigmaPoints, SigmaWeights, UkfError};
 use crate::Real;
 use nalgebra::{SMatrix, SVector};
 
@@ -61,19 +61,6 @@ impl<T: Real, const N: usize, const M: usize, F: UkfModel<T, N, M>> UkfMeasureme
     fn h(&self, x: &SVector<T, N>) -> SVector<T, M> {
         self.0.h(x)
     }
-}
-
-/// Why an unscented filter could not be built.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum UkfError {
-    /// `α`, `β` or `κ` not finite, `α ≤ 0`, `n + κ ≤ 0` (no real spread), or a centre weight
-    /// `|Wm₀|` so large that the means would keep fewer than four significant digits in the
-    /// precision in use (see [`MerweSigmaPoints`]).
-    SigmaPoints,
-    /// The initial state or covariance is not finite, or `(n + λ) P₀` has no Cholesky factor:
-    /// `P₀` is also the value the covariance guard resets to, so it must be positive definite.
-    InitialCovariance,
 }
 
 /// Lower Cholesky factor of `spread · P` into `l`; `false` unless the lower triangle and the

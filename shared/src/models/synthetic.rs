@@ -2,7 +2,7 @@
 //! only on the sizes, so the chip benchmark (`firmware/src/bin/bench`) and the host benchmark
 //! (`shared/benches/filters.rs`) run these same models, and their figures compare.
 
-use crate::filter::{LinearModel, UkfModel};
+use crate::filter::{LinearModel, SteadyState, UkfModel};
 use nalgebra::{SMatrix, SVector};
 
 /// A tiny linear congruential generator: numbers in [−1, 1), identical on every platform.
@@ -42,6 +42,30 @@ pub fn dense_model<const N: usize, const M: usize>(rng: &mut Lcg) -> LinearModel
         c: SMatrix::from_fn(|_, _| rng.next()),
         q: b * b.transpose() + SMatrix::identity() * 0.01,
         r: SMatrix::identity() * 0.5,
+    }
+}
+
+/// A steady state for the steady-state filter's benchmarks: identity covariances and a gain
+/// with entries in [−0.01, 0.01). Any gain costs the same per step, and solving a 24-state
+/// Riccati equation (in software `f64` on the chip) would only slow the benchmarks down.
+///
+/// ```
+/// use edgekf::filter::SteadyStateFilter;
+/// use edgekf::models::synthetic::{dense_model, some_steady_state, Lcg};
+/// use nalgebra::SVector;
+/// let mut rng = Lcg(11);
+/// let model = dense_model::<6, 2>(&mut rng);
+/// let ss = some_steady_state::<6, 2>(&mut rng);
+/// assert!(ss.gain.amax() < 0.01);
+/// assert!(SteadyStateFilter::<f32, 6, 2>::from_steady_state(&model, &ss, SVector::zeros()).is_ok());
+/// ```
+pub fn some_steady_state<const N: usize, const M: usize>(rng: &mut Lcg) -> SteadyState<N, M> {
+    SteadyState {
+        predicted: SMatrix::identity(),
+        filtered: SMatrix::identity(),
+        gain: SMatrix::from_fn(|_, _| 0.01 * rng.next()),
+        innovation: SMatrix::identity(),
+        iterations: 0,
     }
 }
 

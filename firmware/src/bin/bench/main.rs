@@ -16,8 +16,8 @@
 #![no_main]
 
 use cortex_m_rt::entry;
-use edgekf::filter::{KalmanFilter, MerweSigmaPoints, SteadyState, SteadyStateFilter, UnscentedKalmanFilter};
-use edgekf::models::synthetic::{dense_model, CubicModel, Lcg};
+use edgekf::filter::{KalmanFilter, MerweSigmaPoints, SteadyStateFilter, UnscentedKalmanFilter};
+use edgekf::models::synthetic::{dense_model, some_steady_state, CubicModel, Lcg};
 use edgekf_firmware::semihost::exit;
 use nalgebra::{SMatrix, SVector};
 
@@ -72,15 +72,7 @@ fn predict_only<const N: usize, const M: usize>(rng: &mut Lcg) {
 
 fn steady<const N: usize, const M: usize>(label: &str, rng: &mut Lcg) {
     let model = dense_model::<N, M>(rng);
-    // Any gain costs the same; solving a 24-state Riccati equation in software f64 would only
-    // slow the benchmark down.
-    let ss = SteadyState {
-        predicted: SMatrix::identity(),
-        filtered: SMatrix::identity(),
-        gain: SMatrix::from_fn(|_, _| 0.01 * rng.next()),
-        innovation: SMatrix::identity(),
-        iterations: 0,
-    };
+    let ss = some_steady_state::<N, M>(rng);
     let Ok(mut f) = SteadyStateFilter::<f32, N, M>::from_steady_state(&model, &ss, SVector::zeros()) else {
         defmt::error!("bench {=str}: no filter", label);
         exit(1)

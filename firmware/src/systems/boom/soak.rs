@@ -10,7 +10,7 @@
 use super::BoomImage;
 use crate::hil::HilImage;
 use super::{estimators, GYRO, INCLINOMETER, SAMPLE_RATE_HZ};
-use crate::soak::{psd_root, Blocks, Drift, Noise, SoakFrame, SoakRow};
+use crate::soak::engine::{psd_root, Blocks, Drift, Noise, SoakFrame, SoakRow};
 use edgekf::systems::boom::{slot, MEASUREMENTS, MODES, STATES};
 use nalgebra::SVector;
 
@@ -41,7 +41,7 @@ const BLOCK: u32 = 10_000;
 /// The soak (see the module docs); `n` samples.
 #[inline(never)]
 pub fn boom(n: u32) -> SoakFrame {
-    let Ok((mut est, _)) = estimators() else { return crate::soak::not_started(n) };
+    let Ok((mut est, _)) = estimators() else { return crate::soak::engine::not_started(n) };
     let dt = 1.0 / f64::from(SAMPLE_RATE_HZ);
     let mut length = Drift::new(dt);
     let (mut feed, mut feed_rate) = (Drift::new(dt), Drift::new(dt));

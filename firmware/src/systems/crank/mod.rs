@@ -9,7 +9,7 @@
 //! 10 KB, for the exact median), owned by the caller; the rest is about 200 bytes.
 
 use crate::frame::FrameSink;
-use crate::hil::{HilError, HilImage, HilNode};
+use crate::hil::{clocked_source, HilError, HilImage, HilNode};
 use crate::line_feed::{ByteSource, ChannelReader};
 use crate::node::{Innovation, Node, NodeEstimator, Poll};
 use crate::source::ChannelSource;
@@ -323,15 +323,6 @@ clearance_frame! {
     }
 }
 
-/// The crank image's source: the crank acceleration, lines missing from the file stepped as
-/// missing samples for up to [`crate::source::MAX_GAP_S`] (see
-/// [`ChannelSource::with_clock`]): the window statistics skip them, and the release detector
-/// counts their time, so a line lost before the first contact does not move it earlier.
-pub fn channel_source<B: ByteSource>(reader: ChannelReader<B, 1>) -> ChannelSource<B, 1> {
-    let max_gap = crate::source::MAX_GAP_S * f64::from(SAMPLE_RATE_HZ);
-    ChannelSource::new(reader).with_clock(1.0 / f64::from(SAMPLE_RATE_HZ), max_gap as u32)
-}
-
 impl NodeEstimator for CrankNode<'_> {
     type Input = [f32; 1];
     type Frame = WindowFrame;
@@ -370,7 +361,10 @@ impl HilImage for CrankImage {
     fn start<B: ByteSource>(input: B, storage: &mut Storage) -> Result<HilNode<'_, Self, B>, HilError<FeatureError>> {
         let reader = ChannelReader::new(input, CHANNELS).map_err(HilError::Header)?;
         let estimator = CrankNode::new(storage).map_err(HilError::Start)?;
-        Ok(Node::new(channel_source(reader), estimator, Default::default()))
+        // Lines missing from the file are stepped as missing samples: the window statistics
+        // skip them, and the release detector counts their time, so a line lost before the
+        // first contact does not move it earlier.
+        Ok(Node::new(clocked_source(reader, SAMPLE_RATE_HZ), estimator, Default::default()))
     }
 
     fn finish<B: ByteSource>(node: &HilNode<'_, Self, B>, sink: &mut impl FrameSink) {

@@ -9,7 +9,7 @@
 use super::CrankImage;
 use crate::hil::HilImage;
 use super::{Storage, MODEL, SAMPLE_RATE_HZ, WINDOW};
-use crate::soak::{Blocks, Drift, Noise, SoakFrame, SoakRow};
+use crate::soak::engine::{Blocks, Drift, Noise, SoakFrame, SoakRow};
 use edgekf::systems::crank::{ClearanceEstimator, CrankFeatures, CLEARANCE_RANGE, FEATURES};
 
 /// Its rows.
@@ -78,13 +78,13 @@ impl CrankSignal {
         self.k = k.wrapping_add(1);
         // 10 rev/s ±20 % over 15 minutes.
         let step =
-            |t: f64| core::f64::consts::TAU * 10.0 * crate::soak::swing(t, 0.2, 900.0) / f64::from(SAMPLE_RATE_HZ);
+            |t: f64| core::f64::consts::TAU * 10.0 * crate::soak::engine::swing(t, 0.2, 900.0) / f64::from(SAMPLE_RATE_HZ);
         let (cd, sd) = (self.turn.0.at(k, |t| libm::cos(step(t))), self.turn.1.at(k, |t| libm::sin(step(t))));
         let (c, s) = self.phasor;
         let (c1, s1) = (c * cd - s * sd, s * cd + c * sd);
         let g = 1.5 - 0.5 * (c1 * c1 + s1 * s1);
         self.phasor = (c1 * g, s1 * g);
-        let size = 2000.0 * self.amplitude.at(k, |t| crate::soak::swing(t, 0.3, 600.0));
+        let size = 2000.0 * self.amplitude.at(k, |t| crate::soak::engine::swing(t, 0.3, 600.0));
         if s < 0.0 && s1 >= 0.0 && c1 > 0.0 {
             self.impact = (0, size);
         } else if s > 0.0 && s1 <= 0.0 && c1 < 0.0 {
@@ -108,7 +108,7 @@ pub fn crank(n: u32) -> SoakFrame {
     let mut storage: Storage = [0.0; WINDOW - 1];
     let mut fresh_storage: Storage = [0.0; WINDOW - 1];
     let rate = f64::from(SAMPLE_RATE_HZ);
-    let Ok(mut est) = ClearanceEstimator::new(&MODEL, &mut storage, rate) else { return crate::soak::not_started(n) };
+    let Ok(mut est) = ClearanceEstimator::new(&MODEL, &mut storage, rate) else { return crate::soak::engine::not_started(n) };
     let mut signal = CrankSignal::new();
     let mut window_start = signal;
     let mut blocks = Blocks::new(n, 1.0);

@@ -72,17 +72,6 @@ fn harmonic<M: Markers>() {
         defmt::error!("bench harmonic: no estimator");
         exit(1)
     };
-    for k in 0..3 {
-        est.step(Some(k as f32 * 0.1));
-    }
-    M::start();
-    core::hint::black_box(est.step(core::hint::black_box(Some(0.25))));
-    M::end();
-    defmt::info!(
-        "bench harmonic_step n={=usize} m={=usize} resets={=u32}",
-        4usize,
-        1usize,
-        est.counters().filter.covariance_resets
-    );
+    let resets = |e: &HarmonicForceEstimator<f32>| e.counters().filter.covariance_resets;
+    crate::bench::one_step::<M, _, _>("harmonic_step", (4, 1), &mut est, |e, y| e.step(y), resets);
 }
-

@@ -206,44 +206,9 @@ crate::frame! {
     }
 }
 
-crate::frame! {
-    /// What the virtual ADXL355 did: the faults it injected, for the test to check the node's
-    /// counts against.
-    #[derive(Eq)]
-    pub struct VirtualFrame = "virtual {=u32} {=u32} {=u32} {=u32} {=u32} {=u32} {=u32} {=u32}" {
-        /// Samples taken from the feed into the FIFO.
-        pub samples_loaded: u32,
-        /// Injected NACKs sent.
-        pub nacks_sent: u32,
-        /// FIFO entries discarded because the FIFO overflowed.
-        pub overrun_entries: u32,
-        /// Injected timeouts sent.
-        pub timeouts_sent: u32,
-        /// Garbage reads served.
-        pub garbage_sent: u32,
-        /// Samples dropped (not produced) while measuring.
-        pub samples_dropped: u32,
-        /// Resets injected.
-        pub resets: u32,
-        /// Samples lost to resets (cleared from the FIFO, or due in standby).
-        pub samples_discarded: u32,
-    }
-}
-
-impl From<crate::virtual_adxl355::VirtualCounters> for VirtualFrame {
-    fn from(v: crate::virtual_adxl355::VirtualCounters) -> Self {
-        Self {
-            samples_loaded: v.samples_loaded,
-            nacks_sent: v.nacks_sent,
-            overrun_entries: v.overrun_entries,
-            timeouts_sent: v.timeouts_sent,
-            garbage_sent: v.garbage_sent,
-            samples_dropped: v.samples_dropped,
-            resets: v.resets,
-            samples_discarded: v.samples_discarded,
-        }
-    }
-}
+/// What the virtual ADXL355 did: the faults it injected, for the test to check the node's
+/// counts against. The device's own counters are the frame (one list of the counts).
+pub type VirtualFrame = crate::virtual_adxl355::VirtualCounters;
 
 /// The QEMU image `edgekf-qemu`: the real driver and loop on a virtual ADXL355 whose samples
 /// come from the HIL file (columns `t, ax, ay, az`, optional fault columns). Frames: `start`,
@@ -283,7 +248,7 @@ impl HilImage for OscillatorImage {
             bad_lines: feed.bad_lines(),
             ignored_columns: feed.columns().ignored() as u32,
         });
-        sink.frame(&VirtualFrame::from(device.counters()));
+        sink.frame(&device.counters());
     }
 }
 

@@ -3,7 +3,7 @@
 
 use super::OscillatorImage;
 use crate::hil::HilImage;
-use crate::soak::{not_started, psd_root, swing, Blocks, Drift, Noise, SoakFrame, SoakRow};
+use crate::soak::engine::{not_started, psd_root, swing, Blocks, Drift, Noise, SoakFrame, SoakRow};
 use edgekf::systems::oscillator::{GainMode, HarmonicForceEstimator, HarmonicForceParams};
 use nalgebra::Vector4;
 

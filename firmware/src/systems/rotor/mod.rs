@@ -322,10 +322,9 @@ crate::frame! {
 }
 
 /// The rotor image's source: the probes' channels, lines missing from the file bridged for up
-/// to [`crate::source::MAX_GAP_S`] (see [`ChannelSource::with_clock`]).
+/// to [`crate::source::MAX_GAP_S`] (see [`crate::hil::clocked_source`]).
 pub fn channel_source<B: ByteSource>(reader: ChannelReader<B, 4>) -> ChannelSource<B, 4> {
-    let max_gap = crate::source::MAX_GAP_S * f64::from(SAMPLE_RATE_HZ);
-    ChannelSource::new(reader).with_clock(1.0 / f64::from(SAMPLE_RATE_HZ), max_gap as u32)
+    crate::hil::clocked_source(reader, SAMPLE_RATE_HZ)
 }
 
 /// The rotor estimator as the node runs it: the poll's samples (one line and the missing ones

@@ -5,7 +5,7 @@
 use super::accel::{self, RotorAccelImage, ACCEL_DESIGN, ACCEL_STATES};
 use super::{constants as probes, RotorEstimator, RotorImage, DESIGN, STATES, STEADY_AFTER};
 use crate::hil::HilImage;
-use crate::soak::{psd_root, swing, Blocks, Drift, Noise, SoakFrame, SoakRow};
+use crate::soak::engine::{psd_root, swing, Blocks, Drift, Noise, SoakFrame, SoakRow};
 use edgekf::export::matrix;
 use nalgebra::SVector;
 

@@ -15,16 +15,6 @@ pub fn run<M: Markers>() {
         exit(1)
     };
     defmt::info!("bench sdof_start n={=usize} m={=usize}", 2usize, 1usize);
-    for k in 0..3 {
-        est.step(Some(k as f32 * 0.1));
-    }
-    M::start();
-    core::hint::black_box(est.step(core::hint::black_box(Some(0.25))));
-    M::end();
-    defmt::info!(
-        "bench sdof_step n={=usize} m={=usize} resets={=u32}",
-        2usize,
-        1usize,
-        est.counters().filter.covariance_resets
-    );
+    let resets = |e: &SdofEstimator<f32>| e.counters().filter.covariance_resets;
+    crate::bench::one_step::<M, _, _>("sdof_step", (2, 1), &mut est, |e, y| e.step(y), resets);
 }

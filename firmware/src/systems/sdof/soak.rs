@@ -2,7 +2,7 @@
 
 use super::{params, SdofImage};
 use crate::hil::HilImage;
-use crate::soak::{not_started, psd_root, swing, Blocks, Drift, Noise, SoakFrame, SoakRow};
+use crate::soak::engine::{not_started, psd_root, swing, Blocks, Drift, Noise, SoakFrame, SoakRow};
 use edgekf::systems::sdof::{SdofEstimator, SdofParams};
 use nalgebra::Vector2;
 

@@ -9,7 +9,7 @@
 //! in the caller's [`Storage`], not on the stack of every call.
 
 use crate::frame::FrameSink;
-use crate::hil::{HilError, HilImage, HilNode};
+use crate::hil::{clocked_source, HilError, HilImage, HilNode};
 use crate::line_feed::{ByteSource, ChannelReader};
 use crate::node::{Innovation, Node, NodeEstimator, Poll};
 use crate::source::ChannelSource;
@@ -240,8 +240,7 @@ impl HilImage for UuvImage {
     fn start<B: ByteSource>(input: B, storage: &mut Storage) -> Result<HilNode<'_, Self, B>, HilError<EstimatorError>> {
         let reader = ChannelReader::new(input, CHANNELS).map_err(HilError::Header)?.with_empty_cells();
         let est = storage.insert(estimator().map_err(HilError::Start)?);
-        let max_gap = crate::source::MAX_GAP_S * f64::from(SAMPLE_RATE_HZ);
-        let source = ChannelSource::new(reader).with_clock(1.0 / f64::from(SAMPLE_RATE_HZ), max_gap as u32);
+        let source = clocked_source(reader, SAMPLE_RATE_HZ);
         Ok(Node::new(source, UuvNode::new(est), Default::default()))
     }
 

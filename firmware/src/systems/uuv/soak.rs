@@ -9,7 +9,7 @@
 use super::UuvImage;
 use crate::hil::HilImage;
 use super::{estimator, LAYOUT, SAMPLE_RATE_HZ, STATES};
-use crate::soak::{Blocks, Drift, Noise, SoakFrame, SoakRow};
+use crate::soak::engine::{Blocks, Drift, Noise, SoakFrame, SoakRow};
 use edgekf::systems::uuv::{
     wrap, Command, Drive, MeasurementNoise, ProcessNoise, ReducedDynamics, Sample, Status, Vehicle, VELOCITY,
 };
@@ -45,12 +45,12 @@ const DVL_EVERY: u32 = 10;
 pub fn uuv(n: u32) -> SoakFrame {
     let vehicle = Vehicle::default();
     let (Ok(mut est), Some(dynamics)) = (estimator(), ReducedDynamics::<f32>::new(&vehicle)) else {
-        return crate::soak::not_started(n);
+        return crate::soak::engine::not_started(n);
     };
     let dt = 1.0 / f64::from(SAMPLE_RATE_HZ);
     let (k_t, k_v, bias, current) = match (LAYOUT.k_t(), LAYOUT.k_v(), LAYOUT.acc_bias(), LAYOUT.current()) {
         (Some(a), Some(b), Some(c), Some(d)) => (a, b, c, d),
-        _ => return crate::soak::not_started(n),
+        _ => return crate::soak::engine::not_started(n),
     };
     let (depth, heading, rpm) = (10.0f32, core::f32::consts::FRAC_PI_4, 1500.0f32);
     let mut x = SVector::<f32, STATES>::zeros();

@@ -152,6 +152,20 @@ mod ix {
     pub const N_UUDR: usize = 44;
 }
 
+/// The seven hydrodynamic products that one pair of the equations of motion shares (sway and
+/// yaw, or heave and pitch): six of two velocities, and the control surface's `u_r·u_r·δ`.
+type Products<T> = ([[T; 2]; 6], [T; 3]);
+
+/// `start + c₀·a₀·b₀ + … + c₅·a₅·b₅ + c₆·u_r·u_r·δ`: one equation's coefficients `c` on its
+/// pair's products `p`, multiplied and added left to right as the equation written out (the
+/// same operations in the same order, so the same bits and the same instructions).
+#[inline(always)]
+fn hydrodynamic<T: Real>(start: T, c: [T; 7], p: &Products<T>) -> T {
+    let [c0, c1, c2, c3, c4, c5, c6] = c;
+    let ([[a0, b0], [a1, b1], [a2, b2], [a3, b3], [a4, b4], [a5, b5]], [u0, u1, d]) = *p;
+    start + c0 * a0 * b0 + c1 * a1 * b1 + c2 * a2 * b2 + c3 * a3 * b3 + c4 * a4 * b4 + c5 * a5 * b5 + c6 * u0 * u1 * d
+}
+
 impl<T: Real> ReducedDynamics<T> {
     /// The model of `vehicle`; `None` if its constants fail [`Vehicle::check`] or its mass
     /// matrix is singular.
@@ -241,44 +255,25 @@ impl<T: Real> ReducedDynamics<T> {
             + h[X_RR] * r * r
             + c.kt * main
             - c.m * (w * q - v * r + c.zg * p * r);
-        let y = wb * ct * sf
-            + h[Y_VV] * vr * vr.abs()
-            + h[Y_RR] * r * r.abs()
-            + h[Y_UR] * ur * r
-            + h[Y_WP] * wr * p
-            + h[Y_PQ] * p * q
-            + h[Y_UV] * ur * vr
-            + h[Y_UUDR] * ur * ur * dr
+        // Sway and yaw share their seven hydrodynamic products, heave and pitch theirs.
+        let lateral = ([[vr, vr.abs()], [r, r.abs()], [ur, r], [wr, p], [p, q], [ur, vr]], [ur, ur, dr]);
+        let vertical = ([[wr, wr.abs()], [q, q.abs()], [ur, q], [vr, p], [r, p], [ur, wr]], [ur, ur, ds]);
+        let y = hydrodynamic(wb * ct * sf, [h[Y_VV], h[Y_RR], h[Y_UR], h[Y_WP], h[Y_PQ], h[Y_UV], h[Y_UUDR]], &lateral)
             - c.m * (u * r - w * p + c.zg * q * r);
-        let z = wb * ct * cf
-            + h[Z_WW] * wr * wr.abs()
-            + h[Z_QQ] * q * q.abs()
-            + h[Z_UQ] * ur * q
-            + h[Z_VP] * vr * p
-            + h[Z_RP] * r * p
-            + h[Z_UW] * ur * wr
-            + h[Z_UUDS] * ur * ur * ds
-            + vert
-            - c.m * (v * p - u * q - c.zg * (p * p + q * q));
+        let z =
+            hydrodynamic(wb * ct * cf, [h[Z_WW], h[Z_QQ], h[Z_UQ], h[Z_VP], h[Z_RP], h[Z_UW], h[Z_UUDS]], &vertical)
+                + vert
+                - c.m * (v * p - u * q - c.zg * (p * p + q * q));
         let k = -c.zg * c.w * ct * sf + h[K_PP] * p * p.abs() + h[K_P] * p + c.kq * main - (c.izz - c.iyy) * q * r
             + c.m * c.zg * (u * r - w * p);
-        let mm = -c.zg * c.w * st
-            + h[M_WW] * wr * wr.abs()
-            + h[M_QQ] * q * q.abs()
-            + h[M_UQ] * ur * q
-            + h[M_VP] * vr * p
-            + h[M_RP] * r * p
-            + h[M_UW] * ur * wr
-            + h[M_UUDS] * ur * ur * ds
-            - (c.ixx - c.izz) * r * p
+        let mm = hydrodynamic(
+            -c.zg * c.w * st,
+            [h[M_WW], h[M_QQ], h[M_UQ], h[M_VP], h[M_RP], h[M_UW], h[M_UUDS]],
+            &vertical,
+        ) - (c.ixx - c.izz) * r * p
             - c.m * c.zg * (w * q - v * r);
-        let n = h[N_VV] * vr * vr.abs()
-            + h[N_RR] * r * r.abs()
-            + h[N_UR] * ur * r
-            + h[N_WP] * wr * p
-            + h[N_PQ] * p * q
-            + h[N_UV] * ur * vr
-            + h[N_UUDR] * ur * ur * dr
+        // −0 is the exact identity of `+`: the sum starts at the first product, as written out.
+        let n = hydrodynamic(-T::zero(), [h[N_VV], h[N_RR], h[N_UR], h[N_WP], h[N_PQ], h[N_UV], h[N_UUDR]], &lateral)
             - (c.iyy - c.ixx) * p * q;
         self.m_inv * Nu::<T>::from([x, y, z, k, mm, n])
     }
