@@ -14,13 +14,15 @@
 mod detector;
 mod dynamics;
 mod estimator;
+mod sample;
 mod settings;
 mod update;
 mod vehicle;
 
 pub use detector::{open, signatures, watch, Status, ThrusterMonitor};
 pub use dynamics::{Attitude, Drive, Nu, ReducedDynamics};
-pub use estimator::{wrap, Command, Estimate, EstimatorError, Health, Sample, UuvEstimator, CHANNELS};
+pub use estimator::{Estimate, EstimatorError, Health, UuvEstimator};
+pub use sample::{wrap, Command, Sample, CHANNELS};
 pub use settings::{
     DetectorSettings, EstimatorSettings, InitialSpread, Layout, MeasurementNoise, ProcessNoise, VEHICLE_STATES,
     VELOCITY,

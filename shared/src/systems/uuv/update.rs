@@ -5,7 +5,7 @@
 //! is the update the node runs.
 
 use super::detector::{signatures, watch, ThrusterMonitor};
-use super::estimator::{wrap, Sample};
+use super::sample::{wrap, Sample};
 use super::settings::{MeasurementNoise, VELOCITY};
 use crate::filter::{Innovation, UkfMeasurement, UkfModel, UnscentedKalmanFilter};
 use crate::Real;
