@@ -324,9 +324,13 @@ fn boom_simulate_then_estimate_writes_the_issues_columns() {
     std::fs::write(&no_cmd, stripped).unwrap();
     let out = edgekf(&["boom", "estimate", "--data", path(&no_cmd), "--static", path(&statics), "--out", path(&est)]);
     assert!(!out.status.success() && text(&out.stderr).contains("luff_rate_cmd"), "{}", text(&out.stderr));
+    // A recording without truth (every real one) is drawn alone, and its estimate written.
     let args = ["boom", "estimate", "--data", path(&no_cmd), "--static", path(&statics), "--method", "paper"];
-    let out = edgekf(&[&args[..], &["--out", path(&est)]].concat());
+    let _ = std::fs::remove_file(&est);
+    let out = edgekf(&[&args[..], &["--out", path(&est), "--plot", path(&svg)]].concat());
     assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(text(&out.stdout).contains("(the recording has no truth_tip_vibration)"), "{}", text(&out.stdout));
+    assert!(std::fs::read_to_string(&svg).unwrap().contains("no truth in the recording") && est.exists());
     // The recording is never an output.
     let out = edgekf(&["boom", "estimate", "--data", path(&data), "--static", path(&statics), "--out", path(&data)]);
     assert!(!out.status.success());

@@ -131,7 +131,8 @@ fn estimate_command(args: EstimateArgs) -> anyhow::Result<()> {
         match figure {
             Some(svg) => {
                 write_atomic(path, svg).with_context(|| format!("cannot write {}", path.display()))?;
-                println!("{}: health factors against truth", path.display());
+                let truth = file.column("truth_k_t").is_some() || file.column("truth_k_v").is_some();
+                println!("{}: health factors{}", path.display(), if truth { " against truth" } else { "" });
             }
             None => eprintln!("notice: no health state in the configuration: {} not drawn", path.display()),
         }
