@@ -363,9 +363,15 @@ fn loop_boom_names_an_undeclared_inclinometer_lag() {
     assert!(no_lag.contains("lag = 0.0\n") && no_lag != shipped);
     std::fs::write(&config, no_lag).unwrap();
     let c = path(&config);
+    let fixed = dir.join("fixed.toml");
     let args = ["loop", "boom", "--config", c, "--data", path(&data), "--static", path(&statics), "--report"];
-    let out = edgekf(&[&args[..], &[path(&report), "--quiet"]].concat());
+    let out = edgekf(&[&args[..], &[path(&report), "--quiet", "--corrected-config", path(&fixed)]].concat());
     assert!(out.status.success(), "{}\n{}", text(&out.stdout), text(&out.stderr));
+    // The boom's own figure is on stdout, and the lag went into the corrected configuration.
+    assert!(text(&out.stdout).contains("peak_error_pct") && text(&out.stdout).contains("1 of 1 effects carried"));
+    let corrected: toml::Table = std::fs::read_to_string(&fixed).unwrap().parse().unwrap();
+    let lag = corrected["inclinometer"]["lag"].as_float().unwrap();
+    assert!((lag - 0.3).abs() < 0.06 && corrected["sim"]["inclinometer"]["lag"].as_float() == Some(0.3), "{lag}");
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(report.join("report.json")).unwrap()).unwrap();
     assert_eq!(json["system"], "boom");
@@ -379,6 +385,11 @@ fn loop_boom_names_an_undeclared_inclinometer_lag() {
     let (before, after) =
         (json["before"]["peak_error_pct"].as_f64().unwrap(), json["after"]["peak_error_pct"].as_f64().unwrap());
     assert!(after < 0.5 * before, "peak error {before} % → {after} %");
+    // The loop again with the corrected configuration: nothing left to add.
+    let again = dir.join("again");
+    let args = ["loop", "boom", "--config", path(&fixed), "--data", path(&data), "--static", path(&statics)];
+    let out = edgekf(&[&args[..], &["--report", path(&again), "--quiet"]].concat());
+    assert!(out.status.success() && text(&out.stdout).contains("0 effect(s) added"), "{}", text(&out.stdout));
     // Without --static the loop says what it needs.
     let out = edgekf(&["loop", "boom", "--config", c, "--data", path(&data), "--report", path(&dir.join("r2"))]);
     assert!(!out.status.success() && text(&out.stderr).contains("--static"), "{}", text(&out.stderr));
@@ -412,7 +423,9 @@ fn loop_uuv_names_an_undeclared_offset_and_reports_the_declared_model() {
         path(&data),
     ]);
     assert!(out.status.success(), "{}", text(&out.stderr));
-    let out = edgekf(&["loop", "uuv", "--config", c, "--data", path(&data), "--report", path(&report), "--quiet"]);
+    let fixed = dir.join("fixed.toml");
+    let args = ["loop", "uuv", "--config", c, "--data", path(&data), "--report", path(&report), "--quiet"];
+    let out = edgekf(&[&args[..], &["--corrected-config", path(&fixed)]].concat());
     let stdout = text(&out.stdout);
     assert!(out.status.success(), "{stdout}\n{}", text(&out.stderr));
     assert!(stdout.contains("+ sensor_bias at acc_z"), "{stdout}");
@@ -427,4 +440,12 @@ fn loop_uuv_names_an_undeclared_offset_and_reports_the_declared_model() {
     let k_v = |run: &str| json[run]["error_rms"]["k_v"].as_f64().unwrap();
     assert!(k_v("before") > 0.2 && k_v("after") < 0.05, "k_v RMS error {} → {}", k_v("before"), k_v("after"));
     assert!(report.join("report.html").exists());
+    // The corrected configuration has the estimator carry the IMU's biases; with it the loop
+    // adds nothing to the same recording.
+    let corrected: toml::Table = std::fs::read_to_string(&fixed).unwrap().parse().unwrap();
+    assert_eq!(corrected["estimator"]["sensor_biases"].as_bool(), Some(true));
+    let again = dir.join("again");
+    let out =
+        edgekf(&["loop", "uuv", "--config", path(&fixed), "--data", path(&data), "--report", path(&again), "--quiet"]);
+    assert!(out.status.success() && text(&out.stdout).contains("0 effect(s) added"), "{}", text(&out.stdout));
 }

@@ -62,6 +62,9 @@ pub fn summary_table(r: &LoopReport) -> String {
             x.error_rms.get(k).map_or("-".into(), |v| readable(v * scale))
         }));
     }
+    for k in r.before.metrics.keys() {
+        s.push_str(&row(k, &|x| x.metrics.get(k).map_or("-".into(), |v| readable(*v))));
+    }
     for u in &r.not_identifiable {
         let what = u.parameter.as_ref().map(|p| format!(" {p}")).unwrap_or_default();
         s.push_str(&format!("  not identifiable: {} {}{}: {}\n", u.kind, u.location, what, u.reason));

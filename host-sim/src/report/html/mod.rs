@@ -172,7 +172,7 @@ mod tests {
             whiteness_p: 0.5,
             consistent: false,
             error_rms: BTreeMap::from([("n12_x".to_string(), rms)]),
-            metrics: BTreeMap::new(),
+            metrics: BTreeMap::from([("peak_error_pct".to_string(), rms * 1e6)]),
             log_likelihood: -10.0,
             channels: vec![channel("n5_x"), channel("n5_y")],
             bin_width_hz: 1000.0 / 1024.0,
@@ -246,6 +246,8 @@ mod tests {
         assert!(html.contains("<td>a &quot;line&quot; &lt;here&gt;</td>"));
         assert!(html.contains("<td class=\"num\">1.050 (+5.0 %)</td>"));
         assert!(html.contains("from 2.400 s"), "a change-point effect shows its onset");
+        // A system's own figures are rows of the run's table, to four significant digits.
+        assert!(html.contains("peak error pct</th><td class=\"num\">2.000</td><td class=\"num better\">1.000</td>"));
         // What was refused and how each effect enters the configuration are on the page too.
         assert!(html.contains("<td>at the bound &lt;1.3&gt;</td>") && html.contains("<td>mass</td>"));
         assert!(html.contains("<td>sensor[node=5].scale ×1.050</td>") && html.contains("<td>into the model</td>"));

@@ -208,11 +208,22 @@ fn overall_table(out: &mut String, b: &RunSummary, a: &RunSummary) {
         ("NIS mean per channel (1 when consistent)", pair(b.nis_mean, a.nis_mean, |v| fixed(v, 3), Better::NearOne)),
         ("whiteness p (smallest over the channels)", pair(b.whiteness_p, a.whiteness_p, p_value, Better::PValue)),
     ];
+    let metrics: Vec<(String, [Cell; 2])> = b
+        .metrics
+        .iter()
+        .map(|(k, vb)| {
+            (k.replace('_', " "), pair(*vb, a.metrics.get(k).copied().unwrap_or(f64::NAN), num, Better::Lower))
+        })
+        .collect();
     out.push_str(
         "<h3>The run</h3>\n<table>\n<thead><tr><th></th><th>before</th><th>after</th></tr></thead>\n<tbody>\n",
     );
     for (label, cells) in rows {
         out.push_str(&labelled_row(&esc(label), &cells));
+    }
+    // A system's own error figures against truth (the boom's `peak_error_pct`).
+    for (label, cells) in metrics {
+        out.push_str(&labelled_row(&esc(&label), &cells));
     }
     out.push_str("</tbody>\n</table>\n");
 }
@@ -224,7 +235,7 @@ fn channel_cells(name: &str, scale: f64, b: &RunSummary, a: &RunSummary) -> Vec<
     let field = |c: &Option<ChannelSignature>, f: fn(&ChannelSignature) -> f64| c.as_ref().map_or(f64::NAN, f);
     let rms = |s: &RunSummary| s.innovation_rms.get(name).map_or(f64::NAN, |v| v * scale);
     let mut cells = Vec::with_capacity(8);
-    cells.extend(pair(rms(b), rms(a), |v| fixed(v, 3), Better::Lower));
+    cells.extend(pair(rms(b), rms(a), num, Better::Lower));
     cells.extend(pair(field(&cb, |c| c.nis), field(&ca, |c| c.nis), |v| fixed(v, 3), Better::NearOne));
     cells.extend(pair(field(&cb, |c| c.whiteness_p), field(&ca, |c| c.whiteness_p), p_value, Better::PValue));
     cells.extend(pair(field(&cb, |c| c.z), field(&ca, |c| c.z), |v| fixed(v, 1), Better::NearZero));
@@ -261,7 +272,7 @@ fn error_table(out: &mut String, tr: &Traces, b: &RunSummary, a: &RunSummary) {
         let (scale, unit) = shown(&tr.rows, k);
         let shown = |s: &RunSummary| s.error_rms.get(k).map_or(f64::NAN, |v| v * scale);
         let label = format!("{} <span class=\"unit\">{}</span>", esc(k), esc(unit));
-        out.push_str(&labelled_row(&label, &pair(shown(b), shown(a), |v| fixed(v, 3), Better::Lower)));
+        out.push_str(&labelled_row(&label, &pair(shown(b), shown(a), num, Better::Lower)));
     }
     out.push_str("</tbody>\n</table>\n");
 }
