@@ -69,6 +69,17 @@ fn demo_prints_the_summary_and_writes_files() {
     let factor = report["effects_added"][0]["value"].as_f64().unwrap();
     assert!((factor - 1.10).abs() < 0.02, "{factor}");
     assert!(dir.join("loop/data.csv").exists());
+    // The report says where it came from: its command, rerun as printed, makes the same finding.
+    let command = report["source"]["command"].as_str().unwrap();
+    assert!(report["source"]["data_sha256"].as_str().is_some_and(|h| h.len() == 64), "{}", report["source"]);
+    let args: Vec<&str> = command.split_whitespace().skip(1).collect();
+    assert_eq!(args[..2], ["loop", "rotor"]);
+    let rerun = edgekf(&[&args[..], &["--quiet"]].concat());
+    assert!(
+        text(&rerun.stdout).contains(&format!("+ parameter at disk 12 mass: ×{factor:.4}")),
+        "{}",
+        text(&rerun.stdout)
+    );
 
     // The third part: the fast clearance estimator names joint B and sizes its 0.3 mm within
     // ±3 % from the first contact after release; the window features alone are further off.

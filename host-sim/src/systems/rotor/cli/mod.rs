@@ -459,7 +459,7 @@ pub fn demo(args: &crate::cli::request::DemoArgs) -> anyhow::Result<()> {
     use crate::report::text::{summary_table, write_report};
     if let Some(dir) = &args.out {
         let files = crate::report::text::REPORT_FILES.map(|f| format!("loop/{f}"));
-        let files: Vec<&str> = files.iter().map(String::as_str).chain(["loop/data.csv"]).collect();
+        let files: Vec<&str> = files.iter().map(String::as_str).chain(["loop/data.csv", "loop/config.toml"]).collect();
         crate::io::output::check_folder(dir, &files, &[args.config.as_deref()])?;
     }
     println!("closing the loop — {}", LoopDemo::describe());
@@ -467,12 +467,33 @@ pub fn demo(args: &crate::cli::request::DemoArgs) -> anyhow::Result<()> {
     print!("{}", summary_table(&demo.report));
     if let Some(dir) = &args.out {
         let dir = dir.join("loop");
-        write_report(&demo.report, &dir)?;
-        let d = &demo.data;
-        let names: Vec<&str> = d.names.iter().map(String::as_str).collect();
-        let cols: Vec<&[f64]> = d.columns.iter().map(Vec::as_slice).collect();
-        crate::io::data::write(&dir.join("data.csv"), &names, &d.t, &cols)?;
-        println!("wrote {0}/data.csv and the report in {0}", dir.display());
+        std::fs::create_dir_all(&dir).with_context(|| format!("{}: cannot make the folder", dir.display()))?;
+        let mut report = demo.report;
+        report.source = rerunnable(&demo.data, &dir)?;
+        write_report(&report, &dir)?;
+        println!("wrote the data, the declared model and the report in {}", dir.display());
+        println!("rerun: {}", report.source.command.as_deref().unwrap_or_default());
     }
     Ok(())
+}
+
+/// Writes the demo's recording and declared model into `dir` (`data.csv`, `config.toml`) and
+/// returns the report's `source` naming them, with the `edgekf loop rotor` command that makes
+/// the same report from them.
+fn rerunnable(d: &crate::io::data::DataFile, dir: &std::path::Path) -> anyhow::Result<crate::residual_loop::Source> {
+    let (data, config) = (dir.join("data.csv"), dir.join("config.toml"));
+    let text = d.to_csv_string()?;
+    crate::io::output::write_atomic(&data, &text).with_context(|| format!("cannot write {}", data.display()))?;
+    let declared = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/configs/rotor_paper.toml"));
+    crate::io::output::write_atomic(&config, declared).with_context(|| format!("cannot write {}", config.display()))?;
+    let command =
+        format!("edgekf loop rotor --config {} --data {} --report {}", config.display(), data.display(), dir.display());
+    Ok(crate::residual_loop::Source {
+        data: Some(data.display().to_string()),
+        data_sha256: Some(crate::io::data::hex_sha256(text.as_bytes())),
+        config: Some(config.display().to_string()),
+        command: Some(command),
+        version: env!("CARGO_PKG_VERSION").into(),
+        ..Default::default()
+    })
 }
