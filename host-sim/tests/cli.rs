@@ -208,6 +208,16 @@ fn help_explains_the_commands() {
     assert!(text(&out.stdout).contains("--faults"));
     // A usage error is clap's: exit 2.
     assert_eq!(edgekf(&["oscillator", "estimate"]).status.code(), Some(2));
+    // Each system's loop and baseline says what it does, not the doc of the flags it shares.
+    for args in [["loop", "--help"], ["baseline", "--help"]] {
+        let help = text(&edgekf(&args).stdout);
+        assert!(
+            help.contains("rotor  ") && !help.contains("The flags of every") && !help.contains("own flag"),
+            "{help}"
+        );
+    }
+    let help = text(&edgekf(&["rotor", "export", "--help"]).stdout);
+    assert!(help.contains("the one the accelerometer node runs"), "{help}");
 }
 
 #[test]

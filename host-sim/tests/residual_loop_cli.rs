@@ -90,6 +90,10 @@ fn loop_rotor_estimates_the_speed() {
     let csv = dir.join("data.csv");
     std::fs::write(&csv, model.simulate(&opts).unwrap().to_data_file().to_csv_string().unwrap()).unwrap();
     let report = dir.join("report");
+    // A band that is not a fraction is a usage error (exit 2), before any work.
+    let bad = edgekf_loop(rig, &csv, &report, &["--estimate-speed", "10"]);
+    assert_eq!(bad.status.code(), Some(2), "{}", String::from_utf8_lossy(&bad.stderr));
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("not a fraction") && !report.exists());
     let out = edgekf_loop(rig, &csv, &report, &["--quiet", "--estimate-speed"]);
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));

@@ -22,10 +22,9 @@ pub fn command(registry: &[SystemEntry]) -> clap::Command {
         .arg_required_else_help(true);
     for s in registry {
         if s.close_loop.as_ref().is_some_and(|l| l.baseline.is_some()) {
-            cmd = cmd.subcommand(BaselineArgs::augment_args(clap::Command::new(s.name).about(format!(
-                "{}: what a healthy {} shows that its model lacks, in a baseline file",
-                s.name, s.name
-            ))));
+            // The about last: `augment_args` puts the flag struct's own doc there.
+            let about = format!("{}: what a healthy {} shows that its model lacks, in a baseline file", s.name, s.name);
+            cmd = cmd.subcommand(BaselineArgs::augment_args(clap::Command::new(s.name)).about(about));
         }
     }
     cmd

@@ -51,7 +51,8 @@ pub fn command(registry: &[SystemEntry]) -> clap::Command {
         .arg_required_else_help(true);
     for s in registry {
         if let Some(l) = &s.close_loop {
-            cmd = cmd.subcommand((l.args)(LoopArgs::augment_args(clap::Command::new(s.name).about(l.about))));
+            // The about last: `augment_args` puts the flag structs' own doc there.
+            cmd = cmd.subcommand((l.args)(LoopArgs::augment_args(clap::Command::new(s.name))).about(l.about));
         }
     }
     cmd

@@ -161,8 +161,8 @@ pub enum RotorCommand {
         /// Modes kept in the reduced model.
         #[arg(long, value_name = "N", default_value_t = 8)]
         modes: usize,
-        /// The robust tuning (faster force random walk, more modal process noise): the
-        /// accelerometer node's.
+        /// Export the robust tuning (faster force random walk, more modal process noise), the
+        /// one the accelerometer node runs
         #[arg(long)]
         robust: bool,
     },
@@ -404,8 +404,17 @@ fn simulate(
 pub struct RotorLoopArgs {
     /// Read the running speed from the data, within this fraction of the configured
     /// (nominal) speed (default 0.1 when given without a value): for a motor that slips.
-    #[arg(long, value_name = "FRACTION", num_args = 0..=1, default_missing_value = "0.1")]
+    #[arg(long, value_name = "FRACTION", num_args = 0..=1, default_missing_value = "0.1", value_parser = fraction)]
     pub estimate_speed: Option<f64>,
+}
+
+/// A fraction strictly between 0 and 1 (clap's usage error, exit 2, otherwise).
+fn fraction(text: &str) -> Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(f) if f > 0.0 && f < 1.0 => Ok(f),
+        Ok(f) => Err(format!("{f} is not a fraction between 0 and 1 (0.1 is ±10 %)")),
+        Err(e) => Err(format!("{text:?}: {e}")),
+    }
 }
 
 /// `edgekf loop rotor`: the rotor's configuration and data, the loop closed on them.
