@@ -100,6 +100,9 @@ pub struct DataReport {
     pub nan_cells: Vec<(String, usize)>,
     /// Regularity of the time column.
     pub timing: TimingReport,
+    /// The line number of the last row when the file does not end with a newline: a file
+    /// still being written, or cut in transfer, may have lost part of that row.
+    pub unterminated_last_line: Option<u64>,
 }
 
 impl DataReport {
@@ -118,6 +121,9 @@ impl DataReport {
             ));
         }
         out.extend(self.timing.notices());
+        if let Some(line) = self.unterminated_last_line {
+            out.push(format!("the last line ({line}) has no newline: the file may have been cut there"));
+        }
         out
     }
 }
@@ -205,9 +211,11 @@ pub fn read_from_required<R: Read>(
         columns: vec![Vec::new(); layout.kept.len()],
     };
     let mut nan_counts = vec![0usize; layout.kept.len()];
+    let mut last_line = header_line;
     for record in records {
         let record = record.map_err(csv_err)?;
         let line = record.position().map_or(0, |p| lines.line_of(p.byte()));
+        last_line = line;
         if record.len() != layout.width {
             return Err(DataError::Ragged { path: path.to_owned(), line, expected: layout.width, found: record.len() });
         }
@@ -242,6 +250,7 @@ pub fn read_from_required<R: Read>(
         ignored_columns: layout.ignored,
         nan_cells: data.names.iter().cloned().zip(nan_counts).filter(|(_, n)| *n > 0).collect(),
         timing: data.timing(),
+        unterminated_last_line: (!bytes.ends_with(b"\n")).then_some(last_line),
     };
     Ok((data, report))
 }

@@ -179,3 +179,17 @@ fn a_corrupt_time_far_beyond_the_rest_is_counted_not_overflowed() {
         let _ = report.to_string();
     }
 }
+
+/// A file that stops mid-row (a recording still being written, a cut transfer) is read, with a
+/// notice naming the line that may be cut; a row with fewer fields than the header is an error
+/// naming its line.
+#[test]
+fn a_last_line_without_a_newline_is_a_notice_and_a_short_one_an_error() {
+    let (_, report) = parse("t,ax\n0,1\n0.001,2\n0.002,0.", &["ax"]).unwrap();
+    assert_eq!(report.unterminated_last_line, Some(4));
+    assert!(report.notices().iter().any(|n| n.contains("last line (4) has no newline")), "{:?}", report.notices());
+    let (_, whole) = parse("t,ax\n0,1\n0.001,2\n", &["ax"]).unwrap();
+    assert!(whole.unterminated_last_line.is_none() && whole.notices().is_empty());
+    let e = parse("t,ax\n0,1\n0.001,2\n0.002\n", &["ax"]).unwrap_err();
+    assert_eq!(e.to_string(), "test.csv:4: 1 field(s), but the header has 2");
+}
