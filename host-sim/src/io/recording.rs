@@ -50,7 +50,12 @@ fn on_one_timeline(
     rate: f64,
     timeline: &super::timeline::TimelineOptions,
 ) -> Result<(super::data::DataFile, Vec<super::timeline::Restart>)> {
-    eprintln!("{}: {notes}", path.display());
+    let rows = file.len();
+    let (file, bridged) = super::timeline::bridge(&file, &notes.timing, timeline);
+    // A slow channel's empty cells between its updates are its rate, said once below.
+    let mut shown = notes.clone();
+    shown.nan_cells.retain(|(name, count)| !bridged.only_between_updates(name, *count, rows));
+    eprintln!("{}: {shown}", path.display());
     if (notes.timing.sample_rate - rate).abs() > 0.01 * rate {
         anyhow::bail!(
             "{}: sampled at {:.3} Hz, the configuration says {rate} Hz",
@@ -58,7 +63,6 @@ fn on_one_timeline(
             notes.timing.sample_rate
         );
     }
-    let (file, bridged) = super::timeline::bridge(&file, &notes.timing, timeline);
     for n in bridged.notices() {
         eprintln!("notice: {n}");
     }

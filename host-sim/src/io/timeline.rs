@@ -98,13 +98,30 @@ impl Bridging {
                 r.gap_s, r.t
             ));
         }
+        // Channels of one sensor (the same spacing) described once.
+        let mut described: Vec<usize> = Vec::new();
         for c in &self.slow_channels {
+            if described.contains(&c.every) {
+                continue;
+            }
+            described.push(c.every);
+            let names: Vec<String> =
+                self.slow_channels.iter().filter(|o| o.every == c.every).map(|o| format!("`{}`", o.name)).collect();
+            let (verb, its) = if names.len() == 1 { ("is", "its") } else { ("are", "their") };
             out.push(format!(
-                "timeline: `{}` is updated every {} rows ({:.3} Hz); its empty cells between updates are not dropouts",
-                c.name, c.every, c.rate_hz
+                "timeline: {} {verb} updated every {} rows ({:.3} Hz); {its} empty cells between updates are not dropouts",
+                names.join(", "),
+                c.every,
+                c.rate_hz
             ));
         }
         out
+    }
+
+    /// Whether `count` empty cells of channel `name` in `rows` rows are no more than its
+    /// updates leave between them (a slow channel with no dropout of its own).
+    pub fn only_between_updates(&self, name: &str, count: usize, rows: usize) -> bool {
+        self.slow_channels.iter().any(|c| c.name == name && count <= rows - rows.div_ceil(c.every))
     }
 
     /// For each of the bridged file's `rows`, whether it was inserted for a lost sample (one
