@@ -80,6 +80,80 @@ pub fn clocked_source<B: ByteSource, const M: usize>(reader: ChannelReader<B, M>
     ChannelSource::new(reader).with_clock(1.0 / f64::from(rate_hz), max_gap as u32)
 }
 
+crate::frame! {
+    /// What an image that reads its channels from a file met in that file, emitted before the
+    /// image's own end frame: one set of counts, read the same way for every system.
+    #[derive(Eq)]
+    pub struct FileEnd = "file bad_lines={=u32} untimed_lines={=u32} missing_lines={=u32} time_jumps={=u32}" {
+        /// Lines that did not parse (stepped as missing if their `t` did).
+        pub bad_lines: u32,
+        /// Lines without a usable `t` (not stepped).
+        pub untimed_lines: u32,
+        /// Lines missing from the file (by their `t`), stepped as missing samples.
+        pub missing_lines: u32,
+        /// Lines whose `t` was off the sample grid (not bridged; see [`ChannelSource`]).
+        pub time_jumps: u32,
+    }
+}
+
+impl FileEnd {
+    /// The counts of `source` so far.
+    ///
+    /// ```
+    /// use edgekf_firmware::hil::{clocked_source, FileEnd};
+    /// use edgekf_firmware::line_feed::ChannelReader;
+    /// use edgekf_firmware::node::{Health, Recorded, SampleSource};
+    /// // At 10 Hz: the line at t = 0.1 is missing, "x" does not parse.
+    /// let text = b"t,a\n0,1\n0.2,x\n0.3,2\n";
+    /// let mut src = clocked_source(ChannelReader::new(&text[..], ["a"]).unwrap(), 10);
+    /// while src.advance() {
+    ///     src.read(&mut Health::default(), |_| {});
+    /// }
+    /// let end = FileEnd::of(&src);
+    /// assert_eq!((end.bad_lines, end.missing_lines, end.untimed_lines, end.time_jumps), (1, 1, 0, 0));
+    /// ```
+    pub fn of<B: ByteSource, const M: usize>(source: &ChannelSource<B, M>) -> Self {
+        Self {
+            bad_lines: source.reader().bad_lines(),
+            untimed_lines: source.untimed_lines(),
+            missing_lines: source.missing_lines(),
+            time_jumps: source.time_jumps(),
+        }
+    }
+}
+
+/// The node of an image that reads the channels of a file sampled `rate_hz` a second (the
+/// source of [`clocked_source`]): `reader` is the header's outcome, `estimator` is started only
+/// on a usable header. One start-up for every such image.
+///
+/// ```
+/// use edgekf_firmware::hil::{clocked_node, HilError};
+/// use edgekf_firmware::line_feed::ChannelReader;
+/// use edgekf_firmware::node::{Innovation, NodeEstimator, Poll};
+/// # struct Sum(f32);
+/// # impl NodeEstimator for Sum {
+/// #     type Input = [f32; 1];
+/// #     type Frame = edgekf_firmware::frame::Done;
+/// #     fn step(&mut self, x: Option<[f32; 1]>) -> Innovation { self.0 += x.map_or(0.0, |[a]| a); Innovation::default() }
+/// #     fn report(&mut self, _: &Poll) -> Option<Self::Frame> { None }
+/// # }
+/// let text = b"t,a\n0,1\n0.1,2\n";
+/// let mut node = clocked_node(ChannelReader::new(&text[..], ["a"]), 10, || Ok::<_, ()>(Sum(0.0))).unwrap();
+/// node.run(|_| {});
+/// assert_eq!(node.estimator().0, 3.0);
+/// // A header without the channel is the header's error; the estimator is not started.
+/// let bad = clocked_node(ChannelReader::new(&b"t,b\n"[..], ["a"]), 10, || -> Result<Sum, ()> { unreachable!() });
+/// assert!(matches!(bad, Err(HilError::Header(_))));
+/// ```
+pub fn clocked_node<B: ByteSource, E: NodeEstimator<Input = [f32; M]>, X, const M: usize>(
+    reader: Result<ChannelReader<B, M>, FeedError>,
+    rate_hz: u32,
+    estimator: impl FnOnce() -> Result<E, X>,
+) -> Result<Node<ChannelSource<B, M>, E>, HilError<X>> {
+    let source = clocked_source(reader.map_err(HilError::Header)?, rate_hz);
+    Ok(Node::new(source, estimator().map_err(HilError::Start)?, Default::default()))
+}
+
 /// Polls `node` until its input has run out, every report to `sink`, then the image's
 /// end-of-run frames.
 pub fn run<I: HilImage, B: ByteSource>(node: &mut HilNode<'_, I, B>, sink: &mut impl FrameSink) {

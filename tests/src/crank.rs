@@ -6,6 +6,7 @@ use crate::faulty::FaultPlan;
 use crate::report::frames;
 use anyhow::{anyhow, bail, Result};
 use edgekf::systems::crank::{ClearanceEstimate, FEATURES};
+use edgekf_firmware::hil::FileEnd;
 use edgekf_firmware::systems::crank::{CrankEnd, CrankImage, FeaturesFrame, WindowFrame, WindowReport};
 
 /// What a run of the node's estimator reports: every window's estimate, then the whole
@@ -19,8 +20,10 @@ pub struct CrankRun {
     /// The estimate for the whole recording.
     pub estimate: ClearanceEstimate<f32>,
     /// The end-of-run frame as the image sent it, the firmware's own struct: its counters of
-    /// samples stepped and skipped, and of bad, untimed and missing lines and time jumps.
+    /// windows and of samples stepped and skipped.
     pub end: CrankEnd,
+    /// What the image met in its input file: bad, untimed and missing lines and time jumps.
+    pub file: FileEnd,
 }
 
 /// Runs the firmware's crank image over CSV text exactly as `edgekf-crank-qemu` does.
@@ -35,10 +38,11 @@ pub fn parse(lines: &[String]) -> Result<CrankRun> {
         frames::<WindowFrame>(lines)?.iter().map(|w| w.report().ok_or_else(joint)).collect::<Result<_>>()?;
     let features = frames::<FeaturesFrame>(lines)?.pop().ok_or_else(|| anyhow!("no `feat` line"))?;
     let end = frames::<CrankEnd>(lines)?.pop().ok_or_else(|| anyhow!("no `crank` line: the run did not finish"))?;
+    let file = crate::host::file_end(lines)?;
     if end.windows as usize != windows.len() {
         bail!("{} window lines but the end line says {}", windows.len(), end.windows);
     }
-    Ok(CrankRun { windows, features: features.values(), estimate: end.estimate().ok_or_else(joint)?, end })
+    Ok(CrankRun { windows, features: features.values(), estimate: end.estimate().ok_or_else(joint)?, end, file })
 }
 
 /// The HIL input: `t, crank_alpha` in shortest round-trip form.
@@ -118,7 +122,8 @@ pub fn faulty_csv(text: &str) -> String {
 /// `tolerance` (relative) of the clean run's then. Returns the clearance's relative difference.
 pub fn check_faulty_run(run: &CrankRun, clean: &CrankRun, samples: usize, tolerance: f64) -> Result<f64> {
     let e = &run.end;
-    let counts = (e.samples, e.skipped, e.bad_lines, e.untimed_lines, e.missing_lines, e.time_jumps);
+    let f = &run.file;
+    let counts = (e.samples, e.skipped, f.bad_lines, f.untimed_lines, f.missing_lines, f.time_jumps);
     // Skipped: the missing lines, the empty cell and the NaN.
     let missing = FAULTS.missing_lines();
     let want = (samples as u32, missing + 2, FaultPlan::BAD_LINES, FaultPlan::UNTIMED_LINES, missing, 0);

@@ -6,7 +6,7 @@
 use crate::report::RunReport;
 use anyhow::{anyhow, Result};
 use edgekf_firmware::frame::{Done, Frame, FrameSink};
-use edgekf_firmware::hil::{self, HilImage, HilNode};
+use edgekf_firmware::hil::{self, FileEnd, HilImage, HilNode};
 use edgekf_firmware::systems::oscillator::OscillatorImage;
 
 /// Frames collected as the lines a decoded defmt log would hold.
@@ -41,6 +41,11 @@ fn finish<I: HilImage>(node: &mut HilNode<'_, I, &[u8]>, mut sink: Lines) -> Res
     hil::run::<I, _>(node, &mut sink);
     sink.frame(&Done {});
     Ok(sink.0)
+}
+
+/// The `file` frame of a run's lines: what the image met in its input file.
+pub fn file_end(lines: &[String]) -> Result<FileEnd> {
+    crate::report::frames::<FileEnd>(lines)?.pop().ok_or_else(|| anyhow!("no `file` line: the run did not finish"))
 }
 
 /// Runs the oscillator image (`NodeConfig::default()`) over CSV text exactly as `edgekf-qemu`

@@ -3,10 +3,11 @@
 //! image's QEMU run against the host's, and the accuracy measure shared by the tests.
 
 use crate::faulty::FaultPlan;
+use crate::host::file_end;
 use crate::report::frames;
 use anyhow::{anyhow, bail, Result};
 use edgekf_firmware::frame::Frame;
-use edgekf_firmware::hil::HilImage;
+use edgekf_firmware::hil::{FileEnd, HilImage};
 use edgekf_firmware::line_feed::ChannelReader;
 use edgekf_firmware::node::Node;
 use edgekf_firmware::systems::rotor::{
@@ -75,6 +76,10 @@ pub fn qemu_matches_host<I: HilImage, E: Frame + PartialEq + Debug>(elf: &Path, 
     if fw_end.len() != 1 || fw_end != host_end {
         bail!("end frames: firmware {fw_end:?}, host {host_end:?}");
     }
+    let (fw_file, host_file) = (file_end(&run.lines)?, file_end(&host)?);
+    if fw_file != host_file {
+        bail!("file frames: firmware {fw_file:?}, host {host_file:?}");
+    }
     Ok(run.lines)
 }
 
@@ -134,18 +139,19 @@ pub fn disk_rms_error_numbered(reports: &[(u32, RotorReport)], rec: &Recording, 
 /// (1 µm RMS), and from 0.5 s after the last fault every disk and force estimate within 1 % of
 /// the clean run's RMS. Returns the disk error and that mismatch, for the log.
 pub fn check_faulty_run(lines: &[String], clean: &[(u32, RotorReport)], rec: &Recording) -> Result<(f64, f64)> {
-    let end = end(lines)?;
+    let (end, file) = (end(lines)?, file_end(lines)?);
     let lines_read = rec.t.len() as u32 - FAULTS.deleted.len() as u32 + 1;
-    let expected = RotorEnd {
-        samples: lines_read,
+    if end.samples != lines_read {
+        anyhow::bail!("end frame {end:?}, expected {lines_read} samples");
+    }
+    let expected = FileEnd {
         bad_lines: FaultPlan::BAD_LINES,
         untimed_lines: FaultPlan::UNTIMED_LINES,
         missing_lines: FAULTS.missing_lines(),
         time_jumps: 0,
-        ..end
     };
-    if end != expected {
-        anyhow::bail!("end frame {end:?}, expected {expected:?}");
+    if file != expected {
+        anyhow::bail!("file frame {file:?}, expected {expected:?}");
     }
     let reports = parse_numbered(lines)?;
     let numbers: Vec<u32> = reports.iter().map(|(k, _)| *k).collect();

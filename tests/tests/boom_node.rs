@@ -6,10 +6,11 @@
 //! what its code reports on the host.
 
 use edgekf_firmware::frame::Frame;
+use edgekf_firmware::hil::FileEnd;
 use edgekf_firmware::systems::boom::{self as node, BoomEnd, BoomFrame, BoomImage};
 use edgekf_sim::systems::boom::peaks::peak_errors;
 use edgekf_sim::systems::boom::{simulate, BoomConfig, BoomRecording, Scenario, SimOptions};
-use edgekf_tests::host::lines;
+use edgekf_tests::host::{file_end, lines};
 use edgekf_tests::report::frames;
 
 /// `duration` s of `scenario`, seed 2, as the CSV the image reads.
@@ -19,11 +20,12 @@ fn recording(scenario: Scenario, duration: f64) -> (BoomRecording, String) {
     (rec, text)
 }
 
-fn run_host(text: &str) -> (Vec<BoomFrame>, BoomEnd) {
+/// The host run's per-sample frames, its end frame and its `file` frame.
+fn run_host(text: &str) -> (Vec<BoomFrame>, BoomEnd, FileEnd) {
     let out = lines::<BoomImage>(text.as_bytes()).unwrap();
     let per_sample = frames::<BoomFrame>(&out).unwrap();
     let end = frames::<BoomEnd>(&out).unwrap().pop().expect("boomend frame");
-    (per_sample, end)
+    (per_sample, end, file_end(&out).unwrap())
 }
 
 #[test]
@@ -41,9 +43,9 @@ fn the_nodes_boom_and_sensors_are_the_configurations() {
 fn the_node_estimates_the_vibration_on_both_runs() {
     for (scenario, duration) in [(Scenario::Luffing, 60.0), (Scenario::Extension, 140.0)] {
         let (rec, text) = recording(scenario, duration);
-        let (frames, end) = run_host(&text);
+        let (frames, end, file) = run_host(&text);
         assert_eq!(frames.len(), rec.t.len());
-        assert_eq!((end.samples as usize, end.bad_lines, end.missing_lines), (rec.t.len(), 0, 0));
+        assert_eq!((end.samples as usize, file.bad_lines, file.missing_lines), (rec.t.len(), 0, 0));
         assert_eq!((end.covariance_resets, end.refused_updates, end.reduce_failures), (0, 0, 0));
         let col = |n: &str| rec.column(n).unwrap();
         let (truth, rate) = (col("truth_tip_vibration"), col("truth_root_rate"));
@@ -77,12 +79,12 @@ fn garbage_and_lost_rows_are_counted_and_bridged() {
     rows[2002] = set(&rows[2002], 2, "NaN");
     rows.remove(1002);
     let faulty = rows.join("\n") + "\n";
-    let (frames, end) = run_host(&faulty);
+    let (frames, end, file) = run_host(&faulty);
     assert_eq!(end.samples as usize, rec.t.len(), "every sample stepped, the lost row bridged");
-    assert_eq!((end.missing_lines, end.time_jumps, end.bad_lines), (1, 0, 1));
+    assert_eq!((file.missing_lines, file.time_jumps, file.bad_lines), (1, 0, 1));
     assert_eq!((end.covariance_resets, end.refused_updates), (0, 0));
     // Frames by sample number (a bridged sample and the row after it are reported as one).
-    let (clean, _) = run_host(&text);
+    let (clean, ..) = run_host(&text);
     let worst =
         frames.iter().map(|f| (f.vibration - clean[f.sample as usize - 1].vibration).abs()).fold(0.0f32, f32::max);
     eprintln!("a lost row and two bad readings move the vibration by at most {worst:.2e} m");
@@ -114,7 +116,7 @@ mod hil {
             panic!("{msg}");
         }
         let chip = frames::<BoomFrame>(&run.lines).unwrap();
-        let (host, end) = run_host(&text);
+        let (host, end, file) = run_host(&text);
         let bits = |f: &BoomFrame| {
             [f.tip_angle, f.vibration, f.deflection, f.paper_vibration, f.innovation_gyro, f.innovation_incl, f.nis]
                 .map(f32::to_bits)
@@ -125,6 +127,7 @@ mod hil {
         }
         let chip_end = frames::<BoomEnd>(&run.lines).unwrap().pop().expect("boomend");
         assert_eq!(chip_end, end);
+        assert_eq!(file_end(&run.lines).unwrap(), file);
         let stack = frames::<edgekf_firmware::frame::StackFrame>(&run.lines).unwrap().pop().expect("stack line");
         eprintln!("HIL boom: {} frames bit-identical to the host run; {stack:?}", chip.len());
     }
@@ -137,7 +140,8 @@ mod hil {
 fn node_soak_on_a_long_run_of_luffing_stops() {
     let duration = if std::env::var_os("EDGEKF_LONG").is_some() { 10_000.0 } else { 1_000.0 };
     let (rec, text) = recording(Scenario::Luffing, duration);
-    let (frames, end) = run_host(&text);
+    let (frames, end, file) = run_host(&text);
+    assert_eq!(file, FileEnd::default(), "a simulated file has no bad, missing or untimed lines");
     assert_eq!(end.samples as usize, rec.t.len());
     assert_eq!((end.covariance_resets, end.refused_updates, end.reduce_failures), (0, 0, 0));
     let col = |n: &str| rec.column(n).unwrap();

@@ -213,9 +213,9 @@ mod hil {
              without t), {} windows, joint {}, clearance {rel:+.2e} off the clean run's; bit-identical to the host",
             chip.end.samples,
             chip.end.skipped,
-            chip.end.missing_lines,
-            chip.end.bad_lines,
-            chip.end.untimed_lines,
+            chip.file.missing_lines,
+            chip.file.bad_lines,
+            chip.file.untimed_lines,
             chip.windows.len(),
             Joint::ALL[chip.estimate.joint]
         );

@@ -6,9 +6,10 @@
 //! QEMU reports bit for bit what its code reports on the host.
 
 use edgekf_firmware::frame::Frame;
+use edgekf_firmware::hil::FileEnd;
 use edgekf_firmware::systems::uuv::{UuvEnd, UuvFrame, UuvImage};
 use edgekf_sim::systems::uuv::{simulate, Scenario, SimOptions, UuvConfig, UuvRecording};
-use edgekf_tests::host::lines;
+use edgekf_tests::host::{file_end, lines};
 use edgekf_tests::report::frames;
 
 /// The paper scenario from 200 s to 232 s (the fault at 220 s, the first recovery at 228 s
@@ -26,11 +27,12 @@ fn paper_tail(seed: u64) -> (UuvRecording, String) {
     (tail, text)
 }
 
-fn run_host(text: &str) -> (Vec<UuvFrame>, UuvEnd) {
+/// The host run's per-sample frames, its end frame and its `file` frame.
+fn run_host(text: &str) -> (Vec<UuvFrame>, UuvEnd, FileEnd) {
     let out = lines::<UuvImage>(text.as_bytes()).unwrap();
     let per_sample = frames::<UuvFrame>(&out).unwrap();
     let end = frames::<UuvEnd>(&out).unwrap().pop().expect("uuvend frame");
-    (per_sample, end)
+    (per_sample, end, file_end(&out).unwrap())
 }
 
 /// Seconds from `at` to the first frame at or after it whose main-thruster status is
@@ -46,9 +48,9 @@ fn latency(rec: &UuvRecording, frames: &[UuvFrame], at: f64, declared: bool) -> 
 #[test]
 fn node_declares_the_fault_and_the_recovery_within_a_second() {
     let (rec, text) = paper_tail(3);
-    let (frames, end) = run_host(&text);
+    let (frames, end, file) = run_host(&text);
     assert_eq!(frames.len(), rec.t.len());
-    assert_eq!((end.samples as usize, end.bad_lines, end.missing_lines), (rec.t.len(), 0, 0));
+    assert_eq!((end.samples as usize, file.bad_lines, file.missing_lines), (rec.t.len(), 0, 0));
     assert_eq!((end.covariance_resets, end.refused_updates), (0, 0));
     let [fault, recovery, relapse] =
         [(220.0, true), (228.0, false), (230.0, true)].map(|(t, d)| latency(&rec, &frames, t, d));
@@ -77,11 +79,11 @@ fn garbage_and_lost_rows_are_counted_and_bridged() {
     rows[302] = set(&rows[302], 7, "NaN");
     rows.remove(102);
     let faulty = rows.join("\n") + "\n";
-    let (frames, end) = run_host(&faulty);
+    let (frames, end, file) = run_host(&faulty);
     assert_eq!(end.samples as usize, rec.t.len(), "every sample stepped, the lost row bridged");
-    assert_eq!((end.missing_lines, end.time_jumps), (1, 0));
-    assert_eq!(end.bad_lines, 1, "the garbage row; a NaN cell is a missing value");
-    let (clean, _) = run_host(&text);
+    assert_eq!((file.missing_lines, file.time_jumps), (1, 0));
+    assert_eq!(file.bad_lines, 1, "the garbage row; a NaN cell is a missing value");
+    let (clean, ..) = run_host(&text);
     let last = frames.len() - 1;
     assert!((frames[last].k_t - clean[last].k_t).abs() < 0.05);
     assert_eq!(frames[last].status_t, clean[last].status_t);
@@ -112,7 +114,7 @@ mod hil {
             panic!("{msg}");
         }
         let chip = frames::<UuvFrame>(&run.lines).unwrap();
-        let (host, end) = run_host(&text);
+        let (host, end, file) = run_host(&text);
         let bits =
             |f: &UuvFrame| [f.k_t, f.k_t_std, f.k_v, f.k_v_std, f.z, f.psi, f.u, f.phi, f.imu_nis].map(f32::to_bits);
         assert_eq!(chip.len(), host.len());
@@ -126,6 +128,7 @@ mod hil {
         }
         let chip_end = frames::<UuvEnd>(&run.lines).unwrap().pop().expect("uuvend");
         assert_eq!(chip_end, end);
+        assert_eq!(file_end(&run.lines).unwrap(), file);
         let stack = frames::<edgekf_firmware::frame::StackFrame>(&run.lines).unwrap().pop().expect("stack line");
         eprintln!("HIL uuv: {} frames bit-identical to the host run; {stack:?}", chip.len());
     }
@@ -141,7 +144,8 @@ fn node_soak_on_a_long_healthy_flight() {
     let opts = SimOptions { scenario: Scenario::Healthy, duration: samples as f64 / 50.0, seed: 77 };
     let rec = simulate(&config, &opts, &mut |_| {}).unwrap();
     let text = rec.to_csv(std::path::Path::new("soak.csv")).unwrap();
-    let (frames, end) = run_host(&text);
+    let (frames, end, file) = run_host(&text);
+    assert_eq!(file, FileEnd::default(), "a simulated file has no bad, missing or untimed lines");
     assert_eq!(end.samples as u64, samples);
     assert_eq!((end.covariance_resets, end.refused_updates), (0, 0));
     assert!(frames.iter().all(|f| f.status_t == 0 && f.status_v == 0), "declared on healthy data");

@@ -12,9 +12,9 @@
 //! about 12 KB of stack in `f64`.
 
 use crate::frame::FrameSink;
-use crate::hil::{clocked_source, HilError, HilImage, HilNode};
+use crate::hil::{clocked_node, FileEnd, HilError, HilImage, HilNode};
 use crate::line_feed::{ByteSource, ChannelReader};
-use crate::node::{Innovation, Node, NodeEstimator, Poll};
+use crate::node::{Innovation, NodeEstimator, Poll};
 use crate::source::ChannelSource;
 use edgekf::systems::boom::{
     Ar2, BoomConstants, BoomSection, ModelError, ModelEstimate, ModelEstimator, ModelSettings, PaperEstimator,
@@ -169,18 +169,10 @@ crate::frame! {
 }
 
 crate::frame! {
-    /// The end of a run: counts.
-    pub struct BoomEnd = "boomend {=u32} {=u32} {=u32} {=u32} {=u32} {=u32} {=u32} {=u32} {=u32}" {
+    /// The end of a run: counts (the file's own in [`FileEnd`], just before).
+    pub struct BoomEnd = "boomend {=u32} {=u32} {=u32} {=u32} {=u32}" {
         /// Samples stepped (rows, and missing rows bridged).
         pub samples: u32,
-        /// Rows that did not parse (stepped as missing).
-        pub bad_lines: u32,
-        /// Rows missing from the file (by their `t`), stepped as missing.
-        pub missing_lines: u32,
-        /// Rows without a usable `t` (not stepped).
-        pub untimed_lines: u32,
-        /// Rows off the sample grid (not bridged).
-        pub time_jumps: u32,
         /// Reductions of the boom that failed (the last good one kept).
         pub reduce_failures: u32,
         /// The model's covariance resets.
@@ -210,7 +202,7 @@ impl NodeEstimator for BoomNode<'_> {
 /// The QEMU image `edgekf-boom-qemu`: the boom's channels from the HIL file (other columns
 /// ignored; an empty or NaN cell is a missing reading of that channel alone, lines that do not
 /// parse are stepped as missing samples and counted, lines missing by their `t` are bridged
-/// for up to [`crate::source::MAX_GAP_S`]); a `boom` frame per sample, then `boomend`.
+/// for up to [`crate::source::MAX_GAP_S`]); a `boom` frame per sample, then `file` ([`FileEnd`]) and `boomend`.
 pub struct BoomImage;
 
 impl HilImage for BoomImage {
@@ -228,21 +220,19 @@ impl HilImage for BoomImage {
 
     #[inline(never)] // start-up temporaries stay out of the caller's frame
     fn start<B: ByteSource>(input: B, storage: &mut Storage) -> Result<HilNode<'_, Self, B>, HilError<ModelError>> {
-        let reader = ChannelReader::new(input, CHANNELS).map_err(HilError::Header)?.with_empty_cells();
-        let (model, paper) = storage.insert(estimators().map_err(HilError::Start)?);
-        let source = clocked_source(reader, SAMPLE_RATE_HZ);
-        Ok(Node::new(source, BoomNode::new(model, paper), Default::default()))
+        let reader = ChannelReader::new(input, CHANNELS).map(ChannelReader::with_empty_cells);
+        clocked_node(reader, SAMPLE_RATE_HZ, move || {
+            let (model, paper) = storage.insert(estimators()?);
+            Ok(BoomNode::new(model, paper))
+        })
     }
 
     fn finish<B: ByteSource>(node: &HilNode<'_, Self, B>, sink: &mut impl FrameSink) {
+        sink.frame(&FileEnd::of(node.source()));
         let n = node.estimator();
         let h = n.model().health();
         sink.frame(&BoomEnd {
             samples: n.samples(),
-            bad_lines: node.source().reader().bad_lines(),
-            missing_lines: node.source().missing_lines(),
-            untimed_lines: node.source().untimed_lines(),
-            time_jumps: node.source().time_jumps(),
             reduce_failures: n.model().reduce_failures(),
             covariance_resets: h.covariance_resets,
             refused_updates: h.refused_updates,

@@ -9,9 +9,9 @@
 //! 10 KB, for the exact median), owned by the caller; the rest is about 200 bytes.
 
 use crate::frame::FrameSink;
-use crate::hil::{clocked_source, HilError, HilImage, HilNode};
+use crate::hil::{clocked_node, FileEnd, HilError, HilImage, HilNode};
 use crate::line_feed::{ByteSource, ChannelReader};
-use crate::node::{Innovation, Node, NodeEstimator, Poll};
+use crate::node::{Innovation, NodeEstimator, Poll};
 use crate::source::ChannelSource;
 use edgekf::systems::crank::{ClearanceEstimate, ClearanceEstimator, ClearanceModel, FeatureError, FEATURES};
 
@@ -303,23 +303,14 @@ impl From<[f32; FEATURES]> for FeaturesFrame {
 }
 
 clearance_frame! {
-    /// The end of a crank run: the whole recording's estimate and the counts.
-    CrankEnd = "crank {=u8} {=f32} {=f32} {=f32} {=f32} {=f32} {=f32} {=f32} {=u8} {=u32} {=u32} {=u32} {=u32} {=u32} {=u32} {=u32}" {} {
+    /// The end of a crank run: the whole recording's estimate and the counts (the file's own in [`FileEnd`]).
+    CrankEnd = "crank {=u8} {=f32} {=f32} {=f32} {=f32} {=f32} {=f32} {=f32} {=u8} {=u32} {=u32} {=u32}" {} {
         /// Windows completed.
         pub windows: u32,
         /// Samples stepped (lines, and missing lines bridged).
         pub samples: u32,
         /// Samples skipped (missing or non-finite).
         pub skipped: u32,
-        /// Lines that did not parse.
-        pub bad_lines: u32,
-        /// Lines without a usable `t` (not stepped).
-        pub untimed_lines: u32,
-        /// Lines missing from the file (by their `t`), stepped as missing samples.
-        pub missing_lines: u32,
-        /// Lines whose `t` was off the sample grid (not bridged; see
-        /// [`crate::source::ChannelSource`]).
-        pub time_jumps: u32,
     }
 }
 
@@ -341,7 +332,7 @@ impl NodeEstimator for CrankNode<'_> {
 
 /// The QEMU image `edgekf-crank-qemu`: the crank acceleration from the HIL file (other columns
 /// ignored; lines that do not parse or hold a non-finite value are skipped and counted); a
-/// `win` frame after every window, then `feat` and `crank`.
+/// `win` frame after every window, then `file` ([`FileEnd`]), `feat` and `crank`.
 pub struct CrankImage;
 
 impl HilImage for CrankImage {
@@ -359,25 +350,20 @@ impl HilImage for CrankImage {
 
     #[inline(never)] // start-up temporaries stay out of the caller's frame
     fn start<B: ByteSource>(input: B, storage: &mut Storage) -> Result<HilNode<'_, Self, B>, HilError<FeatureError>> {
-        let reader = ChannelReader::new(input, CHANNELS).map_err(HilError::Header)?;
-        let estimator = CrankNode::new(storage).map_err(HilError::Start)?;
         // Lines missing from the file are stepped as missing samples: the window statistics
         // skip them, and the release detector counts their time, so a line lost before the
         // first contact does not move it earlier.
-        Ok(Node::new(clocked_source(reader, SAMPLE_RATE_HZ), estimator, Default::default()))
+        clocked_node(ChannelReader::new(input, CHANNELS), SAMPLE_RATE_HZ, || CrankNode::new(storage))
     }
 
     fn finish<B: ByteSource>(node: &HilNode<'_, Self, B>, sink: &mut impl FrameSink) {
+        sink.frame(&FileEnd::of(node.source()));
         let est = node.estimator();
         sink.frame(&FeaturesFrame::from(est.features()));
         let end = CrankEnd {
             windows: est.windows(),
             samples: est.samples(),
             skipped: est.skipped(),
-            bad_lines: node.source().reader().bad_lines(),
-            untimed_lines: node.source().untimed_lines(),
-            missing_lines: node.source().missing_lines(),
-            time_jumps: node.source().time_jumps(),
             ..CrankEnd::default()
         };
         sink.frame(&end.with_estimate(&est.estimate()));

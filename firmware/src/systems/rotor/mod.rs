@@ -9,9 +9,9 @@
 //! [`RotorImage`]).
 
 use crate::frame::FrameSink;
-use crate::hil::{HilError, HilImage, HilNode};
+use crate::hil::{clocked_node, FileEnd, HilError, HilImage, HilNode};
 use crate::line_feed::{ByteSource, ChannelReader};
-use crate::node::{Innovation, Node, NodeEstimator, Poll};
+use crate::node::{Innovation, NodeEstimator, Poll};
 use crate::source::ChannelSource;
 use edgekf::filter::{FilterHealth, LowRankDesign, LowRankKalmanFilter};
 use nalgebra::{ArrayStorage, SMatrix, SVector};
@@ -300,20 +300,11 @@ impl RotorFrame {
 }
 
 crate::frame! {
-    /// The end of a rotor run.
+    /// The end of a rotor run (the file's counts in [`FileEnd`], just before).
     #[derive(Eq)]
-    pub struct RotorEnd = "rotor {=u32} {=u32} {=u32} {=u32} {=u32} {=u32} {=u32}" {
+    pub struct RotorEnd = "rotor {=u32} {=u32} {=u32}" {
         /// Input lines read (one poll each).
         pub samples: u32,
-        /// Of those, lines that did not parse (stepped as missing if their `t` did).
-        pub bad_lines: u32,
-        /// Lines without a usable `t` (not stepped).
-        pub untimed_lines: u32,
-        /// Lines missing from the file (by their `t`), bridged by prediction.
-        pub missing_lines: u32,
-        /// Lines whose `t` was off the sample grid (not bridged; see
-        /// [`ChannelSource`]).
-        pub time_jumps: u32,
         /// Filter covariance resets (see [`RotorEstimator::health`]).
         pub covariance_resets: u32,
         /// Refused updates.
@@ -367,7 +358,7 @@ impl<const N: usize, const R: usize> NodeEstimator for RotorNode<N, R> {
 }
 
 /// The QEMU image `edgekf-rotor-qemu`: the four probes' readings from the HIL file (other
-/// columns ignored); a `rot` frame per sample, then `rotor`.
+/// columns ignored); a `rot` frame per sample, then `file` ([`FileEnd`]) and `rotor`.
 pub struct RotorImage;
 
 impl HilImage for RotorImage {
@@ -383,18 +374,15 @@ impl HilImage for RotorImage {
 
     #[inline(never)] // start-up temporaries stay out of the caller's frame
     fn start<B: ByteSource>(input: B, _: &mut ()) -> Result<HilNode<'_, Self, B>, HilError<Self::StartError>> {
-        let reader = ChannelReader::new(input, CHANNELS).map_err(HilError::Header)?;
-        Ok(Node::new(channel_source(reader), RotorNode::new(RotorEstimator::new()), Default::default()))
+        let estimator = || Ok(RotorNode::new(RotorEstimator::new()));
+        clocked_node(ChannelReader::new(input, CHANNELS), SAMPLE_RATE_HZ, estimator)
     }
 
     fn finish<B: ByteSource>(node: &HilNode<'_, Self, B>, sink: &mut impl FrameSink) {
+        sink.frame(&FileEnd::of(node.source()));
         let h = node.estimator().estimator().health();
         sink.frame(&RotorEnd {
             samples: node.health().blocks,
-            bad_lines: node.source().reader().bad_lines(),
-            untimed_lines: node.source().untimed_lines(),
-            missing_lines: node.source().missing_lines(),
-            time_jumps: node.source().time_jumps(),
             covariance_resets: h.covariance_resets,
             refused_updates: h.refused_updates,
         });

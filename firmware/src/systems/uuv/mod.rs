@@ -9,9 +9,9 @@
 //! in the caller's [`Storage`], not on the stack of every call.
 
 use crate::frame::FrameSink;
-use crate::hil::{clocked_source, HilError, HilImage, HilNode};
+use crate::hil::{clocked_node, FileEnd, HilError, HilImage, HilNode};
 use crate::line_feed::{ByteSource, ChannelReader};
-use crate::node::{Innovation, Node, NodeEstimator, Poll};
+use crate::node::{Innovation, NodeEstimator, Poll};
 use crate::source::ChannelSource;
 use edgekf::systems::uuv::{
     Command, Estimate, EstimatorError, EstimatorSettings, Layout, Sample, Status, UuvEstimator, Vehicle,
@@ -179,18 +179,10 @@ impl UuvFrame {
 }
 
 crate::frame! {
-    /// The end of a run: counts.
-    pub struct UuvEnd = "uuvend {=u32} {=u32} {=u32} {=u32} {=u32} {=u32} {=u32} {=u32} {=u32}" {
+    /// The end of a run: counts (the file's own in [`FileEnd`], just before).
+    pub struct UuvEnd = "uuvend {=u32} {=u32} {=u32} {=u32} {=u32}" {
         /// Samples stepped (rows, and missing rows bridged).
         pub samples: u32,
-        /// Rows that did not parse (stepped as missing).
-        pub bad_lines: u32,
-        /// Rows missing from the file (by their `t`), stepped as missing.
-        pub missing_lines: u32,
-        /// Rows without a usable `t` (not stepped).
-        pub untimed_lines: u32,
-        /// Rows off the sample grid (not bridged).
-        pub time_jumps: u32,
         /// CUSUM alarms of the main thruster.
         pub alarms_t: u32,
         /// Of the vertical thruster.
@@ -220,7 +212,7 @@ impl NodeEstimator for UuvNode<'_> {
 /// The QEMU image `edgekf-uuv-qemu`: the vehicle's channels from the HIL file (other columns
 /// ignored; empty cells are missing values, lines that do not parse are stepped as missing
 /// samples and counted, lines missing by their `t` are bridged for up to
-/// [`crate::source::MAX_GAP_S`]); a `uuv` frame per sample, then `uuvend`.
+/// [`crate::source::MAX_GAP_S`]); a `uuv` frame per sample, then `file` ([`FileEnd`]) and `uuvend`.
 pub struct UuvImage;
 
 impl HilImage for UuvImage {
@@ -238,22 +230,17 @@ impl HilImage for UuvImage {
 
     #[inline(never)] // start-up temporaries stay out of the caller's frame
     fn start<B: ByteSource>(input: B, storage: &mut Storage) -> Result<HilNode<'_, Self, B>, HilError<EstimatorError>> {
-        let reader = ChannelReader::new(input, CHANNELS).map_err(HilError::Header)?.with_empty_cells();
-        let est = storage.insert(estimator().map_err(HilError::Start)?);
-        let source = clocked_source(reader, SAMPLE_RATE_HZ);
-        Ok(Node::new(source, UuvNode::new(est), Default::default()))
+        let reader = ChannelReader::new(input, CHANNELS).map(ChannelReader::with_empty_cells);
+        clocked_node(reader, SAMPLE_RATE_HZ, move || Ok(UuvNode::new(storage.insert(estimator()?))))
     }
 
     fn finish<B: ByteSource>(node: &HilNode<'_, Self, B>, sink: &mut impl FrameSink) {
+        sink.frame(&FileEnd::of(node.source()));
         let n = node.estimator();
         let est = n.estimator();
         let h = est.health();
         sink.frame(&UuvEnd {
             samples: n.samples(),
-            bad_lines: node.source().reader().bad_lines(),
-            missing_lines: node.source().missing_lines(),
-            untimed_lines: node.source().untimed_lines(),
-            time_jumps: node.source().time_jumps(),
             alarms_t: est.alarms()[0],
             alarms_v: est.alarms()[1],
             covariance_resets: h.covariance_resets,
