@@ -6,7 +6,7 @@ use super::filter::Run;
 use super::onset;
 use super::optimize::maximise;
 use super::options::LoopOptions;
-use super::report::{Refused, Trial};
+use super::report::{NotIdentifiable, Refused, Trial};
 use super::signature::Signature;
 use super::system::LoopSystem;
 use super::vocabulary::{Applied, EffectLabel};
@@ -31,6 +31,31 @@ impl std::fmt::Display for OutOfBounds {
 }
 
 impl std::error::Error for OutOfBounds {}
+
+/// A fit that ran to the edge of its range while gaining less there than an effect must gain
+/// to be added: the likelihood is flat over the whole range, so the edge says nothing about a
+/// bound, only that the data cannot see the effect.
+#[derive(Debug)]
+struct Flat {
+    /// The log-likelihood gained at the edge.
+    gain: f64,
+    /// What an effect must gain to be added.
+    penalty: f64,
+    /// The range, in words.
+    range: String,
+}
+
+impl std::fmt::Display for Flat {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "its best fit runs to the edge of the range it may take ({}) and gains only {:.2} there, less than the {:.1} an effect must gain to be added: these sensors cannot see it",
+            self.range, self.gain, self.penalty
+        )
+    }
+}
+
+impl std::error::Error for Flat {}
 
 /// A candidate fitted to the data.
 pub(super) struct Fitted<E, M> {
@@ -65,15 +90,11 @@ pub(super) struct Engine<'a, S: LoopSystem> {
 }
 
 impl<S: LoopSystem> Engine<'_, S> {
-    /// `½ p ln n` for the effect's parameters, and one more for a fitted onset, plus the
-    /// baseline's [`gain_floor`](LoopOptions::gain_floor) over the run.
+    /// What `e` must gain to be added: `½ p ln n` for its parameters (and one more for a
+    /// fitted onset), plus the baseline's [`gain_floor`](LoopOptions::gain_floor) over the run.
     pub(super) fn penalty(&self, e: &S::Effect, onset: bool) -> f64 {
-        self.bic(e, onset) + self.options.gain_floor * self.nis_scale * self.n_meas
-    }
-
-    /// `½ p ln n` alone.
-    pub(super) fn bic(&self, e: &S::Effect, onset: bool) -> f64 {
-        0.5 * (self.sys.fitting(e).parameters + usize::from(onset)) as f64 * self.n_meas.ln()
+        let parameters = self.sys.fitting(e).parameters + usize::from(onset);
+        0.5 * parameters as f64 * self.n_meas.ln() + self.options.gain_floor * self.nis_scale * self.n_meas
     }
 
     /// Fits `cand` on top of `effects`: present from the start and, if it may start mid-run,
@@ -114,29 +135,32 @@ impl<S: LoopSystem> Engine<'_, S> {
         let fitting = self.sys.fitting(&cand);
         let theta = match fitting.scalar {
             Some((range, grid)) => {
-                let x = maximise(
+                let best = maximise(
                     |th| self.sys.run(&with(th)).ok().map(|(_, r)| r.log_likelihood()),
                     range.low,
                     range.high,
                     grid,
                     range.tolerance,
                 )
-                .ok_or_else(|| anyhow!("no value of the scalar gives a usable model"))?
-                .x;
+                .ok_or_else(|| anyhow!("no value of the scalar gives a usable model"))?;
+                let x = best.x;
                 // A likelihood still rising at the edge of the range has no maximum there: the
                 // effect is standing in for something else, and its value would be the range's.
-                // (An edge where the effect is neutral is a legitimate answer.)
+                // Unless it gains too little there to be added: then the likelihood is flat
+                // and the data cannot see the effect at all. (An edge where the effect is
+                // neutral is a legitimate answer.)
                 let edge = (10.0 * range.tolerance).max(0.01 * (range.high - range.low));
                 let at = |bound: f64| (x - bound).abs() <= edge && bound != range.neutral;
                 if at(range.low) || at(range.high) {
                     let shown = |v: f64| if range.log { v.exp() } else { v };
+                    let range_text = format!("{:.4} … {:.4}", shown(range.low), shown(range.high));
+                    let (gain, penalty) = (best.value - base.log_likelihood(), self.penalty(&cand, onset_s.is_some()));
+                    if gain <= penalty {
+                        return Err(Flat { gain, penalty, range: range_text }.into());
+                    }
                     return Err(OutOfBounds {
                         value: shown(x),
-                        why: format!(
-                            "the likelihood still rises at the edge of the range it may take ({:.4} … {:.4})",
-                            shown(range.low),
-                            shown(range.high)
-                        ),
+                        why: format!("the likelihood still rises at the edge of the range it may take ({range_text})"),
                     }
                     .into());
                 }
@@ -246,14 +270,15 @@ impl<S: LoopSystem> Engine<'_, S> {
         }
     }
 
-    /// Fits every candidate of `cands` on top of `effects`.
+    /// Fits every candidate of `cands` on top of `effects`; a fit refused goes to `refused`,
+    /// one the data cannot see to `hidden`.
     pub(super) fn fit_all(
         &self,
         at: Round,
         effects: &[Applied<S::Effect>],
         cands: Vec<S::Effect>,
         base: &Run,
-        refused: &mut Vec<Refused>,
+        (refused, hidden): (&mut Vec<Refused>, &mut Vec<NotIdentifiable>),
     ) -> Vec<Fitted<S::Effect, S::Model>> {
         let total = cands.len();
         let fits: Vec<_> = cands
@@ -276,6 +301,11 @@ impl<S: LoopSystem> Engine<'_, S> {
                 Ok(f) => results.push(f),
                 Err(e) => {
                     self.progress(|| format!("  {} at {}: {e:#}", label.kind, label.location));
+                    if let Some(flat) = e.downcast_ref::<Flat>() {
+                        let statistic = "max_delta_log_likelihood";
+                        hidden.push(NotIdentifiable::of(&label, statistic, flat.gain, flat.to_string()));
+                        continue;
+                    }
                     refused.push(Refused::of(
                         &label,
                         e.downcast_ref::<OutOfBounds>().map(|o| o.value),

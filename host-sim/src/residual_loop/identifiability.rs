@@ -40,11 +40,11 @@ impl<S: LoopSystem> Engine<'_, S> {
             .collect()
     }
 
-    /// Effects of [`LoopSystem::screened`] the data cannot see from the final model.
     /// The declared effects ([`LoopSystem::declared`]) with a scalar that the data cannot see
     /// from the final model: moving the scalar to its [`probes`] changes the log-likelihood by
-    /// less than the effect's BIC cost. A trial whose filter fails (diverges, cannot be built)
-    /// counts as seen: the data reject it.
+    /// less than an effect must gain to be added (its BIC cost and the model's floor, the
+    /// acceptance rule's own threshold: an effect below it could never be found). A trial whose
+    /// filter fails (diverges, cannot be built) counts as seen: the data reject it.
     pub(super) fn screen(&self, effects: &[Applied<S::Effect>], run: &Run) -> Vec<NotIdentifiable> {
         let base = run.log_likelihood();
         let screened: Vec<(S::Effect, Probes)> = self
@@ -57,7 +57,7 @@ impl<S: LoopSystem> Engine<'_, S> {
         let worsts: Vec<f64> = screened
             .par_iter()
             .map(|(e, probes)| {
-                let penalty = self.bic(e, false);
+                let penalty = self.penalty(e, false);
                 let mut worst: f64 = 0.0;
                 for &theta in &probes.thetas {
                     let mut trial = effects.to_vec();
@@ -73,7 +73,7 @@ impl<S: LoopSystem> Engine<'_, S> {
             .collect();
         let mut out = Vec::new();
         for ((e, probes), worst) in screened.iter().zip(worsts) {
-            let penalty = self.bic(e, false);
+            let penalty = self.penalty(e, false);
             let label = self.sys.label(e);
             let what = label.detail.parameter.clone().unwrap_or_else(|| label.kind.to_string());
             self.progress(|| format!("screen: {what} of {}: |Δ log-likelihood| ≤ {worst:.2}", label.location));
@@ -85,8 +85,9 @@ impl<S: LoopSystem> Engine<'_, S> {
                     statistic: "max_delta_log_likelihood".into(),
                     value: worst,
                     reason: format!(
-                        "{} changes the log-likelihood by at most {worst:.2}, less than its BIC cost {penalty:.1}: these sensors cannot see it",
-                        probes.what
+                        "{} changes the log-likelihood by at most {worst:.2}, less than the {penalty:.1} an effect must gain to be added: these sensors cannot see it{}",
+                        probes.what,
+                        probes.limit(worst, penalty, &label.unit)
                     ),
                 });
             }
@@ -99,6 +100,27 @@ impl<S: LoopSystem> Engine<'_, S> {
 struct Probes {
     thetas: Vec<f64>,
     what: String,
+    /// The scalar's neutral value and whether it is a log-factor.
+    neutral: f64,
+    log: bool,
+}
+
+impl Probes {
+    /// The smallest change the data could tell, in words, from the log-likelihood's change
+    /// `worst` at the farthest probe and the `penalty` an effect must gain: the likelihood is
+    /// quadratic near the neutral value, so the change grows with the square of the distance.
+    fn limit(&self, worst: f64, penalty: f64, unit: &str) -> String {
+        let span = self.thetas.iter().map(|t| (t - self.neutral).abs()).fold(0.0, f64::max);
+        if worst <= 0.0 || span <= 0.0 || !worst.is_finite() {
+            return String::new();
+        }
+        let d = span * (penalty / worst).sqrt();
+        if self.log {
+            format!(" (the smallest it could tell is a factor of about ×{:.3} or ×{:.3})", d.exp(), (-d).exp())
+        } else {
+            format!(" (the smallest it could tell is about ±{d:.3e} {unit})")
+        }
+    }
 }
 
 /// A component parameter (a factor `θ = ln f`) is screened halved and doubled: a model's
@@ -106,13 +128,16 @@ struct Probes {
 /// allows it (a sensor's setting within its tolerance), the neutral end left out.
 fn probes(kind: EffectKind, range: &ScalarRange) -> Probes {
     if kind == EffectKind::Parameter {
-        return Probes { thetas: vec![0.5f64.ln(), 2f64.ln()], what: "halving or doubling it".into() };
+        let thetas = vec![0.5f64.ln(), 2f64.ln()];
+        return Probes { thetas, what: "halving or doubling it".into(), neutral: 0.0, log: true };
     }
     let thetas = [range.low, range.high].into_iter().filter(|t| *t != range.neutral).collect();
     let shown = |v: f64| if range.log { v.exp() } else { v };
     Probes {
         thetas,
         what: format!("moving it over the range it may take ({:.4} … {:.4})", shown(range.low), shown(range.high)),
+        neutral: range.neutral,
+        log: range.log,
     }
 }
 

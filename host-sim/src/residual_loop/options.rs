@@ -23,8 +23,8 @@ pub struct LoopOptions {
     /// Two locations of the same kind whose log-likelihoods differ by less than this are
     /// reported as not identifiable from each other.
     pub identifiable_margin: f64,
-    /// Check at the end which component parameters the data cannot see (halving or doubling
-    /// each changes the log-likelihood by less than its BIC cost).
+    /// Check at the end which declared parameters and settings the data cannot see (moving
+    /// each over its range changes the log-likelihood by less than an effect must gain).
     pub screen_parameters: bool,
     /// Print progress to standard error.
     pub progress: bool,

@@ -116,6 +116,25 @@ pub struct NotIdentifiable {
     pub reason: String,
 }
 
+impl NotIdentifiable {
+    /// The verdict on the effect `label` names, from `statistic`'s `value`, for `reason`.
+    pub fn of(label: &EffectLabel, statistic: &str, value: f64, reason: String) -> Self {
+        Self {
+            kind: label.kind,
+            location: label.location.clone(),
+            parameter: label.detail.parameter.clone(),
+            statistic: statistic.into(),
+            value,
+            reason,
+        }
+    }
+
+    /// Whether it is about the effect `label` names (kind, place and parameter).
+    pub fn names(&self, label: &EffectLabel) -> bool {
+        (self.kind, &self.location, &self.parameter) == (label.kind, &label.location, &label.detail.parameter)
+    }
+}
+
 /// One candidate evaluated.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Trial {

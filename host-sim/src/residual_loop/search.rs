@@ -91,7 +91,8 @@ impl<S: LoopSystem> Engine<'_, S> {
                 continue;
             }
             let at = Round { iteration, tier: tier_index + 1 };
-            let mut results = self.fit_all(at, &st.effects, fresh, &st.run, &mut st.refused);
+            let sinks = (&mut st.refused, &mut st.not_identifiable);
+            let mut results = self.fit_all(at, &st.effects, fresh, &st.run, sinks);
             for f in results.iter().filter(|f| f.delta > f.penalty && !self.pays_in_halves(f)) {
                 st.partial.push(self.partial(f));
                 st.refused.push(self.refused_in_halves(f));
@@ -193,8 +194,18 @@ pub fn search<S: LoopSystem>(sys: &mut S, options: &LoopOptions) -> Result<LoopR
     if options.screen_parameters {
         st.not_identifiable.extend(engine.screen(&st.effects, &st.run));
     }
-    // One verdict per effect: what the data cannot see is not also refused (a fit that ran to
-    // the edge of a flat likelihood says nothing about a bound).
+    // One verdict per effect: what was added is not also unseen, what the data cannot see is
+    // not also refused (a fit that ran to the edge of a flat likelihood says nothing about a
+    // bound), and an effect found unseen in several iterations is listed once.
+    st.not_identifiable.retain(|n| !st.added.iter().any(|f| n.names(&f.label)));
+    let mut once: Vec<NotIdentifiable> = Vec::new();
+    for n in std::mem::take(&mut st.not_identifiable) {
+        let same = |m: &NotIdentifiable| (m.kind, &m.location, &m.parameter) == (n.kind, &n.location, &n.parameter);
+        if !once.iter().any(same) {
+            once.push(n);
+        }
+    }
+    st.not_identifiable = once;
     let unseen = &st.not_identifiable;
     st.refused.retain(|r| !unseen.iter().any(|n| r.is_about(n)));
     let named = |e: &AddedEffect| format!("{} at {}", e.kind.as_str(), e.location);
