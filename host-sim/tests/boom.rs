@@ -150,7 +150,9 @@ fn the_papers_method_on_both_runs() {
         let (truth, rate) = (rec.column("truth_tip_vibration").unwrap(), rec.column("truth_root_rate").unwrap());
         let p = peak_errors(&rec.t, est.column("tip_vibration").unwrap(), truth, rate);
         assert!(p.peaks >= 27 && p.free_decay_peaks >= 27, "{p:?}");
-        // Far from the paper's 1.31 %, and worse during the moves than in free decay.
+        // Within issue #34's 40 %, far from the paper's 1.31 %, and worse during the moves than in
+        // free decay.
+        assert!(p.mean_pct <= 40.0, "{p:?}");
         assert!(p.free_decay_mean_pct > 5.0 && p.mean_pct > p.free_decay_mean_pct, "{p:?}");
         assert!(est.fusions > 50, "{} equilibrium instants fused", est.fusions);
         println!(
@@ -186,10 +188,12 @@ fn the_papers_method_taken_apart() {
             );
         }
         let mean = |i: usize| rows[i].1.mean_pct;
-        // No one step alone brings it close; with all four replaced what is left is the
-        // equilibrium instants themselves (the second mode moves the peak of the relative rate
-        // off the first mode's crossing): about a fifth.
-        assert!(mean(5) < 0.5 * mean(0) && mean(5) < 30.0, "all four {} against {}", mean(5), mean(0));
+        // The AR filter takes out the gyro's noise and leaves the motion (issue #34: before, it
+        // passed 44 % of the rate and cost 76–100 points); the method within the issue's 40 %;
+        // with every step ideal what is left is the equilibrium instants themselves (the second
+        // mode moves the peak of the relative rate off the first mode's crossing).
+        assert!((mean(1) - mean(0)).abs() < 5.0, "without the AR filter {} against {}", mean(1), mean(0));
+        assert!(mean(0) <= 40.0 && mean(5) < 30.0, "the method {}, all four {}", mean(0), mean(5));
     }
 }
 

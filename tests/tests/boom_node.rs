@@ -61,7 +61,8 @@ fn the_node_estimates_the_vibration_on_both_runs() {
             end.fusions
         );
         assert!(m.peaks >= 27 && m.mean_pct <= 2.0, "{m:?}");
-        assert!(p.mean_pct > 10.0 * m.mean_pct && end.fusions > 20, "{p:?}");
+        // The paper's method within issue #34's 40 %, the model-based filter well inside it.
+        assert!(p.mean_pct <= 40.0 && 10.0 * m.mean_pct < p.mean_pct && end.fusions > 20, "{p:?}");
     }
 }
 
@@ -135,7 +136,8 @@ mod hil {
 
 /// Soak: the node's `f32` filters over a long run of luffing stops (1 000 s, 10⁵ samples; 10⁶
 /// with `EDGEKF_LONG=1`): no covariance reset, refused update or failed reduction, the mean
-/// peak error still within 2 % in every block of 10⁴ samples, and the NIS steady.
+/// peak error still within 2 % in every block of 10⁴ samples (the paper's method within 40 %),
+/// and the NIS steady.
 #[test]
 fn node_soak_on_a_long_run_of_luffing_stops() {
     let duration = if std::env::var_os("EDGEKF_LONG").is_some() { 10_000.0 } else { 1_000.0 };
@@ -147,20 +149,26 @@ fn node_soak_on_a_long_run_of_luffing_stops() {
     let col = |n: &str| rec.column(n).unwrap();
     let (truth, rate) = (col("truth_tip_vibration"), col("truth_root_rate"));
     let vib: Vec<f64> = frames.iter().map(|f| f.vibration as f64).collect();
+    let paper: Vec<f64> = frames.iter().map(|f| f.paper_vibration as f64).collect();
     let nis: Vec<f64> = frames.iter().map(|f| f.nis as f64).collect();
     let block = 10_000;
-    let (mut worst, mut lo, mut hi) = (0.0f64, f64::INFINITY, 0.0f64);
+    let (mut worst, mut worst_paper, mut lo, mut hi) = (0.0f64, 0.0f64, f64::INFINITY, 0.0f64);
     for b in 0..rec.t.len() / block {
         let r = b * block..(b + 1) * block;
         let p = peak_errors(&rec.t[r.clone()], &vib[r.clone()], &truth[r.clone()], &rate[r.clone()]);
         worst = worst.max(p.mean_pct);
+        let pp = peak_errors(&rec.t[r.clone()], &paper[r.clone()], &truth[r.clone()], &rate[r.clone()]);
+        worst_paper = worst_paper.max(pp.mean_pct);
         let mean_nis = nis[r.clone()].iter().sum::<f64>() / block as f64;
         (lo, hi) = (lo.min(mean_nis), hi.max(mean_nis));
     }
     eprintln!(
-        "boom node soak: {} samples, worst block mean peak error {worst:.2} %, NIS by block {lo:.3}–{hi:.3}",
+        "boom node soak: {} samples, worst block mean peak error {worst:.2} % (the paper's method \
+         {worst_paper:.1} %), NIS by block {lo:.3}–{hi:.3}",
         rec.t.len()
     );
     assert!(worst <= 2.0, "{worst} %");
+    // The paper's method in `f32` over the whole soak: its filter's covariance stays sound.
+    assert!(worst_paper <= 40.0, "the paper's method {worst_paper} %");
     assert!(hi < 1.5 * lo && hi < 4.0, "NIS by block {lo}–{hi}");
 }

@@ -70,7 +70,7 @@ pub fn model_settings() -> ModelSettings {
 
 /// The paper's method's settings.
 pub fn paper_settings() -> PaperSettings {
-    PaperSettings::new(1.0 / f64::from(SAMPLE_RATE_HZ), GYRO, GYRO_SCALE)
+    PaperSettings::new(1.0 / f64::from(SAMPLE_RATE_HZ), GYRO, GYRO_SCALE, INCLINOMETER.0)
 }
 
 /// Both estimators, kept by the caller.

@@ -56,7 +56,9 @@ pub fn run_variant(config: &BoomConfig, rec: &BoomRecording, ar: Ar2, ideal: Ide
     let col = |n: &str| rec.column(n).ok_or_else(|| anyhow!("the recording has no `{n}`"));
     let (gyro, length) = (col("gyro_rate")?, col("boom_length")?);
     let root = if ideal.true_root { col("truth_root_angle")? } else { col("incl_angle")? };
-    let mut settings = PaperSettings::new(1.0 / config.gyro.sample_rate, ar, config.gyro.scale);
+    // The true root has no lag to take out.
+    let lag = if ideal.true_root { 0.0 } else { config.inclinometer.lag };
+    let mut settings = PaperSettings::new(1.0 / config.gyro.sample_rate, ar, config.gyro.scale, lag);
     settings.ar_filter = !ideal.no_ar_filter;
     if ideal.no_smoothing {
         settings.smoothing = 1;

@@ -17,7 +17,8 @@ pub enum Method {
     /// and AR noise and the inclinometer's lag in its state.
     Model,
     /// The paper's: AR(2) Kalman filter on the gyro, Simpson integration, fusion with the
-    /// inclinometer at the equilibrium instants, `y = α l θ`, moving average.
+    /// inclinometer (its declared lag taken out) at the equilibrium instants, `y = α l θ`,
+    /// moving average.
     Paper,
 }
 
@@ -145,7 +146,7 @@ pub fn estimate_with(
             }
         }
         Method::Paper => {
-            let settings = PaperSettings::new(dt, ar, config.gyro.scale);
+            let settings = PaperSettings::new(dt, ar, config.gyro.scale, config.inclinometer.lag);
             let mut est = PaperEstimator::<f64>::new(&settings);
             for k in 0..n {
                 if restarts.contains(&k) {

@@ -2,9 +2,9 @@
 //! fourth paper: a fire-ladder truck), on the chip.
 //!
 //! * [`Ar2`]: the gyro noise's AR(2) model, identified from a static record (Yule–Walker);
-//! * [`PaperEstimator`]: the paper's method, step by step: the 2-state Kalman filter on the AR
-//!   state, Simpson integration to the tip angle, fusion with the inclinometer at the
-//!   equilibrium instants, `y = α l θ` and a moving average;
+//! * [`PaperEstimator`]: the paper's method, step by step: the Kalman filter on the gyro's AR(2)
+//!   noise (with the rate it rides on in its state), Simpson integration to the tip angle, fusion
+//!   with the inclinometer at the equilibrium instants, `y = α l θ` and a moving average;
 //! * [`BoomConstants::reduce`]: the reduced boom (Rayleigh–Ritz on the boom's own static
 //!   deflection shapes) for the model-based filter: its first modes, their tip values and
 //!   participation, the gravity sag;
@@ -24,5 +24,5 @@ pub use ar::{Ar2, ArError};
 pub use model::{
     slot, ExtraMode, LastStep, ModelError, ModelEstimate, ModelEstimator, ModelSettings, MEASUREMENTS, STATES,
 };
-pub use paper::{PaperEstimate, PaperEstimator, PaperSettings, SMOOTHING_MAX};
+pub use paper::{PaperEstimate, PaperEstimator, PaperSettings, ROOT_WINDOW_MAX, ROOT_WINDOW_S, SMOOTHING_MAX};
 pub use reduced::{BoomConstants, BoomSection, Mode, ReducedBoom, ReducedError, BASIS, MAX_SECTIONS, MODES};
