@@ -42,8 +42,9 @@ pub const ROOT_WINDOW_MAX: usize = 64;
 /// noise leaves about 1e-3 rad/s of the slope (5e-4 rad at 100 Hz), short against a luffing
 /// start or stop (the drive's 0.15 s lag).
 pub const ROOT_WINDOW_S: f64 = 0.3;
-/// Readings kept of the inclinometer.
-const RING: usize = ROOT_WINDOW_MAX + 1;
+/// Readings kept of the inclinometer: a power of two, so that a place in the ring is a mask,
+/// not a division, on the chip.
+const RING: usize = (ROOT_WINDOW_MAX + 1).next_power_of_two();
 
 /// The method's settings.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -179,8 +180,10 @@ impl<T: Real> PaperEstimator<T> {
         let (x, p) = (self.x, self.p);
         let xp = [x[0], a1 * x[1] + a2 * x[2], x[1]];
         // F P, then (F P) Fᵀ + Q.
-        let row = |i: usize| [p[i][0], p[i][1], p[i][2]];
-        let fp = [row(0), [0, 1, 2].map(|j| a1 * p[1][j] + a2 * p[2][j]), row(1)];
+        // Written out element by element: indices computed in closures are bounds checks the
+        // chip's no-panic proof cannot see through.
+        let [p0, p1, p2] = p;
+        let fp = [p0, [a1 * p1[0] + a2 * p2[0], a1 * p1[1] + a2 * p2[1], a1 * p1[2] + a2 * p2[2]], p1];
         let mut pp = fp.map(|r| [r[0], a1 * r[1] + a2 * r[2], r[1]]);
         pp[0][0] += qw;
         pp[1][1] += q;
@@ -188,7 +191,7 @@ impl<T: Real> PaperEstimator<T> {
             (self.x, self.p) = (xp, pp);
             return xp[0];
         };
-        let ph = [0, 1, 2].map(|i| pp[i][0] + pp[i][1]);
+        let ph = pp.map(|r| r[0] + r[1]);
         let s = ph[0] + ph[1] + r;
         if !s.is_finite() || s <= T::zero() {
             (self.x, self.p) = (xp, pp);
@@ -196,7 +199,7 @@ impl<T: Real> PaperEstimator<T> {
         }
         let gain = ph.map(|v| v / s);
         let e = z - xp[0] - xp[1];
-        self.x = [0, 1, 2].map(|i| xp[i] + gain[i] * e);
+        self.x = [xp[0] + gain[0] * e, xp[1] + gain[1] * e, xp[2] + gain[2] * e];
         // P = P⁻ − K (P⁻ Cᵀ)ᵀ, kept symmetric.
         let half = t(0.5);
         for i in 0..3 {
@@ -217,10 +220,13 @@ impl<T: Real> PaperEstimator<T> {
             return T::zero();
         }
         let newest = self.incl[k % RING];
-        let centre = m as f64 / 2.0;
+        // The weights `i − m/2` stepped in `T` (no `f64` on the chip's single-precision FPU).
+        let (one, start) = (T::one(), k - m);
+        let mut weight = -t(m as f64 / 2.0);
         let mut num = T::zero();
         for i in 0..=m {
-            num += t(i as f64 - centre) * (self.incl[(k - m + i) % RING] - newest);
+            num += weight * (self.incl[(start + i) % RING] - newest);
+            weight += one;
         }
         let den = (m * (m + 1) * (m + 2)) as f64 / 12.0;
         num / t(den * self.settings.dt)
