@@ -237,6 +237,23 @@ fn engine_finds_a_wrong_stiffness_on_another_system() {
     assert!((e.value - 1.1).abs() < 0.01, "{}", e.value);
 }
 
+/// Each added effect with a scalar carries the 95 % interval of its value from the profile
+/// likelihood: around the value, and over eight seeds it holds the true stiffness about as
+/// often as a 95 % interval should (at least six of eight), where a point without width or an
+/// interval around the wrong value would hold it never.
+#[test]
+fn an_added_effects_value_carries_its_interval() {
+    let mut held = 0;
+    for seed in 4..12 {
+        let r = close(1.1, 0.0, seed);
+        let e = &r.effects_added[0];
+        let [a, b] = e.interval.unwrap_or_else(|| panic!("seed {seed}: no interval: {e:?}"));
+        assert!(a < e.value && e.value < b && b - a < 0.05, "seed {seed}: {a} … {b} around {}", e.value);
+        held += usize::from(a <= 1.1 && 1.1 <= b);
+    }
+    assert!(held >= 6, "the true 1.1 within {held} of 8 intervals");
+}
+
 /// Each added effect's correction comes in the report beside it, and the corrected
 /// configuration carries the fitted stiffness under a comment naming the report.
 #[test]

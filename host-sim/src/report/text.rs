@@ -34,13 +34,14 @@ pub fn summary_table(r: &LoopReport) -> String {
         let what = e.detail.parameter.as_ref().or(e.detail.line.as_ref()).map(|p| format!(" {p}")).unwrap_or_default();
         let from = e.detail.onset_s.map(|o| format!(" from {o:.3} s")).unwrap_or_default();
         s.push_str(&format!(
-            "  + {}{} at {}{}{}: {} (Δ log-likelihood {:.1}, BIC cost {:.1})\n",
+            "  + {}{} at {}{}{}: {}{} (Δ log-likelihood {:.1}, BIC cost {:.1})\n",
             e.kind,
             order,
             e.location,
             what,
             from,
             show_value(e.value, &e.unit),
+            e.interval.map(|i| format!(", 95 % {}", show_interval(i, &e.unit))).unwrap_or_default(),
             e.delta_log_likelihood,
             e.bic_penalty
         ));
@@ -83,6 +84,22 @@ pub fn show_value(v: f64, unit: &str) -> String {
         "m" => format!("{:.3} µm", v * 1e6),
         "s" => format!("{:.3} ms", v * 1e3),
         _ => format!("{v:.4} {unit}"),
+    }
+}
+
+/// An interval `[a, b]` of a value in `unit`, in [`show_value`]'s units.
+///
+/// ```
+/// use edgekf_sim::report::text::show_interval;
+/// assert_eq!(show_interval([0.9, 1.1], "1"), "×0.9000 … ×1.1000");
+/// assert_eq!(show_interval([1e-6, 2e-6], "m"), "1.000 … 2.000 µm");
+/// ```
+pub fn show_interval([a, b]: [f64; 2], unit: &str) -> String {
+    match unit {
+        "1" => format!("×{a:.4} … ×{b:.4}"),
+        "m" => format!("{:.3} … {:.3} µm", a * 1e6, b * 1e6),
+        "s" => format!("{:.3} … {:.3} ms", a * 1e3, b * 1e3),
+        _ => format!("{a:.4} … {b:.4} {unit}"),
     }
 }
 

@@ -96,6 +96,39 @@ impl<S: LoopSystem> Engine<'_, S> {
     }
 }
 
+impl<S: LoopSystem> Engine<'_, S> {
+    /// The 95 % interval of the value of `effects[i]` in the final `model` and `run`: near the
+    /// fit the profile log-likelihood of its scalar is a parabola, whose curvature two runs at
+    /// `θ ± h` give; its width is widened by the innovations' NIS (a model that leaves k times
+    /// the power it expects unexplained is k times less sure) and mapped through the system's
+    /// value. `None` for an effect without a scalar, or where the likelihood does not curve down.
+    pub(super) fn interval(
+        &self,
+        effects: &[Applied<S::Effect>],
+        i: usize,
+        model: &S::Model,
+        run: &Run,
+    ) -> Option<[f64; 2]> {
+        let e = *effects.get(i)?;
+        let (range, _) = self.sys.fitting(&e.effect).scalar?;
+        let h = (10.0 * range.tolerance).max(1e-3 * (range.high - range.low));
+        let ll = |theta: f64| {
+            let mut trial = effects.to_vec();
+            trial[i].theta = theta;
+            self.sys.run(&trial).ok().map(|(_, r)| r.log_likelihood())
+        };
+        let (up, down) = (ll(e.theta + h)?, ll(e.theta - h)?);
+        let curvature = -(up - 2.0 * run.log_likelihood() + down) / (h * h);
+        if !(curvature.is_finite() && curvature > 0.0) {
+            return None;
+        }
+        let half = 1.96 * (self.nis_scale / curvature).sqrt();
+        let at = |theta: f64| self.sys.value(model, run, &Applied { theta, ..e });
+        let (a, b) = (at(e.theta - half), at(e.theta + half));
+        (a.is_finite() && b.is_finite()).then(|| [a.min(b), a.max(b)])
+    }
+}
+
 /// The scalars an effect is screened at, and how the report says so.
 struct Probes {
     thetas: Vec<f64>,
@@ -115,10 +148,11 @@ impl Probes {
             return String::new();
         }
         let d = span * (penalty / worst).sqrt();
-        if self.log {
-            format!(" (the smallest it could tell is a factor of about ×{:.3} or ×{:.3})", d.exp(), (-d).exp())
-        } else {
-            format!(" (the smallest it could tell is about ±{d:.3e} {unit})")
+        match self.log {
+            true if d > 10f64.ln() => " (not even a factor of ten would show)".into(),
+            true => format!(" (the smallest it could tell is a factor of about ×{:.3} or ×{:.3})", d.exp(), (-d).exp()),
+            false if d > 10.0 * span => " (not even ten times that range would show)".into(),
+            false => format!(" (the smallest it could tell is about ±{d:.3e} {unit})"),
         }
     }
 }

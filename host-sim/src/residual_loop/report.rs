@@ -34,6 +34,10 @@ pub struct AddedEffect {
     pub delta_log_likelihood: f64,
     /// Its cost: `½ p ln n`, plus a baseline's gain floor over the run.
     pub bic_penalty: f64,
+    /// The 95 % interval of `value` from the profile likelihood of the effect's scalar in the
+    /// final model (absent for an effect whose size is a state the filter estimates).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub interval: Option<[f64; 2]>,
 }
 
 /// A candidate the loop fitted and refused.

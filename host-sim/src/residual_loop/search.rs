@@ -216,7 +216,7 @@ pub fn search<S: LoopSystem>(sys: &mut S, options: &LoopOptions) -> Result<LoopR
             correction: sys.correction(&Applied::new(*e, 0.0), a.value),
         })
         .collect();
-    let effects_added: Vec<AddedEffect> = first
+    let mut effects_added: Vec<AddedEffect> = first
         .into_iter()
         .map(|(_, a)| a)
         .chain(st.added.iter().map(|f| AddedEffect {
@@ -228,8 +228,16 @@ pub fn search<S: LoopSystem>(sys: &mut S, options: &LoopOptions) -> Result<LoopR
             explains: f.explains.clone(),
             delta_log_likelihood: f.delta,
             bic_penalty: f.penalty,
+            interval: None,
         }))
         .collect();
+    // Each added effect's interval in the final model, at the final model's NIS.
+    engine.nis_scale = if st.summary.nis_mean.is_finite() { st.summary.nis_mean.max(1.0) } else { 1.0 };
+    let intervals: Vec<Option<[f64; 2]>> =
+        (0..st.effects.len()).map(|i| engine.interval(&st.effects, i, &st.model, &st.run)).collect();
+    for (e, interval) in effects_added[corrections.len()..].iter_mut().zip(intervals) {
+        e.interval = interval;
+    }
     for (f, e) in st.added.iter().zip(&effects_added[corrections.len()..]) {
         corrections.push(EffectCorrection { effect: named(e), correction: sys.correction(&f.applied, e.value) });
     }

@@ -375,6 +375,7 @@ fn added<E>(mut label: EffectLabel, unit: String, value: f64, c: &Candidate<E>, 
         explains: c.evidence.harmonics.iter().map(|h| (*h as f64 * c.evidence.hz * 100.0).round() / 100.0).collect(),
         delta_log_likelihood: c.delta,
         bic_penalty: c.penalty,
+        interval: None,
     }
 }
 

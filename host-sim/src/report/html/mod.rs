@@ -196,6 +196,7 @@ mod tests {
                 explains: vec![14.0],
                 delta_log_likelihood: 100.0,
                 bic_penalty: 4.7,
+                interval: Some([1.04, 1.06]),
             }],
             corrections: vec![crate::residual_loop::EffectCorrection {
                 effect: "sensor_scale at n5_x".into(),

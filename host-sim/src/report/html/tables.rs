@@ -105,6 +105,12 @@ pub(super) fn effects(out: &mut String, added: &[AddedEffect]) {
                 Cell::text(&e.location),
                 Cell::text(effect_detail(e)),
                 Cell::num(value_with_unit(e.value, &e.unit), ""),
+                Cell::num(
+                    e.interval.map_or("–".into(), |[a, b]| {
+                        format!("{} … {}", value_with_unit(a, &e.unit), value_with_unit(b, &e.unit))
+                    }),
+                    "",
+                ),
                 Cell::num(fixed(e.delta_log_likelihood, 1), ""),
                 Cell::num(fixed(e.bic_penalty, 1), ""),
                 Cell::text(frequencies(&e.explains)),
@@ -117,6 +123,7 @@ pub(super) fn effects(out: &mut String, added: &[AddedEffect]) {
         "location",
         "parameter / line / order",
         "value",
+        "95 % interval",
         "Δ log-likelihood",
         "BIC cost",
         "lines explained (Hz)",
