@@ -76,7 +76,9 @@ pub fn qemu_matches_host<I: HilImage, E: Frame + PartialEq + Debug>(elf: &Path, 
     if fw_end.len() != 1 || fw_end != host_end {
         bail!("end frames: firmware {fw_end:?}, host {host_end:?}");
     }
-    let (fw_file, host_file) = (file_end(&run.lines)?, file_end(&host)?);
+    // The `file` frame, for an image that reads its channels from a file (not one that reads
+    // virtual sensors).
+    let (fw_file, host_file) = (frames::<FileEnd>(&run.lines)?, frames::<FileEnd>(&host)?);
     if fw_file != host_file {
         bail!("file frames: firmware {fw_file:?}, host {host_file:?}");
     }
