@@ -25,17 +25,13 @@ impl<S: LoopSystem> Engine<'_, S> {
                     && f.label.location != winner.label.location
                     && (winner.delta - f.delta).abs() < self.options.identifiable_margin
             })
-            .map(|r| NotIdentifiable {
-                kind: winner.label.kind,
-                location: r.label.location.clone(),
-                parameter: r.label.detail.parameter.clone(),
-                statistic: "delta_log_likelihood_gap".into(),
-                value: winner.delta - r.delta,
-                reason: format!(
-                    "fits the data as well as {} (log-likelihoods {:.2} apart): the sensors cannot tell the two apart",
-                    winner.label.location,
-                    winner.delta - r.delta
-                ),
+            .map(|r| {
+                let gap = winner.delta - r.delta;
+                let reason = format!(
+                    "fits the data as well as {} (log-likelihoods {gap:.2} apart): the sensors cannot tell the two apart",
+                    winner.label.location
+                );
+                NotIdentifiable::of(&r.label, "delta_log_likelihood_gap", gap, reason)
             })
             .collect()
     }
@@ -78,18 +74,12 @@ impl<S: LoopSystem> Engine<'_, S> {
             let what = label.detail.parameter.clone().unwrap_or_else(|| label.kind.to_string());
             self.progress(|| format!("screen: {what} of {}: |Δ log-likelihood| ≤ {worst:.2}", label.location));
             if worst <= penalty {
-                out.push(NotIdentifiable {
-                    kind: label.kind,
-                    location: label.location,
-                    parameter: label.detail.parameter,
-                    statistic: "max_delta_log_likelihood".into(),
-                    value: worst,
-                    reason: format!(
-                        "{} changes the log-likelihood by at most {worst:.2}, less than the {penalty:.1} an effect must gain to be added: these sensors cannot see it{}",
-                        probes.what,
-                        probes.limit(worst, penalty, &label.unit)
-                    ),
-                });
+                let reason = format!(
+                    "{} changes the log-likelihood by at most {worst:.2}, less than the {penalty:.1} an effect must gain to be added: these sensors cannot see it{}",
+                    probes.what,
+                    probes.limit(worst, penalty, &label.unit)
+                );
+                out.push(NotIdentifiable::of(&label, "max_delta_log_likelihood", worst, reason));
             }
         }
         out

@@ -133,6 +133,11 @@ impl NotIdentifiable {
         }
     }
 
+    /// Whether it is about the same effect as `other` (kind, place and parameter).
+    pub fn is_about(&self, other: &NotIdentifiable) -> bool {
+        (self.kind, &self.location, &self.parameter) == (other.kind, &other.location, &other.parameter)
+    }
+
     /// Whether it is about the effect `label` names (kind, place and parameter).
     pub fn names(&self, label: &EffectLabel) -> bool {
         (self.kind, &self.location, &self.parameter) == (label.kind, &label.location, &label.detail.parameter)

@@ -200,8 +200,7 @@ pub fn search<S: LoopSystem>(sys: &mut S, options: &LoopOptions) -> Result<LoopR
     st.not_identifiable.retain(|n| !st.added.iter().any(|f| n.names(&f.label)));
     let mut once: Vec<NotIdentifiable> = Vec::new();
     for n in std::mem::take(&mut st.not_identifiable) {
-        let same = |m: &NotIdentifiable| (m.kind, &m.location, &m.parameter) == (n.kind, &n.location, &n.parameter);
-        if !once.iter().any(same) {
+        if !once.iter().any(|m| m.is_about(&n)) {
             once.push(n);
         }
     }
