@@ -214,3 +214,31 @@ fn an_undeclared_inclinometer_offset_is_reported_as_unseen() {
     let offset = r.not_identifiable.iter().find(|n| n.kind.as_str() == "sensor_bias" && n.location == "incl_angle");
     assert!(offset.is_some(), "{:?}", r.not_identifiable);
 }
+
+/// One section (the third of four) 20 % less stiff than declared (damage): named as that
+/// section's EI within a fifth, or a tie that lists it, never as the platform's load; the peak
+/// error after the loop within 1.5× the matched configuration's.
+#[test]
+fn a_damaged_section_is_named_as_its_own_ei_not_as_a_load() {
+    let declared = BoomConfig::default();
+    let mut truth = declared.clone();
+    truth.section[2].ei *= 0.8;
+    let r = loop_on(&truth, &declared, 120.0, 1);
+    let matched = loop_on(&declared, &declared, 120.0, 1);
+    let added: Vec<_> = r.effects_added.iter().map(|e| (e.kind.as_str(), e.location.as_str(), e.value)).collect();
+    eprintln!(
+        "section 3 EI ×0.8: added {added:?}; peak error {:.2} % → {:.2} % (matched {:.2} %); ties {:?}",
+        peak_error(&r, "before"),
+        peak_error(&r, "after"),
+        peak_error(&matched, "before"),
+        r.not_identifiable.iter().map(|n| &n.location).collect::<Vec<_>>()
+    );
+    assert!(!r.effects_added.iter().any(|e| e.location == "tip"), "{added:?}");
+    let first = r.effects_added.first().unwrap_or_else(|| panic!("nothing added: {:?}", r.trials));
+    let tie = r.not_identifiable.iter().any(|n| n.location == "section 3");
+    assert!(first.location == "section 3" || tie, "{added:?}");
+    if first.location == "section 3" {
+        assert!((first.value / 0.8 - 1.0).abs() <= 0.2, "factor {}", first.value);
+    }
+    assert!(peak_error(&r, "after") <= 1.5 * peak_error(&matched, "before"), "{added:?}");
+}

@@ -1,8 +1,9 @@
 //! Edits to a user's TOML configuration that keep its comments, order and layout (through
 //! `toml_edit`): how a corrected configuration carries what the loop found back into the
 //! model. A key path names a number through tables and arrays of tables; an entry of an array
-//! of tables is picked by its keys, or `*` for every entry:
-//! `tip.mass`, `section[*].ei`, `disk[node=12].mass`, `sensor[node=5,direction=x].bias`;
+//! of tables is picked by its keys, by its place (`#n`, from 1 as the entries stand in the
+//! file), or `*` for every entry:
+//! `tip.mass`, `section[*].ei`, `section[#3].ei`, `disk[node=12].mass`, `sensor[node=5,direction=x].bias`;
 //! `point_mass[+node=12].mass` appends a new entry with those keys. A key the configuration
 //! lacks is added when the edit says what the model takes without it.
 
@@ -66,6 +67,9 @@ pub enum EditError {
     NotNumber(String),
 }
 
+/// The selector key of an entry picked by its place (`[#n]`).
+const PLACE: &str = "#";
+
 /// One step of a key path: a key, and for an array of tables the entries it picks.
 #[derive(Debug, Clone, PartialEq)]
 struct Step {
@@ -90,6 +94,9 @@ fn parse_path(path: &str) -> Result<Vec<Step>, EditError> {
                 }
                 let select = if inner == "*" {
                     Vec::new()
+                } else if let Some(n) = inner.strip_prefix('#') {
+                    n.parse::<usize>().ok().filter(|n| *n >= 1).ok_or_else(bad)?;
+                    vec![(PLACE.to_string(), n.to_string())]
                 } else {
                     let pairs = inner.split(',').map(|kv| kv.split_once('=').map(|(k, v)| (k.trim(), v.trim())));
                     pairs
@@ -145,7 +152,7 @@ fn tables<'a>(root: &'a mut Table, steps: &[Step], create: bool) -> Vec<&'a mut 
                         if step.append {
                             i == last
                         } else {
-                            select.iter().all(|(k, v)| matches(t, k, v))
+                            select.iter().all(|(k, v)| if k == PLACE { v.parse() == Ok(i + 1) } else { matches(t, k, v) })
                         }
                     };
                     next.extend(array.iter_mut().enumerate().filter(|(i, t)| picked(*i, t)).map(|(_, t)| t));
@@ -270,6 +277,14 @@ mod tests {
     }
 
     #[test]
+    fn a_place_picks_the_nth_entry_as_it_stands_in_the_file() {
+        let out = corrected(BOOM, &[("n".into(), ConfigEdit::new("section[#2].ei", Op::Scale(0.8)))]).unwrap();
+        assert_eq!((value(&out, &["section", "ei"], Some(0)), value(&out, &["section", "ei"], Some(1))), (2.0, 3.2));
+        let third = corrected(BOOM, &[("n".into(), ConfigEdit::new("section[#3].ei", Op::Scale(0.8)))]);
+        assert_eq!(third, Err(EditError::Missing("section[#3].ei".into())));
+    }
+
+    #[test]
     fn a_selector_picks_one_entry_by_number_or_text() {
         let text = "[[sensor]]\nnode = 5\ndirection = \"x\"\n\n[[sensor]]\nnode = 5\ndirection = \"y\"\n";
         let edit = ConfigEdit::or_absent("sensor[node=5,direction=y].bias", Op::Add(2.0), 0.0);
@@ -316,6 +331,8 @@ mod tests {
         assert_eq!(one("tip.mass"), Err(EditError::Missing("tip.mass".into())));
         assert_eq!(one("section[ei].x"), Err(EditError::Path("section[ei].x".into())));
         assert_eq!(one("section[*]"), Err(EditError::Path("section[*]".into())));
+        assert_eq!(one("section[#0].ei"), Err(EditError::Path("section[#0].ei".into())));
+        assert_eq!(one("section[#x].ei"), Err(EditError::Path("section[#x].ei".into())));
         assert!(matches!(corrected("[a\n", &[]), Err(EditError::Parse(_))));
         let text = "[gyro]\nname = \"g\"\n";
         let e = corrected(text, &[("n".into(), ConfigEdit::new("gyro.name", Op::Set(1.0)))]);

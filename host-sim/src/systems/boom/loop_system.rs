@@ -8,6 +8,8 @@
 //! * `sensor_bias` on `gyro_rate` with `drift`: a steady drift of the gyro's bias beside the
 //!   random walk the filter gives it, ±1e-3 rad/s per s;
 //! * `parameter` of `boom`, `ei`: a factor 0.8–1.25 on every section's bending stiffness;
+//! * `parameter` of `section N`, `ei`: a factor 0.5–1.5 on one section's (damage, or a
+//!   section of another gauge): its mode shifts differ from a load's or the whole boom's;
 //! * `parameter` of `tip`, `mass`: a factor 0.5–2.5 on the platform's mass (its load: the
 //!   crew and their kit), its rotary inertia scaled with it;
 //! * `extra_mode` at `gyro_rate`: a lightly damped mode the reduced boom lacks (its sideways
@@ -67,6 +69,8 @@ pub enum Effect {
     GyroDrift,
     /// A factor on every section's EI.
     Stiffness,
+    /// A factor on one section's EI (index from 0, as the configuration lists them).
+    SectionStiffness(u8),
     /// A factor on the platform's mass and rotary inertia.
     PlatformMass,
     /// A mode the reduced boom lacks, seen by the gyro. Value: its frequency, Hz.
@@ -144,6 +148,11 @@ impl<'a> BoomSystem<'a> {
                         section.ei *= factor;
                     }
                 }
+                Effect::SectionStiffness(i) => {
+                    if let Some(section) = s.constants.sections[..s.constants.count].get_mut(usize::from(i)) {
+                        section.ei *= factor;
+                    }
+                }
                 Effect::PlatformMass => {
                     s.constants.tip_mass *= factor;
                     s.constants.tip_inertia *= factor;
@@ -154,6 +163,11 @@ impl<'a> BoomSystem<'a> {
             }
         }
         s
+    }
+
+    /// One effect per section of the configuration: its EI.
+    fn sections(&self) -> impl Iterator<Item = Effect> {
+        (0..self.settings.constants.count.min(usize::from(u8::MAX))).map(|i| Effect::SectionStiffness(i as u8))
     }
 
     /// The innovation spectra's bin width, Hz (at the boom's rates the spectra use
@@ -186,6 +200,7 @@ impl<'a> BoomSystem<'a> {
             }
             Effect::GyroScale => (ScalarRange::factor(0.95, 1.05, 1e-4), 5),
             Effect::Stiffness => (ScalarRange::factor(0.8, 1.25, 1e-4), 5),
+            Effect::SectionStiffness(_) => (ScalarRange::factor(0.5, 1.5, 1e-4), 5),
             Effect::PlatformMass => (ScalarRange::factor(0.5, 2.5, 1e-4), 5),
             Effect::ExtraMode { seed_mhz, .. } => {
                 let (f, w) = (*seed_mhz as f64 * 1e-3, 2.0 * self.bin_width_hz());
@@ -273,6 +288,7 @@ impl LoopSystem for BoomSystem<'_> {
         }
         if off(0) {
             named.extend([Effect::GyroScale, Effect::GyroDrift, Effect::Stiffness, Effect::PlatformMass]);
+            named.extend(self.sections());
         }
         // Lines in the gyro's innovations at none of the boom's frequencies, for the one slot.
         if !effects.iter().any(|a| matches!(a.effect, Effect::ExtraMode { .. })) {
@@ -305,6 +321,9 @@ impl LoopSystem for BoomSystem<'_> {
                 Effect::PlatformMass,
             ]
         };
+        if !s.consistent {
+            catch_all.extend(self.sections());
+        }
         catch_all.retain(|e| !in_model(e) && !named.contains(e));
         vec![named, catch_all]
     }
@@ -312,21 +331,22 @@ impl LoopSystem for BoomSystem<'_> {
     fn label(&self, e: &Effect) -> EffectLabel {
         let parameter = |p: &str| EffectDetail { parameter: Some(p.into()), ..EffectDetail::default() };
         let (kind, location, unit, detail) = match e {
-            Effect::InclinometerLag => (EffectKind::SensorLag, MEASURED[1], "s", EffectDetail::default()),
-            Effect::InclinometerOffset => (EffectKind::SensorBias, MEASURED[1], "rad", EffectDetail::default()),
-            Effect::GyroScale => (EffectKind::SensorScale, MEASURED[0], "1", EffectDetail::default()),
+            Effect::InclinometerLag => (EffectKind::SensorLag, MEASURED[1].into(), "s", EffectDetail::default()),
+            Effect::InclinometerOffset => (EffectKind::SensorBias, MEASURED[1].into(), "rad", EffectDetail::default()),
+            Effect::GyroScale => (EffectKind::SensorScale, MEASURED[0].into(), "1", EffectDetail::default()),
             // Its value is the drift (rad/s per s), beside the bias the filter tracks.
-            Effect::GyroDrift => (EffectKind::SensorBias, MEASURED[0], "rad/s/s", EffectDetail::default()),
-            Effect::Stiffness => (EffectKind::Parameter, "boom", "1", parameter("ei")),
-            Effect::PlatformMass => (EffectKind::Parameter, "tip", "1", parameter("mass")),
+            Effect::GyroDrift => (EffectKind::SensorBias, MEASURED[0].into(), "rad/s/s", EffectDetail::default()),
+            Effect::Stiffness => (EffectKind::Parameter, "boom".into(), "1", parameter("ei")),
+            Effect::SectionStiffness(i) => (EffectKind::Parameter, format!("section {}", i + 1), "1", parameter("ei")),
+            Effect::PlatformMass => (EffectKind::Parameter, "tip".into(), "1", parameter("mass")),
             Effect::ExtraMode { .. } => (
                 EffectKind::ExtraMode,
-                MEASURED[0],
+                MEASURED[0].into(),
                 "Hz",
                 EffectDetail { damping: Some(EXTRA_ZETA), ..EffectDetail::default() },
             ),
         };
-        EffectLabel { kind, location: location.into(), detail, unit: unit.into() }
+        EffectLabel { kind, location, detail, unit: unit.into() }
     }
 
     /// One parameter for a setting; an extra mode's frequency and its two states' start.
@@ -339,17 +359,20 @@ impl LoopSystem for BoomSystem<'_> {
         Fitting::scalar(parameters, range, grid)
     }
 
-    /// The configuration's component parameters (the sections' EI, the platform's mass) and
-    /// its sensors' settings (the inclinometer's lag and offset, the gyro's scale and drift).
+    /// The configuration's component parameters (the boom's EI, each section's, the
+    /// platform's mass) and its sensors' settings (the inclinometer's lag and offset, the
+    /// gyro's scale and drift).
     fn declared(&self) -> Vec<Effect> {
-        vec![
-            Effect::Stiffness,
+        let mut declared = vec![Effect::Stiffness];
+        declared.extend(self.sections());
+        declared.extend([
             Effect::PlatformMass,
             Effect::InclinometerLag,
             Effect::InclinometerOffset,
             Effect::GyroScale,
             Effect::GyroDrift,
-        ]
+        ]);
+        declared
     }
 
     /// The fitted lag (s) or offset (rad), or the factor.
@@ -358,7 +381,9 @@ impl LoopSystem for BoomSystem<'_> {
             Effect::InclinometerLag | Effect::InclinometerOffset | Effect::GyroDrift | Effect::ExtraMode { .. } => {
                 effect.theta
             }
-            Effect::GyroScale | Effect::Stiffness | Effect::PlatformMass => effect.theta.exp(),
+            Effect::GyroScale | Effect::Stiffness | Effect::SectionStiffness(_) | Effect::PlatformMass => {
+                effect.theta.exp()
+            }
         }
     }
 
@@ -368,6 +393,7 @@ impl LoopSystem for BoomSystem<'_> {
         let scale = |path: &str| ConfigEdit::new(path, Op::Scale(value));
         match effect.effect {
             Effect::Stiffness => Correction::model([scale("section[*].ei")]),
+            Effect::SectionStiffness(i) => Correction::model([scale(&format!("section[#{}].ei", i + 1))]),
             Effect::PlatformMass => Correction::model([scale("tip.mass"), scale("tip.rotary_inertia")]),
             Effect::InclinometerLag => {
                 Correction::model([ConfigEdit::or_absent("inclinometer.lag", Op::Set(value), 0.0)])
