@@ -95,6 +95,10 @@ fn an_undeclared_load_on_the_platform_is_named_as_its_mass() {
     let mass = r.effects_added.iter().find(|e| e.kind.as_str() == "parameter" && e.location == "tip");
     let mass = mass.unwrap_or_else(|| panic!("no parameter of the tip: {:?}", r.trials)).value;
     assert!((mass / (4.0 / 3.0) - 1.0).abs() <= 0.1, "factor {mass}");
+    // A softer section moves the first mode as a load does: whichever fits as well is listed.
+    let ties: Vec<_> = r.not_identifiable.iter().filter(|n| n.statistic == "delta_log_likelihood_gap").collect();
+    eprintln!("ties: {:?}", ties.iter().map(|n| (&n.location, &n.reason)).collect::<Vec<_>>());
+    assert!(ties.iter().all(|n| n.location.starts_with("section") || n.location == "boom"), "{ties:?}");
     assert!(peak_error(&r, "after") <= 1.5 * peak_error(&matched, "before"), "{r:?}");
     assert!(peak_error(&r, "before") > 2.0 * peak_error(&r, "after"), "{r:?}");
 }

@@ -108,25 +108,93 @@ fn loop_rotor_estimates_the_speed() {
     assert_eq!(v["effects_added"].as_array().unwrap().len(), 0, "{}", v["effects_added"]);
 }
 
-/// `--baseline` on a system without baselines is a usage error before any work, not a flag
-/// silently ignored and recorded in the report.
+/// Runs `edgekf` with `args`.
+fn edgekf(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_edgekf")).args(args).output().expect("run edgekf")
+}
+
+/// `edgekf baseline oscillator` learns a healthy record's floor and innovation level; `loop
+/// oscillator --baseline` on another healthy record adds nothing and finds its innovations at
+/// the baseline's level, on a record with an accelerometer bias finds the bias and innovations
+/// grown; a baseline of another system is refused before a report is written.
 #[test]
-fn a_baseline_is_refused_where_it_would_be_ignored() {
+fn a_baseline_of_the_oscillator_is_learned_and_judged_against() {
+    use edgekf_sim::systems::oscillator::scenario::Scenario;
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("residual-loop-cli-baseline");
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     let demo = concat!(env!("CARGO_MANIFEST_DIR"), "/configs/oscillator_demo.toml");
-    let out = Command::new(env!("CARGO_BIN_EXE_edgekf"))
-        .args(["loop", "oscillator", "--config", demo, "--data"])
-        .arg(dir.join("no-such.csv"))
-        .arg("--report")
-        .arg(dir.join("report"))
-        .arg("--baseline")
-        .arg(dir.join("no-such.toml"))
-        .output()
-        .unwrap();
+    let declared = Scenario::load(Path::new(demo)).unwrap();
+    let write = |name: &str, s: &Scenario| {
+        let path = dir.join(name);
+        std::fs::write(&path, s.simulate().to_data_file().to_csv_string().unwrap()).unwrap();
+        path.to_str().unwrap().to_string()
+    };
+    let healthy = write("healthy.csv", &Scenario { seed: 11, ..declared.clone() });
+    let other = write("other.csv", &Scenario { seed: 12, ..declared.clone() });
+    let mut biased = Scenario { seed: 13, ..declared.clone() };
+    biased.sensor.bias_m_s2[0] = 0.05;
+    let biased = write("biased.csv", &biased);
+    let b = dir.join("b.toml");
+    let b = b.to_str().unwrap();
+    let out = edgekf(&["baseline", "oscillator", "--config", demo, "--data", &healthy, "--out", b, "--quiet"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let learned = edgekf_sim::residual_loop::levels::LevelBaseline::load(Path::new(b), "oscillator").unwrap();
+    assert!(learned.gain_floor.is_finite() && learned.gain_floor >= 0.0, "{learned:?}");
+    assert_eq!(learned.source.data, healthy);
+    assert_eq!(learned.source.data_sha256.len(), 64);
+    let level = |data: &str, name: &str| {
+        let report = dir.join(name);
+        let out = edgekf(&[
+            "loop",
+            "oscillator",
+            "--config",
+            demo,
+            "--data",
+            data,
+            "--baseline",
+            b,
+            "--report",
+            report.to_str().unwrap(),
+            "--quiet",
+        ]);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(report.join("report.json")).unwrap()).unwrap();
+        let c = &v["baseline_comparison"][0];
+        assert_eq!((c["kind"].as_str(), c["location"].as_str()), (Some("innovation_rms"), Some("ax")), "{v}");
+        assert_eq!(v["baseline"]["data"].as_str(), Some(healthy.as_str()));
+        (c["ratio_to_baseline"].as_f64().unwrap(), v["effects_added"].clone())
+    };
+    let (ratio, added) = level(&other, "other");
+    assert!((ratio - 1.0).abs() < 0.1 && added.as_array().unwrap().is_empty(), "×{ratio}: {added}");
+    let (ratio, added) = level(&biased, "biased");
+    eprintln!("biased: innovations ×{ratio} the baseline's, added {added}");
+    assert!(ratio > 1.3, "×{ratio}");
+    assert_eq!((added[0]["kind"].as_str(), added[0]["location"].as_str()), (Some("sensor_bias"), Some("ax")));
+    assert!((added[0]["value"].as_f64().unwrap() / 0.05 - 1.0).abs() < 0.05, "{added}");
+    // A baseline of another system: refused, no report.
+    let foreign = dir.join("foreign.toml");
+    std::fs::write(
+        &foreign,
+        std::fs::read_to_string(b).unwrap().replace("system = \"oscillator\"", "system = \"boom\""),
+    )
+    .unwrap();
+    let report = dir.join("refused");
+    let out = edgekf(&[
+        "loop",
+        "oscillator",
+        "--config",
+        demo,
+        "--data",
+        &other,
+        "--baseline",
+        foreign.to_str().unwrap(),
+        "--report",
+        report.to_str().unwrap(),
+        "--quiet",
+    ]);
     let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(!out.status.success(), "{stderr}");
-    assert!(stderr.contains("--baseline would be ignored") && stderr.contains("rotor"), "{stderr}");
-    assert!(!dir.join("report").exists());
+    assert!(!out.status.success() && stderr.contains("a baseline of `boom`, not of `oscillator`"), "{stderr}");
+    assert!(!report.exists());
 }

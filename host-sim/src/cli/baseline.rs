@@ -15,16 +15,17 @@ use clap::{ArgMatches, Args, FromArgMatches};
 pub fn command(registry: &[SystemEntry]) -> clap::Command {
     let mut cmd = clap::Command::new("baseline")
         .about(
-            "Learn a healthy baseline from a recording of a good machine (noise levels, structural resonances, \
-             synchronous levels), for `edgekf loop <system> --baseline`",
+            "Learn a healthy baseline from a recording of a good machine (what its model leaves unexplained, its \
+             innovation levels; the rotor's also its resonances and synchronous levels), for `edgekf loop <system> \
+             --baseline`",
         )
         .subcommand_required(true)
         .arg_required_else_help(true);
     for s in registry {
-        if s.close_loop.as_ref().is_some_and(|l| l.baseline.is_some()) {
+        if let Some(b) = s.close_loop.as_ref().and_then(|l| l.baseline) {
             // The about last: `augment_args` puts the flag struct's own doc there.
             let about = format!("{}: what a healthy {} shows that its model lacks, in a baseline file", s.name, s.name);
-            cmd = cmd.subcommand(BaselineArgs::augment_args(clap::Command::new(s.name)).about(about));
+            cmd = cmd.subcommand((b.args)(BaselineArgs::augment_args(clap::Command::new(s.name))).about(about));
         }
     }
     cmd
@@ -33,7 +34,7 @@ pub fn command(registry: &[SystemEntry]) -> clap::Command {
 /// Runs `edgekf baseline <system> …`; `command_line` goes into the baseline's `[source]`.
 pub fn run(registry: &[SystemEntry], m: &ArgMatches, command_line: &str) -> Result<()> {
     let Some((name, sub)) = m.subcommand() else { unreachable!("clap requires a subcommand") };
-    let learn = registry
+    let entry = registry
         .iter()
         .find(|s| s.name == name)
         .and_then(|s| s.close_loop.as_ref())
@@ -51,7 +52,7 @@ pub fn run(registry: &[SystemEntry], m: &ArgMatches, command_line: &str) -> Resu
     };
     let options = LoopOptions { progress: !args.quiet, ..LoopOptions::default() };
     let request = BaselineRequest { args: args.clone(), options, source };
-    let text = learn(&request)?;
+    let text = (entry.learn)(&request, sub)?;
     write_atomic(&args.out, text).with_context(|| format!("{}: cannot write", args.out.display()))?;
     println!("wrote {}", args.out.display());
     Ok(())

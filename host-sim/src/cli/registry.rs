@@ -30,9 +30,17 @@ pub struct LoopEntry {
     pub args: fn(clap::Command) -> clap::Command,
     /// Loads the configuration, reads the data and closes the loop.
     pub run: fn(&super::request::LoopRequest, &ArgMatches) -> Result<LoopReport>,
-    /// Learns a healthy baseline (`edgekf baseline <system>`) and returns the file's text, if
-    /// the system has baselines.
-    pub baseline: Option<fn(&super::request::BaselineRequest) -> Result<String>>,
+    /// `edgekf baseline <system>`, if the system has baselines.
+    pub baseline: Option<BaselineEntry>,
+}
+
+/// `edgekf baseline <system>`.
+#[derive(Clone, Copy)]
+pub struct BaselineEntry {
+    /// Adds the system's own flags to the ones every baseline has.
+    pub args: fn(clap::Command) -> clap::Command,
+    /// Learns a healthy baseline and returns the file's text.
+    pub learn: fn(&super::request::BaselineRequest, &ArgMatches) -> Result<String>,
 }
 
 /// A system's part of `edgekf demo`.

@@ -35,9 +35,6 @@ pub struct BaselineArgs {
     /// The operating condition it belongs to (e.g. "0 hp"), written into the baseline.
     #[arg(long, value_name = "TEXT")]
     pub condition: Option<String>,
-    /// At most this many resonances and synchronous forces.
-    #[arg(long, value_name = "N", default_value_t = 12)]
-    pub max_parts: usize,
     /// Do not print each part as it is tried.
     #[arg(long)]
     pub quiet: bool,

@@ -152,7 +152,9 @@ fn tables<'a>(root: &'a mut Table, steps: &[Step], create: bool) -> Vec<&'a mut 
                         if step.append {
                             i == last
                         } else {
-                            select.iter().all(|(k, v)| if k == PLACE { v.parse() == Ok(i + 1) } else { matches(t, k, v) })
+                            select
+                                .iter()
+                                .all(|(k, v)| if k == PLACE { v.parse() == Ok(i + 1) } else { matches(t, k, v) })
                         }
                     };
                     next.extend(array.iter_mut().enumerate().filter(|(i, t)| picked(*i, t)).map(|(_, t)| t));

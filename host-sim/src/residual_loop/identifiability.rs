@@ -11,26 +11,65 @@ use super::vocabulary::{Applied, EffectKind, EffectLabel};
 use rayon::prelude::*;
 
 impl<S: LoopSystem> Engine<'_, S> {
+    /// How far apart two fits' log-likelihoods must be for the data to prefer one: the
+    /// identifiability margin, or the model's floor over the run where that is larger (a
+    /// difference the model's own mismatch could make is no evidence, as a gain below it is
+    /// none).
+    fn tie_margin(&self) -> f64 {
+        self.options.identifiable_margin.max(self.options.gain_floor * self.nis_scale * self.n_meas)
+    }
+
+    /// Which of `results` (all fitted in one tier, in the system's order) to keep, given the
+    /// best paying one `best`: the best, unless a fit of another quantity (a mass against a
+    /// stiffness) pays within the [`tie_margin`](Self::tie_margin) of it. The data cannot
+    /// choose between those, so the system's order does: it lists its candidates likelier
+    /// first ([`LoopSystem::candidates`]). Ties of one quantity at other places keep the best
+    /// and are listed ([`rivals`](Self::rivals)).
+    pub(super) fn choose(&self, results: &[Fitted<S::Effect, S::Model>], best: usize) -> usize {
+        let b = &results[best];
+        let tied = |f: &Fitted<S::Effect, S::Model>| {
+            family(&f.label) == family(&b.label) && self.pays(f) && (b.delta - f.delta).abs() < self.tie_margin()
+        };
+        let other_quantity = results.iter().any(|f| tied(f) && quantity(&f.label) != quantity(&b.label));
+        if !other_quantity {
+            return best;
+        }
+        results.iter().position(tied).unwrap_or(best)
+    }
+
     /// Rivals of `winner` among `results`: same family, another location, a log-likelihood
-    /// within the identifiability margin.
+    /// within the [`tie_margin`](Self::tie_margin), each with its own fitted value.
     pub(super) fn rivals(
         &self,
         winner: &Fitted<S::Effect, S::Model>,
         results: &[Fitted<S::Effect, S::Model>],
     ) -> Vec<NotIdentifiable> {
+        let margin = self.tie_margin();
         results
             .iter()
             .filter(|f| {
                 family(&f.label) == family(&winner.label)
                     && f.label.location != winner.label.location
-                    && (winner.delta - f.delta).abs() < self.options.identifiable_margin
+                    && (winner.delta - f.delta).abs() < margin
             })
             .map(|r| {
                 let gap = winner.delta - r.delta;
-                let reason = format!(
-                    "fits the data as well as {} (log-likelihoods {gap:.2} apart): the sensors cannot tell the two apart",
-                    winner.label.location
-                );
+                let what = r.label.detail.parameter.as_deref().map(|p| format!("{p} ")).unwrap_or_default();
+                let value = match self.reported_value(r) {
+                    Some(v) => format!(" (fitted as {what}{})", shown(v, &r.label.unit)),
+                    None => String::new(),
+                };
+                let w = &winner.label.location;
+                let reason = if gap >= 0.0 {
+                    format!(
+                        "fits the data as well as {w}{value}: log-likelihoods {gap:.2} apart, less than the {margin:.1} that tells two fits apart: the sensors cannot tell the two apart"
+                    )
+                } else {
+                    format!(
+                        "fits the data as well as {w}{value}: {:.2} better in log-likelihood, less than the {margin:.1} that tells two fits apart: the sensors cannot tell the two apart, and {w} comes first in the system's order (likelier in service)",
+                        -gap
+                    )
+                };
                 NotIdentifiable::of(&r.label, "delta_log_likelihood_gap", gap, reason)
             })
             .collect()
@@ -168,4 +207,19 @@ fn probes(kind: EffectKind, range: &ScalarRange) -> Probes {
 /// The family of an effect for identifiability: same kind and order, different location.
 fn family(l: &EffectLabel) -> (EffectKind, Option<u64>, Option<&str>) {
     (l.kind, l.detail.order.map(f64::to_bits), l.detail.parameter.as_deref().map(|_| "parameter"))
+}
+
+/// The quantity an effect changes: its family, with the parameter's own name (a mass is not a
+/// stiffness, though both are parameters).
+fn quantity(l: &EffectLabel) -> (EffectKind, Option<u64>, Option<&str>) {
+    (l.kind, l.detail.order.map(f64::to_bits), l.detail.parameter.as_deref())
+}
+
+/// `value unit`, or `×value` for a factor (unit `1`).
+fn shown(value: f64, unit: &str) -> String {
+    if unit == "1" {
+        format!("×{value:.4}")
+    } else {
+        format!("{value:.4e} {unit}")
+    }
 }

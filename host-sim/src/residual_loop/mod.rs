@@ -21,6 +21,7 @@
 //! * [`signature`]: the innovations' statistics and what is left unexplained; [`recording`]:
 //!   a system's data as the summaries and the report's traces read them;
 //! * [`baseline`]: a healthy baseline's source and the comparison of a record with it;
+//!   [`levels`]: the baseline any system can have (its gain floor, its innovation levels);
 //! * [`filter`]: a dynamic-size Kalman filter for the host search (time-varying gain until the
 //!   covariance converges, then frozen);
 //! * [`modal_form`]: the transition in real modal form, so that a covariance step is `O(n²)`;
@@ -31,6 +32,7 @@ pub mod correction;
 pub mod filter;
 pub mod fit;
 pub mod identifiability;
+pub mod levels;
 pub mod modal_form;
 pub mod onset;
 pub mod optimize;

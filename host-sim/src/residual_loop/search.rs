@@ -104,7 +104,7 @@ impl<S: LoopSystem> Engine<'_, S> {
                 .max_by(|a, b| (a.1.delta - a.1.penalty).total_cmp(&(b.1.delta - b.1.penalty)))
                 .map(|(i, _)| i);
             if let Some(i) = best {
-                let winner = results.swap_remove(i);
+                let winner = results.swap_remove(self.choose(&results, i));
                 st.not_identifiable.extend(self.rivals(&winner, &results));
                 chosen = Some(winner);
             }

@@ -111,7 +111,9 @@ pub trait LoopSystem: Sync {
     /// only when no candidate of an earlier one is kept (the catch-all goes last). The engine
     /// drops effects already in the model. A system with many places an effect could act
     /// ranks them from the run's innovations ([`locate`](crate::diagnostics::locate)) and
-    /// proposes the few they point to.
+    /// proposes the few they point to. Within a tier the likelier in service comes first
+    /// (a platform's load before a damaged section): where the data cannot choose between two
+    /// quantities, the engine keeps the first and lists the other as not identifiable.
     fn candidates(
         &self,
         summary: &RunSummary,

@@ -21,7 +21,7 @@ pub mod rotor;
 pub mod sdof;
 pub mod uuv;
 
-use crate::cli::registry::{dispatch, subcommands, DemoPart, LoopEntry, SystemEntry};
+use crate::cli::registry::{dispatch, subcommands, BaselineEntry, DemoPart, LoopEntry, SystemEntry};
 
 /// Every system of `edgekf`, in the order of `edgekf --help` and of the demo's parts.
 pub const REGISTRY: &[SystemEntry] = &[
@@ -36,7 +36,7 @@ pub const REGISTRY: &[SystemEntry] = &[
                     and report before/after (report.json, report.html)",
             args: |c| c,
             run: oscillator::cli::close_loop,
-            baseline: None,
+            baseline: Some(BaselineEntry { args: |c| c, learn: oscillator::cli::baseline }),
         }),
         demo: Some(DemoPart { closes_loop: false, run: oscillator::cli::demo }),
     },
@@ -53,7 +53,10 @@ pub const REGISTRY: &[SystemEntry] = &[
                     (report.json, report.html)",
             args: <rotor::cli::RotorLoopArgs as clap::Args>::augment_args,
             run: rotor::cli::close_loop,
-            baseline: Some(rotor::cli::baseline),
+            baseline: Some(BaselineEntry {
+                args: <rotor::cli::RotorBaselineArgs as clap::Args>::augment_args,
+                learn: rotor::cli::baseline,
+            }),
         }),
         demo: Some(DemoPart { closes_loop: true, run: rotor::cli::demo }),
     },
@@ -78,7 +81,10 @@ pub const REGISTRY: &[SystemEntry] = &[
                     report.html); needs --static",
             args: <boom::cli::BoomLoopArgs as clap::Args>::augment_args,
             run: boom::cli::close_loop,
-            baseline: None,
+            baseline: Some(BaselineEntry {
+                args: <boom::cli::BoomLoopArgs as clap::Args>::augment_args,
+                learn: boom::cli::baseline,
+            }),
         }),
         demo: None,
     },
@@ -95,7 +101,7 @@ pub const REGISTRY: &[SystemEntry] = &[
                     report.html)",
             args: |c| c,
             run: uuv::cli::close_loop,
-            baseline: None,
+            baseline: Some(BaselineEntry { args: |c| c, learn: uuv::cli::baseline }),
         }),
         demo: None,
     },

@@ -204,7 +204,7 @@ fn spread(v: &[f64]) -> Option<f64> {
     (stats.count() >= 16 && sd > 0.0).then_some(sd)
 }
 
-/// `edgekf loop boom`'s own flag.
+/// `edgekf loop boom`'s and `edgekf baseline boom`'s own flag.
 #[derive(Debug, Args)]
 pub struct BoomLoopArgs {
     /// The sensors at rest (t, gyro_rate; incl_angle optional): the gyro's AR(2) noise and bias,
@@ -218,19 +218,39 @@ pub fn close_loop(
     request: &crate::cli::request::LoopRequest,
     m: &clap::ArgMatches,
 ) -> anyhow::Result<crate::residual_loop::LoopReport> {
+    let (config, file, ar, incl_noise) = loop_inputs(&request.config, &request.data, m)?;
+    let close = |o: &_| super::loop_system::close_loop(&config, &file, ar, incl_noise, o);
+    let mut report =
+        crate::residual_loop::levels::close_with(request.baseline.as_deref(), "boom", &request.options, close)?;
+    report.source.data_sha256 = file.sha256.clone();
+    Ok(report)
+}
+
+/// `edgekf baseline boom --config C --data healthy.csv --static static.csv --out B`: what the
+/// configured boom leaves unexplained on a healthy recording, and its innovation levels there.
+pub fn baseline(request: &crate::cli::request::BaselineRequest, m: &clap::ArgMatches) -> anyhow::Result<String> {
+    let args = &request.args;
+    let (config, file, ar, incl_noise) = loop_inputs(&args.config, &args.data, m)?;
+    let b =
+        super::loop_system::learn_baseline(&config, &file, ar, incl_noise, args.condition.clone(), &request.options)?;
+    b.with_source(&request.source, file.sha256.as_deref()).to_toml()
+}
+
+/// What a loop or a baseline reads: the configuration, the recording (every measured channel
+/// required), the gyro's noise model and the inclinometer's noise from the static record.
+fn loop_inputs(
+    config: &std::path::Path,
+    data: &std::path::Path,
+    m: &clap::ArgMatches,
+) -> anyhow::Result<(BoomConfig, crate::io::data::DataFile, edgekf::systems::boom::Ar2, f64)> {
     use clap::FromArgMatches;
     let args = BoomLoopArgs::from_arg_matches(m).map_err(|e| anyhow::anyhow!("{e}"))?;
-    let config = BoomConfig::load(&request.config)?;
+    let config = BoomConfig::load(config)?;
     let known: Vec<&str> = MEASURED.iter().chain(TRUTH.iter()).copied().collect();
-    let file =
-        crate::io::recording::read_data(&request.data, &known, config.gyro.sample_rate, &TimelineOptions::default())?;
+    let file = crate::io::recording::read_data(data, &known, config.gyro.sample_rate, &TimelineOptions::default())?;
     for name in MEASURED {
         if file.column(name).is_none() {
-            anyhow::bail!(
-                "{}: no `{name}` column (the boom's loop needs {})",
-                request.data.display(),
-                MEASURED.join(", ")
-            );
+            anyhow::bail!("{}: no `{name}` column (the boom's loop needs {})", data.display(), MEASURED.join(", "));
         }
     }
     let (statics, notes) =
@@ -238,7 +258,5 @@ pub fn close_loop(
     eprintln!("{}: {notes}", args.static_data.display());
     let ar = gyro_model(&config, statics.column("gyro_rate").unwrap_or_default())?;
     let incl_noise = statics.column("incl_angle").and_then(spread).unwrap_or(INCLINOMETER_NOISE);
-    let mut report = super::loop_system::close_loop(&config, &file, ar, incl_noise, &request.options)?;
-    report.source.data_sha256 = file.sha256.clone();
-    Ok(report)
+    Ok((config, file, ar, incl_noise))
 }

@@ -17,6 +17,10 @@
 //!   innovations at none of the reduced boom's frequencies; its frequency is fitted within two
 //!   bins of the line, in the filter's [`ExtraMode`] slot.
 //!
+//! The parameters are proposed load first, then the whole boom, then each section: where the
+//! data cannot tell a load from a stiffness (the gyro sees the first mode best, and each moves
+//! it), the loop keeps the likelier in service and lists the others as not identifiable.
+//!
 //! Each is a setting of the filter fitted by maximum likelihood. A parameter re-reduces the
 //! boom; only the extra mode uses states, the slot the filter keeps for it. The report's
 //! `before` and `after` carry the paper's peak error (`peak_error_pct`) where the data has
@@ -287,7 +291,9 @@ impl LoopSystem for BoomSystem<'_> {
             named.extend([Effect::InclinometerLag, Effect::InclinometerOffset]);
         }
         if off(0) {
-            named.extend([Effect::GyroScale, Effect::GyroDrift, Effect::Stiffness, Effect::PlatformMass]);
+            // Likelier in service first: a load on the platform changes every job; the whole
+            // boom's stiffness only when it was configured wrongly, one section's by damage.
+            named.extend([Effect::GyroScale, Effect::GyroDrift, Effect::PlatformMass, Effect::Stiffness]);
             named.extend(self.sections());
         }
         // Lines in the gyro's innovations at none of the boom's frequencies, for the one slot.
@@ -317,8 +323,8 @@ impl LoopSystem for BoomSystem<'_> {
                 Effect::InclinometerOffset,
                 Effect::GyroScale,
                 Effect::GyroDrift,
-                Effect::Stiffness,
                 Effect::PlatformMass,
+                Effect::Stiffness,
             ]
         };
         if !s.consistent {
@@ -449,4 +455,19 @@ pub fn close_loop(
 ) -> Result<LoopReport> {
     let options = LoopOptions { gain_floor: options.gain_floor.max(MODEL_FLOOR), ..*options };
     search(&mut BoomSystem::new(config, data, ar, incl_noise, &options)?, &options)
+}
+
+/// Learns a [`LevelBaseline`](crate::residual_loop::levels::LevelBaseline) from a healthy
+/// recording with the configured boom (`edgekf baseline boom`). A loop under it takes the
+/// larger of [`MODEL_FLOOR`] and the baseline's floor.
+pub fn learn_baseline(
+    config: &BoomConfig,
+    data: &DataFile,
+    ar: Ar2,
+    incl_noise: f64,
+    condition: Option<String>,
+    options: &LoopOptions,
+) -> Result<crate::residual_loop::levels::LevelBaseline> {
+    let mut sys = BoomSystem::new(config, data, ar, incl_noise, options)?;
+    crate::residual_loop::levels::LevelBaseline::learn(&mut sys, condition, options)
 }

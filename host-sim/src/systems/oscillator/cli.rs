@@ -171,7 +171,19 @@ pub fn close_loop(
 ) -> anyhow::Result<crate::residual_loop::LoopReport> {
     let s = Scenario::load(&request.config)?;
     let file = crate::io::recording::read_data(&request.data, &KNOWN_CHANNELS, s.sensor.odr_hz, &s.timeline)?;
-    let mut report = super::loop_system::close_loop(&s, &file, &request.options)?;
+    let close = |o: &_| super::loop_system::close_loop(&s, &file, o);
+    let mut report =
+        crate::residual_loop::levels::close_with(request.baseline.as_deref(), "oscillator", &request.options, close)?;
     report.source.data_sha256 = file.sha256.clone();
     Ok(report)
+}
+
+/// `edgekf baseline oscillator`: what the scenario's model leaves unexplained on a healthy
+/// recording, and its innovation level there.
+pub fn baseline(request: &crate::cli::request::BaselineRequest, _: &clap::ArgMatches) -> anyhow::Result<String> {
+    let args = &request.args;
+    let s = Scenario::load(&args.config)?;
+    let file = crate::io::recording::read_data(&args.data, &KNOWN_CHANNELS, s.sensor.odr_hz, &s.timeline)?;
+    let b = super::loop_system::learn_baseline(&s, &file, args.condition.clone(), &request.options)?;
+    b.with_source(&request.source, file.sha256.as_deref()).to_toml()
 }

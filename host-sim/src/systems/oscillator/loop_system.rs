@@ -365,3 +365,18 @@ impl LoopSystem for OscillatorSystem<'_> {
 pub fn close_loop(scenario: &Scenario, data: &DataFile, options: &LoopOptions) -> Result<LoopReport> {
     search(&mut OscillatorSystem::new(scenario, data, options)?, options)
 }
+
+/// Learns a [`LevelBaseline`](crate::residual_loop::levels::LevelBaseline) from a healthy
+/// recording with the scenario's model (`edgekf baseline oscillator`).
+pub fn learn_baseline(
+    scenario: &Scenario,
+    data: &DataFile,
+    condition: Option<String>,
+    options: &LoopOptions,
+) -> Result<crate::residual_loop::levels::LevelBaseline> {
+    crate::residual_loop::levels::LevelBaseline::learn(
+        &mut OscillatorSystem::new(scenario, data, options)?,
+        condition,
+        options,
+    )
+}

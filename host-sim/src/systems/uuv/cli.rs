@@ -179,11 +179,27 @@ fn summarise(table: &EstimateTable, data: &crate::io::data::DataFile) {
 
 /// `edgekf loop uuv`: the vehicle's configuration and data, the loop closed on them.
 pub fn close_loop(request: &crate::cli::request::LoopRequest, _: &clap::ArgMatches) -> anyhow::Result<LoopReport> {
-    let config = UuvConfig::load(&request.config)?;
-    let known: Vec<&str> = REQUIRED.iter().chain(TRUTH.iter()).copied().collect();
-    let file =
-        crate::io::recording::read_data(&request.data, &known, config.sensors.rate, &TimelineOptions::default())?;
-    let mut report = super::loop_system::close_loop(&config, &file, &request.options)?;
+    let (config, file) = loop_inputs(&request.config, &request.data)?;
+    let close = |o: &_| super::loop_system::close_loop(&config, &file, o);
+    let mut report =
+        crate::residual_loop::levels::close_with(request.baseline.as_deref(), "uuv", &request.options, close)?;
     report.source.data_sha256 = file.sha256.clone();
     Ok(report)
+}
+
+/// `edgekf baseline uuv`: what the configured vehicle leaves unexplained on a healthy
+/// recording, and its innovation levels there.
+pub fn baseline(request: &crate::cli::request::BaselineRequest, _: &clap::ArgMatches) -> anyhow::Result<String> {
+    let args = &request.args;
+    let (config, file) = loop_inputs(&args.config, &args.data)?;
+    let b = super::loop_system::learn_baseline(&config, &file, args.condition.clone(), &request.options)?;
+    b.with_source(&request.source, file.sha256.as_deref()).to_toml()
+}
+
+/// The configuration and the recording a loop or a baseline reads.
+fn loop_inputs(config: &Path, data: &Path) -> anyhow::Result<(UuvConfig, crate::io::data::DataFile)> {
+    let config = UuvConfig::load(config)?;
+    let known: Vec<&str> = REQUIRED.iter().chain(TRUTH.iter()).copied().collect();
+    let file = crate::io::recording::read_data(data, &known, config.sensors.rate, &TimelineOptions::default())?;
+    Ok((config, file))
 }

@@ -442,10 +442,20 @@ pub fn close_loop(
     Ok(report)
 }
 
+/// `edgekf baseline rotor`'s own flag (beside the ones every baseline has).
+#[derive(Debug, Clone, clap::Args)]
+pub struct RotorBaselineArgs {
+    /// At most this many resonances and synchronous forces.
+    #[arg(long, value_name = "N", default_value_t = 12)]
+    pub max_parts: usize,
+}
+
 /// `edgekf baseline rotor`: the configuration and the healthy recording, the baseline learned
 /// from them (the running speed read from the data within ±10 % of the configured one).
-pub fn baseline(request: &crate::cli::request::BaselineRequest) -> anyhow::Result<String> {
+pub fn baseline(request: &crate::cli::request::BaselineRequest, m: &clap::ArgMatches) -> anyhow::Result<String> {
     use super::loop_system::baseline::{learn, BaselineOptions};
+    use clap::FromArgMatches;
+    let own = RotorBaselineArgs::from_arg_matches(m).map_err(|e| anyhow::anyhow!("{e}"))?;
     let args = &request.args;
     let cfg =
         RotorConfig::load(&args.config).with_context(|| format!("{}: cannot load the rotor", args.config.display()))?;
@@ -453,8 +463,7 @@ pub fn baseline(request: &crate::cli::request::BaselineRequest) -> anyhow::Resul
     let channels: Vec<String> = cfg.sensors.iter().map(|s| s.channel_name()).collect();
     let known: Vec<&str> = channels.iter().map(String::as_str).collect();
     let file = crate::io::recording::read_data(&args.data, &known, cfg.operation.sample_rate, &cfg.timeline)?;
-    let options =
-        BaselineOptions { max_parts: args.max_parts, condition: args.condition.clone(), ..Default::default() };
+    let options = BaselineOptions { max_parts: own.max_parts, condition: args.condition.clone(), ..Default::default() };
     let mut b = learn(&model, &file, &request.options, &Default::default(), &options)?;
     b.source = request.source.clone();
     b.source.data_sha256 = file.sha256.clone().unwrap_or_default();

@@ -110,11 +110,7 @@ pub struct RotorBaseline {
     pub orders: Vec<OrderLevel>,
 }
 
-/// How much more than its baseline's [`gain_floor`](RotorBaseline::gain_floor) an effect must
-/// gain on a record under diagnosis: two records of the same healthy machine differ, and the
-/// best next effect of one gains up to about twice what it gains on the other (the two halves
-/// of CWRU 097).
-pub const FLOOR_MARGIN: f64 = 2.0;
+pub use crate::residual_loop::levels::FLOOR_MARGIN;
 
 /// Orders whose levels a baseline records and a record is compared at.
 pub const ORDERS: [u32; 3] = [1, 2, 3];
@@ -402,19 +398,7 @@ fn leftover_gain(
     say("measuring what the healthy record leaves unexplained (one round of the loop)".into());
     let probe = LoopOptions { max_effects: 1, screen_parameters: false, progress: false, gain_floor: 0.0, ..*options };
     let leftover = search(&mut probe_sys, &probe)?;
-    let gain_floor =
-        leftover.trials.iter().map(|t| (t.delta_log_likelihood - t.bic_penalty) / n_meas).fold(0.0, f64::max);
-    if let Some(t) = leftover
-        .trials
-        .iter()
-        .max_by(|a, b| (a.delta_log_likelihood - a.bic_penalty).total_cmp(&(b.delta_log_likelihood - b.bic_penalty)))
-    {
-        say(format!(
-            "best next effect: {} at {} (Δ log-likelihood {:.1}, BIC cost {:.1}): gain floor {gain_floor:.2e} per measurement",
-            t.kind, t.location, t.delta_log_likelihood, t.bic_penalty
-        ));
-    }
-    Ok(gain_floor)
+    Ok(crate::residual_loop::levels::leftover_gain(&leftover, n_meas, say))
 }
 
 /// The noise standard deviation of each channel in the model with `h`.

@@ -292,3 +292,14 @@ impl LoopSystem for UuvSystem<'_> {
 pub fn close_loop(config: &UuvConfig, data: &DataFile, options: &LoopOptions) -> Result<LoopReport> {
     search(&mut UuvSystem::new(config, data, options)?, options)
 }
+
+/// Learns a [`LevelBaseline`](crate::residual_loop::levels::LevelBaseline) from a healthy
+/// recording with the configured vehicle (`edgekf baseline uuv`).
+pub fn learn_baseline(
+    config: &UuvConfig,
+    data: &DataFile,
+    condition: Option<String>,
+    options: &LoopOptions,
+) -> Result<crate::residual_loop::levels::LevelBaseline> {
+    crate::residual_loop::levels::LevelBaseline::learn(&mut UuvSystem::new(config, data, options)?, condition, options)
+}
