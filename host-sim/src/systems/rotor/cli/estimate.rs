@@ -87,7 +87,7 @@ pub fn estimate(config: &Path, data_path: &Path, out: Option<&Path>, options: &E
     if options.json {
         let mut j = EstimateSummary::new("rotor", data_path, Some(config), &est.t);
         json_quantities(&mut j, &model, &red, &file, &est);
-        j.detail("precision", format!("{precision:?}"));
+        j.detail("precision", format!("{precision:?}").to_lowercase());
         j.out = out.map(Path::to_path_buf);
         j.print()?;
     }
