@@ -178,7 +178,8 @@ fn estimate_command(args: EstimateArgs) -> anyhow::Result<()> {
         ar.sigma,
         ar.mean
     ));
-    let truth_vib = truth(file.column("truth_tip_vibration"));
+    // Truth row for row with the estimate, or none (an empty column is none too).
+    let truth_vib = truth(file.column("truth_tip_vibration")).filter(|c| c.len() == est.t.len());
     if let Some(path) = &args.plot {
         vibration_figure(&est, args.method.name(), truth_vib, file.column(MEASURED[3]))
             .and_then(|svg| write_atomic(path, svg).with_context(|| format!("cannot write {}", path.display())))

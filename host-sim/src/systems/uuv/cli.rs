@@ -158,12 +158,18 @@ fn estimate_command(args: EstimateArgs) -> anyhow::Result<()> {
 
 /// `--plot`: the health factors against their truth, or the speeds where the filter carries no
 /// health factor; a notice when the recording has no truth to draw against.
+///
+/// Without a health factor the speeds are drawn rather than the command refused: the user
+/// asked for a figure of the run, the filter still estimates the vehicle's motion, and a
+/// script that plots every configuration's run should not fail on one of them.
 fn plot(prose: Prose, path: &Path, table: &EstimateTable, file: &DataFile) -> anyhow::Result<()> {
-    let health_truth = [truth(file.column("truth_k_t")), truth(file.column("truth_k_v"))];
+    // Truth row for row with the estimate, or none (an empty column is none too).
+    let aligned = |name: &str| truth(file.column(name)).filter(|c| c.len() == table.t.len());
+    let health_truth = [aligned("truth_k_t"), aligned("truth_k_v")];
     let (svg, what, against) = match super::plot::health_figure(table, health_truth)? {
         Some(svg) => (svg, "health factors", health_truth.iter().any(Option::is_some)),
         None => {
-            let speed_truth = ["truth_u", "truth_v", "truth_w"].map(|c| truth(file.column(c)));
+            let speed_truth = ["truth_u", "truth_v", "truth_w"].map(aligned);
             let svg = super::plot::speed_figure(table, speed_truth)?;
             eprintln!("notice: no health state in the configuration: {} draws the speeds u, v, w", path.display());
             (svg, "speeds", speed_truth.iter().any(Option::is_some))
