@@ -3,7 +3,7 @@
 
 use crate::io::data::{self, DataFile};
 use crate::io::timeline::bridge;
-use crate::report::summary::{truth, EstimateSummary, Prose, Quantity};
+use crate::report::summary::{truth, EstimateSummary, Prose, Quantity, Stats};
 use crate::systems::rotor::estimate::filter::{discrete, run_with, Estimates, FilterPrecision, RunOptions};
 use crate::systems::rotor::estimate::reduce::{reduce, ForceModel, ReducedRotor, Tuning};
 use crate::systems::rotor::{RotorConfig, RotorModel};
@@ -140,8 +140,7 @@ fn json_quantities(j: &mut EstimateSummary, model: &RotorModel, red: &ReducedRot
             j.quantity(format!("{node}_magnitude"), Quantity::of("N", &m).map(|q| q.against(&m, truth_m.as_deref())));
         }
     }
-    let nis: Vec<f64> = est.nis.iter().copied().filter(|x| x.is_finite()).collect();
-    j.detail("nis_mean", nis.iter().sum::<f64>() / nis.len().max(1) as f64);
+    j.detail("nis_mean", Stats::of(&est.nis).map(|s| s.mean));
     j.detail("missing_samples", est.missing);
     j.detail("force_nodes", &red.force_nodes);
 }
@@ -199,8 +198,7 @@ fn print_summary(
         let rms = (v.iter().map(|x| x * x).sum::<f64>() / v.len().max(1) as f64).sqrt();
         prose.say(format_args!("innovation RMS {name}: {rms:.3e}"));
     }
-    let nis: Vec<f64> = est.nis.iter().copied().filter(|x| x.is_finite()).collect();
-    let nis_mean = nis.iter().sum::<f64>() / nis.len().max(1) as f64;
+    let nis_mean = Stats::of(&est.nis).map_or(0.0, |s| s.mean);
     prose.say(format_args!("NIS mean {nis_mean:.3} (consistent: {})", red.channels.len()));
     for (node, d, dir) in reported_nodes(model, red) {
         let Some(truth) = file.column(&format!("truth_n{node}_{dir}")) else { continue };
