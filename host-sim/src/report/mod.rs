@@ -4,9 +4,11 @@
 //! * [`html`]: the self-contained HTML page with SVG plots;
 //! * [`plot`]: the plot kit (panels, axes, lines, markers, legends to one SVG), which knows no
 //!   system: the page and the README's figures draw with it;
-//! * [`text`]: the printed table and the report files.
+//! * [`text`]: the printed table and the report files;
+//! * [`summary`]: the JSON summary of `edgekf <system> estimate --json`.
 
 mod escape;
 pub mod html;
 pub mod plot;
+pub mod summary;
 pub mod text;

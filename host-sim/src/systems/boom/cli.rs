@@ -4,7 +4,7 @@
 //! edgekf boom simulate [--config C] --scenario luffing|extension [--duration 120] [--seed 1]
 //!                      --out data.csv [--static static.csv]
 //! edgekf boom estimate [--config C] --data data.csv --static static.csv [--method model|paper] --out est.csv
-//!                      [--plot vibration.svg]
+//!                      [--plot vibration.svg] [--json]
 //! ```
 
 use super::config::BoomConfig;
@@ -16,6 +16,7 @@ use super::simulate::{simulate, static_inclinometer, static_record, SimOptions};
 use super::simulate::{MEASURED, TRUTH};
 use crate::io::output::{check, write_atomic};
 use crate::io::timeline::TimelineOptions;
+use crate::report::summary::{truth, EstimateSummary, Prose, Quantity};
 use anyhow::Context as _;
 use clap::{Args, Subcommand};
 use std::path::PathBuf;
@@ -62,6 +63,10 @@ pub struct EstimateArgs {
     /// Also draw the tip's vibration (SVG), against truth_tip_vibration where the data have it.
     #[arg(long, value_name = "SVG")]
     pub plot: Option<PathBuf>,
+    /// Print one JSON object on stdout (the text goes to stderr): the tip's vibration, angle
+    /// and deflection with their statistics, the peak vibration and the peak errors.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// Arguments of `edgekf boom simulate`.
@@ -147,6 +152,7 @@ fn estimate_command(args: EstimateArgs) -> anyhow::Result<()> {
     if args.plot.as_ref() == Some(&args.out) {
         anyhow::bail!("{}: --out and --plot are the same file", args.out.display());
     }
+    let prose = Prose { json: args.json };
     let config = load(args.config.as_deref())?;
     let known: Vec<&str> = MEASURED.iter().chain(TRUTH.iter()).copied().collect();
     let required = match args.method {
@@ -161,13 +167,8 @@ fn estimate_command(args: EstimateArgs) -> anyhow::Result<()> {
     let ar = gyro_model(&config, statics.column("gyro_rate").unwrap_or_default())?;
     let incl_noise = statics.column("incl_angle").and_then(spread).unwrap_or(INCLINOMETER_NOISE);
     let est = estimate_with(&config, &file, ar, incl_noise, args.method, &restarts)?;
-    let truth = file.column("truth_tip_vibration");
-    let figure = match &args.plot {
-        Some(_) => Some(vibration_figure(&est, args.method.name(), truth, file.column(MEASURED[3]))?),
-        None => None,
-    };
     write_atomic(&args.out, est.to_csv(&args.out)?).with_context(|| format!("cannot write {}", args.out.display()))?;
-    println!(
+    prose.say(format_args!(
         "{}: {} rows by the {} method; gyro AR(2) [{:.4}, {:.5}], noise {:.2e} rad/s, bias {:.3e} rad/s",
         args.out.display(),
         est.t.len(),
@@ -176,22 +177,71 @@ fn estimate_command(args: EstimateArgs) -> anyhow::Result<()> {
         ar.a[1],
         ar.sigma,
         ar.mean
-    );
-    if let (Some(path), Some(svg)) = (&args.plot, figure) {
-        write_atomic(path, svg).with_context(|| format!("cannot write {}", path.display()))?;
-        let against = if truth.is_some() { " against truth" } else { " (the recording has no truth_tip_vibration)" };
-        println!("{}: the tip's vibration{against}", path.display());
+    ));
+    // Truth row for row with the estimate, or none (an empty column is none too).
+    let truth_vib = truth(file.column("truth_tip_vibration")).filter(|c| c.len() == est.t.len());
+    if let Some(path) = &args.plot {
+        vibration_figure(&est, args.method.name(), truth_vib, file.column(MEASURED[3]))
+            .and_then(|svg| write_atomic(path, svg).with_context(|| format!("cannot write {}", path.display())))
+            .with_context(|| format!("{} written, but not the plot", args.out.display()))?;
+        let against =
+            if truth_vib.is_some() { " against truth" } else { " (the recording has no truth_tip_vibration)" };
+        if truth_vib.is_none() {
+            eprintln!(
+                "notice: {}: no truth_tip_vibration in the recording: the estimate is drawn alone",
+                path.display()
+            );
+        }
+        prose.say(format_args!("{}: the tip's vibration{against}", path.display()));
     }
-    if let (Some(truth), Some(rate), Some(vib)) =
-        (file.column("truth_tip_vibration"), file.column("truth_root_rate"), est.column("tip_vibration"))
-    {
-        let p = peak_errors(&est.t, vib, truth, rate);
-        println!(
+    let peaks = match (truth_vib, truth(file.column("truth_root_rate")), est.column("tip_vibration")) {
+        (Some(truth), Some(rate), Some(vib)) => Some(peak_errors(&est.t, vib, truth, rate)),
+        _ => None,
+    };
+    if let Some(p) = &peaks {
+        prose.say(format_args!(
             "peak error over {} peaks: mean {:.2} %, median {:.2} %; {} free-decay peaks: mean {:.2} %",
             p.peaks, p.mean_pct, p.median_pct, p.free_decay_peaks, p.free_decay_mean_pct
-        );
+        ));
+    }
+    if args.json {
+        json_summary(&args, &file, &est, peaks.as_ref()).print()?;
     }
     Ok(())
+}
+
+/// The JSON object: the tip's vibration (no `final`: its last swing means nothing) with the
+/// text's peak errors as its error, its peak in `details`, and the tip's angle and deflection
+/// against their truth.
+fn json_summary(
+    args: &EstimateArgs,
+    file: &crate::io::data::DataFile,
+    est: &super::estimate::BoomEstimate,
+    peaks: Option<&super::peaks::PeakErrors>,
+) -> EstimateSummary {
+    let mut j = EstimateSummary::new("boom", &args.data, args.config.as_deref(), &file.t);
+    for (name, unit) in [("tip_vibration", "m"), ("tip_angle", "rad"), ("tip_deflection", "m")] {
+        let Some(values) = est.column(name) else { continue };
+        let mut q = Quantity::of(unit, values).map(|q| q.against(values, truth(file.column(&format!("truth_{name}")))));
+        if name == "tip_vibration" {
+            j.detail("peak_tip_vibration", q.as_ref().map(|q| q.stats.peak()));
+            q = q.map(Quantity::without_final);
+            if let Some(p) = peaks {
+                q = q.map(|q| {
+                    q.with_error("peaks", p.peaks as f64)
+                        .with_error("peak_mean_pct", p.mean_pct)
+                        .with_error("peak_median_pct", p.median_pct)
+                        .with_error("free_decay_peaks", p.free_decay_peaks as f64)
+                        .with_error("free_decay_mean_pct", p.free_decay_mean_pct)
+                });
+            }
+        }
+        j.quantity(name, q);
+    }
+    j.detail("method", args.method.name());
+    j.out = Some(args.out.clone());
+    j.plot = args.plot.clone();
+    j
 }
 
 /// Standard deviation of the finite values of `v` (at least 16 of them, not all equal).

@@ -2,13 +2,14 @@
 //! for the firmware; and the oscillator's part of `edgekf demo`.
 
 use super::demo::{describe, describe_run, Demo};
-use super::estimate::{self, EstimateOptions, KNOWN_CHANNELS};
+use super::estimate::{self, window_mean, EstimateOptions, KNOWN_CHANNELS};
 use super::export::harmonic_constants;
 use super::report::{steady_windows, Summary};
 use super::scenario::{Fault, Scenario};
 use crate::cli::request::DemoArgs;
 use crate::io::data;
 use crate::io::output::{check, check_folder};
+use crate::report::summary::{truth as truth_column, EstimateSummary, Prose, Quantity};
 use anyhow::Context as _;
 use clap::{Subcommand, ValueEnum};
 use std::path::{Path, PathBuf};
@@ -58,6 +59,10 @@ pub enum OscillatorCommand {
         /// Seconds after the first sample before errors, innovations and NIS are counted.
         #[arg(long, value_name = "S", default_value_t = 2.0)]
         settle: f64,
+        /// Print one JSON object on stdout (the table goes to stderr): the force amplitude's
+        /// statistics, its means over the steady stretches and its errors against truth.
+        #[arg(long)]
+        json: bool,
     },
     /// Write the scenario's discrete model and steady-state gain as Rust constants.
     ///
@@ -108,44 +113,102 @@ pub fn run(command: OscillatorCommand) -> anyhow::Result<()> {
             println!("wrote {}: discrete model and steady-state gain of {}", out.display(), describe(&s));
             Ok(())
         }
-        OscillatorCommand::Estimate { config, data: path, out, precision, settle } => {
-            check(&[out.as_deref()], &[Some(&path), config.as_deref()])?;
-            let s = scenario(config.as_deref())?;
-            let (data, report) = data::read(&path, &KNOWN_CHANNELS)?;
-            eprintln!("{}: {report}", path.display());
-            let opts = EstimateOptions {
-                settle_s: settle,
-                clip_level: Some(s.sensor.range_m_s2()),
-                timeline: s.timeline,
-                ..Default::default()
-            };
-            let params = s.estimator_params();
-            let (name, est) = match precision {
-                Precision::F64 => ("f64", estimate::run::<f64>(&data, &params, &opts)),
-                Precision::F32 => ("f32", estimate::run::<f32>(&data, &params, &opts)),
-            };
-            let est = est.with_context(|| format!("{}: cannot estimate", path.display()))?;
-            let t_end = data.t.last().copied().unwrap_or(0.0) + report.timing.dt_median;
-            let summary = Summary {
-                title: format!(
-                    "{}: harmonic-force estimate ({name}) with the model of {}\n{}",
-                    path.display(),
-                    config.as_deref().map_or("the demo scenario".into(), |c| c.display().to_string()),
-                    describe(&s)
-                ),
-                data: &data,
-                runs: vec![(name, &est)],
-                windows: steady_windows(&s.force, data.t.first().copied().unwrap_or(0.0), t_end),
-                noise_std: Some(s.sensor.noise_std()),
-            };
-            println!("{summary}");
-            if let Some(out) = out {
-                est.write_csv(&out)?;
-                println!("wrote {}", out.display());
-            }
-            Ok(())
+        OscillatorCommand::Estimate { config, data, out, precision, settle, json } => {
+            estimate_command(EstimateRequest { config, data, out, precision, settle, json })
         }
     }
+}
+
+/// `edgekf oscillator estimate`'s arguments.
+struct EstimateRequest {
+    config: Option<PathBuf>,
+    data: PathBuf,
+    out: Option<PathBuf>,
+    precision: Precision,
+    settle: f64,
+    json: bool,
+}
+
+/// Runs the filter over the data: the table (stdout, or stderr under `--json`), the estimate
+/// file, then the JSON object.
+fn estimate_command(request: EstimateRequest) -> anyhow::Result<()> {
+    let EstimateRequest { config, data: path, out, precision, settle, json } = request;
+    let prose = Prose { json };
+    check(&[out.as_deref()], &[Some(&path), config.as_deref()])?;
+    let s = scenario(config.as_deref())?;
+    let (data, report) = data::read(&path, &KNOWN_CHANNELS)?;
+    eprintln!("{}: {report}", path.display());
+    let opts = EstimateOptions {
+        settle_s: settle,
+        clip_level: Some(s.sensor.range_m_s2()),
+        timeline: s.timeline,
+        ..Default::default()
+    };
+    let params = s.estimator_params();
+    let (name, est) = match precision {
+        Precision::F64 => ("f64", estimate::run::<f64>(&data, &params, &opts)),
+        Precision::F32 => ("f32", estimate::run::<f32>(&data, &params, &opts)),
+    };
+    let est = est.with_context(|| format!("{}: cannot estimate", path.display()))?;
+    let t_end = data.t.last().copied().unwrap_or(0.0) + report.timing.dt_median;
+    let summary = Summary {
+        title: format!(
+            "{}: harmonic-force estimate ({name}) with the model of {}\n{}",
+            path.display(),
+            config.as_deref().map_or("the demo scenario".into(), |c| c.display().to_string()),
+            describe(&s)
+        ),
+        data: &data,
+        runs: vec![(name, &est)],
+        windows: steady_windows(&s.force, data.t.first().copied().unwrap_or(0.0), t_end),
+        noise_std: Some(s.sensor.noise_std()),
+    };
+    prose.say(&summary);
+    if let Some(out) = &out {
+        est.write_csv(out)?;
+        prose.say(format_args!("wrote {}", out.display()));
+    }
+    if json {
+        let mut j = EstimateSummary::new("oscillator", &path, config.as_deref(), &data.t);
+        json_quantities(&mut j, &summary, &est);
+        j.detail("precision", name);
+        j.detail("settle_s", settle);
+        j.out = out;
+        j.print()?;
+    }
+    Ok(())
+}
+
+/// The force amplitude and the displacement in the JSON object, with the table's figures:
+/// the RMS errors after settling, and per steady stretch the force amplitude's mean against
+/// the truth's.
+fn json_quantities(j: &mut EstimateSummary, summary: &Summary<'_>, est: &estimate::Estimates) {
+    let amp = Quantity::of("N", &est.force_amplitude)
+        .map(|q| q.with_error("rms", est.error_rms.force_amplitude.unwrap_or(f64::NAN)));
+    j.quantity("force_amplitude", amp);
+    let x = Quantity::of("m", &est.displacement)
+        .map(|q| q.without_final().with_error("rms", est.error_rms.displacement.unwrap_or(f64::NAN)));
+    j.quantity("displacement", x);
+    let truth = truth_column(summary.data.column("truth_force_amplitude"));
+    let windows: Vec<_> = summary
+        .windows
+        .iter()
+        .map(|&(t0, t1)| {
+            let w = est.window(t0, t1);
+            serde_json::json!({
+                "from_s": t0,
+                "to_s": t1,
+                "force_amplitude_mean": w.force_amplitude,
+                "force_amplitude_std": w.force_amplitude_std,
+                "truth": truth.and_then(|c| window_mean(&summary.data.t, c, t0, t1)),
+                "nis_mean": w.nis_mean,
+            })
+        })
+        .collect();
+    j.detail("steady_windows", windows);
+    j.detail("innovation_rms", est.innovation_rms);
+    j.detail("nis_mean", est.nis_mean);
+    j.detail("missing_samples", est.input.nan + est.input.clipped + est.input.gap_steps);
 }
 
 /// The oscillator's part of `edgekf demo`: the demo scenario (or `--config`'s) estimated in

@@ -3,6 +3,7 @@
 use super::estimate::{self, rms_error, CHANNEL, KNOWN};
 use super::sim::{simulate, SimOptions};
 use crate::io::output::check;
+use crate::report::summary::{EstimateSummary, Prose, Quantity};
 use anyhow::Context as _;
 use clap::{Subcommand, ValueEnum};
 use edgekf::systems::sdof::SdofParams;
@@ -41,6 +42,10 @@ pub enum SdofCommand {
         /// Arithmetic of the filter: f32 as on the sensor node, f64 as a reference.
         #[arg(long, value_enum, default_value_t = Precision::F64)]
         precision: Precision,
+        /// Print one JSON object on stdout (the text goes to stderr): the displacement's and
+        /// the velocity's statistics and RMS errors after settling.
+        #[arg(long)]
+        json: bool,
     },
 }
 
@@ -75,7 +80,8 @@ pub fn run(command: SdofCommand) -> anyhow::Result<()> {
             );
             Ok(())
         }
-        SdofCommand::Estimate { data, out, precision } => {
+        SdofCommand::Estimate { data, out, precision, json } => {
+            let prose = Prose { json };
             check(&[Some(&out)], &[Some(&data)])?;
             let (file, restarts) =
                 crate::io::recording::read_estimator_data(&data, &[CHANNEL], &KNOWN, params.sample_rate_hz)?;
@@ -85,7 +91,7 @@ pub fn run(command: SdofCommand) -> anyhow::Result<()> {
             }
             .with_context(|| format!("{}: cannot estimate", data.display()))?;
             let c = est.counters;
-            println!(
+            prose.say(format_args!(
                 "{}: {} samples, {} missing, {} refused, {} covariance resets, {} restarts",
                 data.display(),
                 c.steps,
@@ -93,16 +99,29 @@ pub fn run(command: SdofCommand) -> anyhow::Result<()> {
                 c.filter.refused_updates,
                 c.filter.covariance_resets,
                 restarts.len()
-            );
+            ));
             let from = (SETTLE_S * params.sample_rate_hz) as usize;
-            for (name, estimate) in [("displacement", &est.displacement), ("velocity", &est.velocity)] {
+            let mut summary = EstimateSummary::new("sdof", &data, None, &file.t);
+            for (name, unit, estimate) in [("displacement", "m", &est.displacement), ("velocity", "m/s", &est.velocity)]
+            {
+                let mut q = Quantity::of(unit, estimate).map(Quantity::without_final);
                 if let Some(truth) = file.column(&format!("truth_{name}")) {
                     let (e, t) = rms_error(estimate, truth, from);
-                    println!("  {name}: RMS error {e:.3e} ({:.3} % of the truth's RMS {t:.3e})", 100.0 * e / t);
+                    prose.say(format_args!(
+                        "  {name}: RMS error {e:.3e} ({:.3} % of the truth's RMS {t:.3e})",
+                        100.0 * e / t
+                    ));
+                    q = q.map(|q| q.with_error("rms", e).with_error("rms_pct", 100.0 * e / t));
                 }
+                summary.quantity(name, q);
             }
             est.write(&out)?;
-            println!("wrote {}", out.display());
+            prose.say(format_args!("wrote {}", out.display()));
+            if json {
+                summary.detail("settle_s", SETTLE_S);
+                summary.out = Some(out);
+                summary.print()?;
+            }
             Ok(())
         }
     }

@@ -94,12 +94,15 @@ fn the_command_line_simulates_and_estimates() {
     edgekf(&[arg("simulate"), arg("--out"), &data_csv, arg("--duration"), arg("2"), arg("--seed"), arg("4")]).unwrap();
     edgekf(&[arg("estimate"), arg("--data"), &data_csv, arg("--out"), &est_csv, arg("--precision"), arg("f32")])
         .unwrap();
+    // --json too: the summary is printed after the estimate is written.
+    edgekf(&[arg("estimate"), arg("--data"), &data_csv, arg("--out"), &est_csv, arg("--json")]).unwrap();
     let (est, _) = data::read(&est_csv, &estimate::OUTPUT).unwrap();
     assert_eq!((est.len(), est.names.len()), (2000, 4));
-    let same = run(SdofCommand::Estimate { data: data_csv.clone(), out: data_csv, precision: Precision::F64 });
+    let same =
+        run(SdofCommand::Estimate { data: data_csv.clone(), out: data_csv, precision: Precision::F64, json: false });
     assert!(same.is_err());
     let bad = dir.path().join("bad.csv");
     std::fs::write(&bad, "t,ay\n0,1\n0.001,2\n").unwrap();
-    let e = run(SdofCommand::Estimate { data: bad, out: est_csv, precision: Precision::F64 }).unwrap_err();
+    let e = run(SdofCommand::Estimate { data: bad, out: est_csv, precision: Precision::F64, json: false }).unwrap_err();
     assert!(format!("{e:#}").contains("ax"), "{e:#}");
 }

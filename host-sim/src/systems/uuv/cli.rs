@@ -3,15 +3,17 @@
 //! ```text
 //! edgekf uuv simulate [--config C] --scenario paper|vertical|healthy [--duration 300] [--seed 1]
 //!                     [--rate 50] --out data.csv
-//! edgekf uuv estimate [--config C] --data data.csv --out est.csv [--plot health.svg]
+//! edgekf uuv estimate [--config C] --data data.csv --out est.csv [--plot health.svg] [--json]
 //! ```
 
 use super::config::UuvConfig;
 use super::estimate::{estimate, EstimateTable, REQUIRED};
 use super::scenario::Scenario;
 use super::simulate::{simulate, SimOptions, TRUTH};
+use crate::io::data::DataFile;
 use crate::io::output::{check, write_atomic};
 use crate::io::timeline::TimelineOptions;
+use crate::report::summary::{truth, EstimateSummary, Prose, Quantity, Stats};
 use crate::residual_loop::LoopReport;
 use anyhow::Context as _;
 use clap::{Args, Subcommand};
@@ -70,9 +72,14 @@ pub struct EstimateArgs {
     /// Estimate file to write.
     #[arg(long, value_name = "CSV")]
     pub out: PathBuf,
-    /// Also draw the health factors (against truth where the data has it) into this SVG.
+    /// Also draw the health factors (against truth where the data has it) into this SVG; with
+    /// no health factor in the configuration, the speeds u, v, w.
     #[arg(long, value_name = "SVG")]
     pub plot: Option<PathBuf>,
+    /// Print one JSON object on stdout (the text goes to stderr): per health factor and speed
+    /// its statistics, final value and error against truth, per thruster its alarms.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// Runs one `edgekf uuv` command.
@@ -116,39 +123,76 @@ fn simulate_command(args: SimulateArgs) -> anyhow::Result<()> {
 
 fn estimate_command(args: EstimateArgs) -> anyhow::Result<()> {
     check(&[Some(&args.out), args.plot.as_deref()], &[Some(&args.data), args.config.as_deref()])?;
+    if args.plot.as_ref() == Some(&args.out) {
+        anyhow::bail!("{}: --out and --plot are the same file", args.out.display());
+    }
+    let prose = Prose { json: args.json };
     let config = load(args.config.as_deref())?;
     let known: Vec<&str> = REQUIRED.iter().chain(TRUTH.iter()).copied().collect();
     let (file, restarts) =
         crate::io::recording::read_estimator_data(&args.data, &REQUIRED, &known, config.sensors.rate)?;
     let table = estimate(&config, &file, &restarts)?;
-    let figure = match &args.plot {
-        Some(_) => super::plot::health_figure(&table, [file.column("truth_k_t"), file.column("truth_k_v")])?,
-        None => None,
-    };
     write_atomic(&args.out, table.to_csv()).with_context(|| format!("cannot write {}", args.out.display()))?;
-    println!("{}: {} rows", args.out.display(), table.t.len());
+    prose.say(format_args!("{}: {} rows", args.out.display(), table.t.len()));
     if let Some(path) = &args.plot {
-        match figure {
-            Some(svg) => {
-                write_atomic(path, svg).with_context(|| format!("cannot write {}", path.display()))?;
-                let truth = file.column("truth_k_t").is_some() || file.column("truth_k_v").is_some();
-                println!("{}: health factors{}", path.display(), if truth { " against truth" } else { "" });
-            }
-            None => eprintln!("notice: no health state in the configuration: {} not drawn", path.display()),
-        }
+        plot(prose, path, &table, &file)
+            .with_context(|| format!("{} written, but not the plot", args.out.display()))?;
     }
-    summarise(&table, &file);
+    let thrusters = summarise(prose, &table, &file);
+    if args.json {
+        let mut j = EstimateSummary::new("uuv", &args.data, args.config.as_deref(), &file.t);
+        for k in ["k_t", "k_v", "u", "v", "w"] {
+            let Some(est) = table.column(k) else { continue };
+            let unit = if k.starts_with("k_") { "1" } else { "m/s" };
+            let q = Quantity::of(unit, est).map(|q| q.against(est, truth(file.column(&format!("truth_{k}")))));
+            j.quantity(k, q);
+        }
+        j.detail("thrusters", thrusters);
+        j.detail("filter_repairs", table.repairs);
+        j.out = Some(args.out);
+        j.plot = args.plot;
+        j.print()?;
+    }
     Ok(())
 }
 
-/// Per thruster: alarms, time declared and, with truth, the RMS error of its factor.
-fn summarise(table: &EstimateTable, data: &crate::io::data::DataFile) {
+/// `--plot`: the health factors against their truth, or the speeds where the filter carries no
+/// health factor; a notice when the recording has no truth to draw against.
+///
+/// Without a health factor the speeds are drawn rather than the command refused: the user
+/// asked for a figure of the run, the filter still estimates the vehicle's motion, and a
+/// script that plots every configuration's run should not fail on one of them.
+fn plot(prose: Prose, path: &Path, table: &EstimateTable, file: &DataFile) -> anyhow::Result<()> {
+    // Truth row for row with the estimate, or none (an empty column is none too).
+    let aligned = |name: &str| truth(file.column(name)).filter(|c| c.len() == table.t.len());
+    let health_truth = [aligned("truth_k_t"), aligned("truth_k_v")];
+    let (svg, what, against) = match super::plot::health_figure(table, health_truth)? {
+        Some(svg) => (svg, "health factors", health_truth.iter().any(Option::is_some)),
+        None => {
+            let speed_truth = ["truth_u", "truth_v", "truth_w"].map(aligned);
+            let svg = super::plot::speed_figure(table, speed_truth)?;
+            eprintln!("notice: no health state in the configuration: {} draws the speeds u, v, w", path.display());
+            (svg, "speeds", speed_truth.iter().any(Option::is_some))
+        }
+    };
+    write_atomic(path, svg).with_context(|| format!("cannot write {}", path.display()))?;
+    if !against {
+        eprintln!("notice: {}: no truth_ columns in the recording: the estimates are drawn alone", path.display());
+    }
+    prose.say(format_args!("{}: {what}{}", path.display(), if against { " against truth" } else { "" }));
+    Ok(())
+}
+
+/// Per thruster: alarms, time declared and, with truth, the RMS error of its factor; returned
+/// for the JSON object as `{thruster: {alarms, declared_s}}`.
+fn summarise(prose: Prose, table: &EstimateTable, data: &DataFile) -> serde_json::Value {
+    let mut thrusters = serde_json::Map::new();
     for (j, (name, k, truth)) in
         [("main", "k_t", "truth_k_t"), ("vertical", "k_v", "truth_k_v")].into_iter().enumerate()
     {
         let Some(est) = table.column(k) else { continue };
         if est.iter().all(|v| v.is_nan()) {
-            println!("{name} thruster: no health state");
+            prose.say(format_args!("{name} thruster: no health state"));
             continue;
         }
         let declared = table.status[j].iter().filter(|s| s.is_some_and(|s| s.declared())).count();
@@ -159,22 +203,20 @@ fn summarise(table: &EstimateTable, data: &crate::io::data::DataFile) {
             declared as f64 * dt,
             est.last().copied().unwrap_or(f64::NAN)
         );
-        if let Some(tr) = data.column(truth) {
-            let sq: Vec<f64> = est
-                .iter()
-                .zip(tr)
-                .filter(|(e, t)| e.is_finite() && t.is_finite())
-                .map(|(e, t)| (e - t).powi(2))
-                .collect();
-            if !sq.is_empty() {
-                line += &format!(", RMS error {:.4}", (sq.iter().sum::<f64>() / sq.len() as f64).sqrt());
-            }
+        if let Some(error) = data.column(truth).and_then(|tr| Stats::of_error(est, tr)) {
+            line += &format!(", RMS error {:.4}", error.rms);
         }
-        println!("{line}");
+        prose.say(line);
+        thrusters
+            .insert(name.into(), serde_json::json!({ "alarms": table.alarms[j], "declared_s": declared as f64 * dt }));
     }
     if table.repairs != (0, 0) {
-        println!("filter repairs: {} covariance reset(s), {} refused update(s)", table.repairs.0, table.repairs.1);
+        prose.say(format_args!(
+            "filter repairs: {} covariance reset(s), {} refused update(s)",
+            table.repairs.0, table.repairs.1
+        ));
     }
+    serde_json::Value::Object(thrusters)
 }
 
 /// `edgekf loop uuv`: the vehicle's configuration and data, the loop closed on them.

@@ -114,6 +114,10 @@ pub struct EstimateArgs {
     /// Estimate file to write.
     #[arg(long, value_name = "CSV")]
     pub out: PathBuf,
+    /// Print one JSON object on stdout (the text goes to stderr): per joint the clearance's
+    /// statistics over the windows, its final value and its error against the truth.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// Arguments of `edgekf crank simulate`.

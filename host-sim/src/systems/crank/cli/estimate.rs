@@ -8,8 +8,10 @@ use super::super::error::CrankError;
 use super::super::estimate::fast::FeatureMap;
 use super::super::estimate::model::FastModel;
 use super::super::estimate::{self, release, ukf, EstimateRow, Recording};
+use super::super::Joint;
 use super::{describe_clearances, load_config, EstimateArgs, MethodArg};
 use crate::io::output::check;
+use crate::report::summary::{EstimateSummary, Prose, Quantity};
 use std::path::Path;
 use std::time::Instant;
 
@@ -23,16 +25,40 @@ pub(super) fn estimate(args: EstimateArgs) -> anyhow::Result<()> {
     let truth = rec.truth_clearance.map(|c| describe_clearances(&c.map(|v| (v > 0.0).then_some(v))));
     let truth = truth.map_or(String::new(), |t| format!("; truth: {t}"));
     let started = Instant::now();
+    let prose = Prose { json: args.json };
     let rows = match args.method {
-        MethodArg::Ukf => by_ukf(&args, &config, &rec, &truth, started)?,
+        MethodArg::Ukf => by_ukf(prose, &args, &config, &rec, &truth, started)?,
         MethodArg::Fast => match fast_model(args.model.as_deref())? {
-            Fast::Model(model) => by_model(&args.data, &config, &rec, &model, &truth, started)?,
-            Fast::Legacy(map) => by_legacy_map(&args.data, &rec, &map, &truth)?,
+            Fast::Model(model) => by_model(prose, &args.data, &config, &rec, &model, &truth, started)?,
+            Fast::Legacy(map) => by_legacy_map(prose, &args.data, &rec, &map, &truth)?,
         },
     };
     estimate::write_estimates(&args.out, &rows).map_err(|e| anyhow::anyhow!("{e}"))?;
-    println!("wrote {}: {} rows", args.out.display(), rows.len());
+    prose.say(format_args!("wrote {}: {} rows", args.out.display(), rows.len()));
+    if args.json {
+        json_summary(&args, &rec, &rows).print()?;
+    }
     Ok(())
+}
+
+/// The JSON object: per joint the clearance over the windows, `final` the last row's (the
+/// estimate for the whole recording), and against the truth the final estimate's error in m
+/// and, at a loose joint, in per cent.
+fn json_summary(args: &EstimateArgs, rec: &Recording, rows: &[EstimateRow]) -> EstimateSummary {
+    let mut j = EstimateSummary::new("crank", &args.data, args.config.as_deref(), &rec.t);
+    for joint in Joint::ALL {
+        let values: Vec<f64> = rows.iter().map(|r| r.clearance[joint.index()]).collect();
+        let mut q = Quantity::of("m", &values);
+        if let (Some(truth), Some(last)) = (rec.truth_clearance.map(|c| c[joint.index()]), values.last()) {
+            let pct = if truth > 0.0 { (last - truth) / truth * 100.0 } else { f64::NAN };
+            q = q.map(|q| q.with_error("truth", truth).with_error("final", last - truth).with_error("final_pct", pct));
+        }
+        j.quantity(format!("clearance_{joint}"), q);
+    }
+    j.detail("method", format!("{:?}", args.method).to_lowercase());
+    j.detail("windows", rows.len().saturating_sub(1));
+    j.out = Some(args.out.clone());
+    j
 }
 
 /// An error about the recording, named by its file.
@@ -42,6 +68,7 @@ fn on_data(data: &Path) -> impl Fn(anyhow::Error) -> anyhow::Error + '_ {
 
 /// The paper's UKF, a progress line per window on stderr.
 fn by_ukf(
+    prose: Prose,
     args: &EstimateArgs,
     config: &CrankConfig,
     rec: &Recording,
@@ -66,7 +93,7 @@ fn by_ukf(
         CrankError::Data(_) => on_data(&args.data)(e.into()),
         e => e.into(),
     })?;
-    println!(
+    prose.say(format_args!(
         "ukf: {} windows of {} s, R std {:.1} rad/s², {} simulations, {} integration steps, wall {:.2} s",
         run.steps.len(),
         args.window,
@@ -74,13 +101,13 @@ fn by_ukf(
         run.simulations,
         run.integration_steps,
         started.elapsed().as_secs_f64()
-    );
-    println!(
+    ));
+    prose.say(format_args!(
         "estimate: A {:.4} ± {:.4} mm (last window {:.4} mm){truth}",
         run.estimate * 1e3,
         run.estimate_std * 1e3,
         run.steps.last().map_or(f64::NAN, |s| s.clearance) * 1e3,
-    );
+    ));
     Ok(run.rows())
 }
 
@@ -120,10 +147,19 @@ fn fast_model(path: Option<&Path>) -> anyhow::Result<Fast> {
 }
 
 /// A legacy impact-rate map (joint A only).
-fn by_legacy_map(data: &Path, rec: &Recording, map: &FeatureMap, truth: &str) -> anyhow::Result<Vec<EstimateRow>> {
+fn by_legacy_map(
+    prose: Prose,
+    data: &Path,
+    rec: &Recording,
+    map: &FeatureMap,
+    truth: &str,
+) -> anyhow::Result<Vec<EstimateRow>> {
     let est = map.estimate(rec).map_err(on_data(data))?;
-    println!("fast (legacy impact-rate map, joint A): {} windows, {} feature operations", est.windows, est.operations);
-    println!("estimate: {}{truth}", describe_clearances(&est.clearance.map(|v| (v > 0.0).then_some(v))));
+    prose.say(format_args!(
+        "fast (legacy impact-rate map, joint A): {} windows, {} feature operations",
+        est.windows, est.operations
+    ));
+    prose.say(format_args!("estimate: {}{truth}", describe_clearances(&est.clearance.map(|v| (v > 0.0).then_some(v)))));
     Ok(est.rows(rec))
 }
 
@@ -131,6 +167,7 @@ fn by_legacy_map(data: &Path, rec: &Recording, map: &FeatureMap, truth: &str) ->
 /// its scores, where the clearance came from (the release stage or the window features) and the
 /// estimate.
 fn by_model(
+    prose: Prose,
     data: &Path,
     config: &CrankConfig,
     rec: &Recording,
@@ -144,7 +181,7 @@ fn by_model(
         }
     }
     let est = model.estimate(rec).map_err(on_data(data))?;
-    println!(
+    prose.say(format_args!(
         "fast: {} windows, {} operations, wall {:.3} s; joint scores A {:.2}, B {:.2}, C {:.2}{}",
         est.features.windows,
         est.operations,
@@ -156,31 +193,31 @@ fn by_model(
             0 => String::new(),
             m => format!("; {m} missing sample(s) skipped, their time counted by the release stage"),
         }
-    );
+    ));
     let features_only = est.per_joint[est.joint.index()] * 1e3;
     match (est.features.release, est.release) {
-        (Some(r), Some(h)) => println!(
+        (Some(r), Some(h)) => prose.say(format_args!(
             "release: first contact seen at {:.1} ms, crank acceleration before it {:.1} rad/s²; taken as contact {} after release: {} {:.4} mm (window features alone {features_only:.4} mm)",
             r.contact * 1e3,
             r.release_alpha,
             h + 1,
             est.joint,
             est.clearance[est.joint.index()] * 1e3
-        ),
-        (Some(r), None) => println!(
+        )),
+        (Some(r), None) => prose.say(format_args!(
             "release: first contact seen at {:.1} ms, crank acceleration before it {:.1} rad/s²; no release law fits it, so the window features give the clearance ({features_only:.4} mm)",
             r.contact * 1e3,
             r.release_alpha
-        ),
-        (None, _) => println!(
+        )),
+        (None, _) => prose.say(format_args!(
             "release: no contact seen in the first {} s; the window features give the clearance ({features_only:.4} mm)",
             release::RELEASE_SPAN
-        ),
+        )),
     }
-    println!(
+    prose.say(format_args!(
         "estimate: joint {}: {}{truth}",
         est.joint,
         describe_clearances(&est.clearance.map(|v| (v > 0.0).then_some(v))),
-    );
+    ));
     model.rows(rec, &est)
 }

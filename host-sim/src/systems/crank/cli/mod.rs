@@ -5,7 +5,7 @@
 //!                       [--seed N] [--integrator symplectic|adaptive] [--step H] [--tolerance TOL]
 //! edgekf crank feature  --data data.csv [--window 0.25] [--column crank_alpha]
 //! edgekf crank estimate --data data.csv --method ukf|fast [--config C] [--initial 0.1e-3]
-//!                       [--window 0.25] [--model model.toml] --out est.csv
+//!                       [--window 0.25] [--model model.toml] --out est.csv [--json]
 //! edgekf crank train    --out model.toml [--config C] [--clearances 0.08e-3,…] [--variants 8]
 //!                       [--duration 10] [--threads 2] [--ridge 1e-4] [--linear] [--seed-base 1000]
 //!                       [--test-variants 0] [--test-seed-base 900000] [--test-clearances …]

@@ -3,6 +3,7 @@
 
 use crate::io::data::{self, DataFile};
 use crate::io::timeline::bridge;
+use crate::report::summary::{truth, EstimateSummary, Prose, Quantity, Stats};
 use crate::systems::rotor::estimate::filter::{discrete, run_with, Estimates, FilterPrecision, RunOptions};
 use crate::systems::rotor::estimate::reduce::{reduce, ForceModel, ReducedRotor, Tuning};
 use crate::systems::rotor::{RotorConfig, RotorModel};
@@ -24,6 +25,8 @@ pub struct EstimateOptions {
     pub robust: bool,
     /// Switch to the steady-state gain at this time, s.
     pub steady_after: Option<f64>,
+    /// One JSON object on stdout, the text on stderr.
+    pub json: bool,
 }
 
 fn load_tuned(config: &Path, modes: usize, random_walk: bool, robust: bool) -> Result<(RotorModel, ReducedRotor)> {
@@ -58,6 +61,7 @@ pub fn estimate(config: &Path, data_path: &Path, out: Option<&Path>, options: &E
     crate::io::output::check(&[out], &[Some(data_path), Some(config)])?;
     let (model, red) = load_tuned(config, options.modes, options.random_walk, options.robust)?;
     let channels: Vec<&str> = red.channels.iter().map(String::as_str).collect();
+    let prose = Prose { json: options.json };
     let (file, report) = data::read_required(data_path, &channels, &[])?;
     eprintln!("{}: {report}", data_path.display());
     let expected = red.sample_rate;
@@ -75,12 +79,70 @@ pub fn estimate(config: &Path, data_path: &Path, out: Option<&Path>, options: &E
     let precision = if options.f32 { FilterPrecision::F32 } else { FilterPrecision::F64 };
     let run_options = RunOptions { steady_after: options.steady_after };
     let est = run_stretches(&red, &file, &timeline.stretches(file.len()), precision, &run_options)?;
-    print_summary(&model, &red, &file, &est, precision);
+    print_summary(prose, &model, &red, &file, &est, precision);
     if let Some(out) = out {
         write_estimates(out, &est)?;
-        println!("wrote {}", out.display());
+        prose.say(format_args!("wrote {}", out.display()));
+    }
+    if options.json {
+        let mut j = EstimateSummary::new("rotor", data_path, Some(config), &est.t);
+        json_quantities(&mut j, &model, &red, &file, &est);
+        j.detail("precision", format!("{precision:?}").to_lowercase());
+        j.out = out.map(Path::to_path_buf);
+        j.print()?;
     }
     Ok(())
+}
+
+/// The nodes whose displacement the text reports (the unbalance nodes and the sensors'), as
+/// (node, direction index, direction).
+fn reported_nodes(model: &RotorModel, red: &ReducedRotor) -> Vec<(usize, usize, &'static str)> {
+    let mut nodes = Vec::new();
+    for node in 0..model.n_nodes() {
+        for (d, dir) in ["x", "y"].into_iter().enumerate() {
+            if red.force_nodes.contains(&node) || red.channels.iter().any(|c| c == &format!("n{node}_{dir}")) {
+                nodes.push((node, d, dir));
+            }
+        }
+    }
+    nodes
+}
+
+/// The JSON object's quantities: the reported nodes' displacements (with the text's RMS
+/// errors, whole run and `t ≥ 1 s`), each unbalance force's components and its magnitude
+/// (whose `final` is the force the run ends with) against `truth_f<k>_*` where present.
+fn json_quantities(j: &mut EstimateSummary, model: &RotorModel, red: &ReducedRotor, file: &DataFile, est: &Estimates) {
+    for (node, d, dir) in reported_nodes(model, red) {
+        let e = &est.displacement[2 * node + d];
+        let mut q = Quantity::of("m", e).map(Quantity::without_final);
+        if let Some(truth) = truth(file.column(&format!("truth_n{node}_{dir}"))) {
+            let whole = rms_error(&est.t, e, truth, f64::NEG_INFINITY);
+            let settled = rms_error(&est.t, e, truth, 1.0);
+            q = q.map(|q| q.with_error("rms", whole).with_error("rms_after_1s", settled));
+        }
+        j.quantity(format!("n{node}_{dir}"), q);
+    }
+    for pair in est.force_names.chunks(2).zip(est.force.chunks(2)) {
+        let (names, forces) = pair;
+        for (name, f) in names.iter().zip(forces) {
+            let q = Quantity::of("N", f)
+                .map(|q| q.without_final().against(f, truth(file.column(&format!("truth_{name}")))));
+            j.quantity(name.clone(), q);
+        }
+        if let ([x, y], [fx, fy]) = (names, forces) {
+            let node = x.trim_end_matches("_x");
+            let magnitude = |a: &[f64], b: &[f64]| -> Vec<f64> { a.iter().zip(b).map(|(a, b)| a.hypot(*b)).collect() };
+            let m = magnitude(fx, fy);
+            let truth_m = match (truth(file.column(&format!("truth_{x}"))), truth(file.column(&format!("truth_{y}")))) {
+                (Some(tx), Some(ty)) => Some(magnitude(tx, ty)),
+                _ => None,
+            };
+            j.quantity(format!("{node}_magnitude"), Quantity::of("N", &m).map(|q| q.against(&m, truth_m.as_deref())));
+        }
+    }
+    j.detail("nis_mean", Stats::of(&est.nis).map(|s| s.mean));
+    j.detail("missing_samples", est.missing);
+    j.detail("force_nodes", &red.force_nodes);
 }
 
 /// The filter over each stretch between restarts (a fresh filter each), the estimates
@@ -111,8 +173,16 @@ fn run_stretches(
     all.ok_or_else(|| anyhow::anyhow!("no samples to estimate"))
 }
 
-fn print_summary(model: &RotorModel, red: &ReducedRotor, file: &DataFile, est: &Estimates, precision: FilterPrecision) {
-    println!(
+/// The run in words: the model, the innovations, the NIS and the errors against truth.
+fn print_summary(
+    prose: Prose,
+    model: &RotorModel,
+    red: &ReducedRotor,
+    file: &DataFile,
+    est: &Estimates,
+    precision: FilterPrecision,
+) {
+    prose.say(format_args!(
         "rotor virtual sensing ({:?}): {} modes ({:.1}–{:.1} Hz), {} states, forces at nodes {:?}, speed {} rad/s",
         precision,
         red.frequencies_hz.len(),
@@ -121,35 +191,31 @@ fn print_summary(model: &RotorModel, red: &ReducedRotor, file: &DataFile, est: &
         red.states(),
         red.force_nodes,
         red.speed
-    );
-    println!("samples {}, missing {}, filter repairs {:?}", est.t.len(), est.missing, est.repairs);
+    ));
+    prose.say(format_args!("samples {}, missing {}, filter repairs {:?}", est.t.len(), est.missing, est.repairs));
     for (i, name) in red.channels.iter().enumerate() {
         let v: Vec<f64> = est.innovation[i].iter().copied().filter(|x| x.is_finite()).collect();
         let rms = (v.iter().map(|x| x * x).sum::<f64>() / v.len().max(1) as f64).sqrt();
-        println!("innovation RMS {name}: {rms:.3e}");
+        prose.say(format_args!("innovation RMS {name}: {rms:.3e}"));
     }
-    let nis: Vec<f64> = est.nis.iter().copied().filter(|x| x.is_finite()).collect();
-    println!("NIS mean {:.3} (consistent: {})", nis.iter().sum::<f64>() / nis.len().max(1) as f64, red.channels.len());
-    let nodes = model.n_nodes();
-    let mut any_truth = false;
-    for node in 0..nodes {
-        for (d, dir) in ["x", "y"].iter().enumerate() {
-            let Some(truth) = file.column(&format!("truth_n{node}_{dir}")) else { continue };
-            any_truth = true;
-            let e = &est.displacement[2 * node + d];
-            if red.force_nodes.contains(&node) || red.channels.iter().any(|c| c == &format!("n{node}_{dir}")) {
-                let whole = rms_error(&est.t, e, truth, f64::NEG_INFINITY) * 1e6;
-                let settled = rms_error(&est.t, e, truth, 1.0) * 1e6;
-                if settled.is_finite() {
-                    println!("n{node}_{dir}: RMS error {settled:.3} µm for t ≥ 1 s ({whole:.3} µm over the whole run)");
-                } else {
-                    println!("n{node}_{dir}: RMS error {whole:.3} µm over the whole run (none after 1 s)");
-                }
-            }
+    let nis_mean = Stats::of(&est.nis).map_or(0.0, |s| s.mean);
+    prose.say(format_args!("NIS mean {nis_mean:.3} (consistent: {})", red.channels.len()));
+    for (node, d, dir) in reported_nodes(model, red) {
+        let Some(truth) = file.column(&format!("truth_n{node}_{dir}")) else { continue };
+        let e = &est.displacement[2 * node + d];
+        let whole = rms_error(&est.t, e, truth, f64::NEG_INFINITY) * 1e6;
+        let settled = rms_error(&est.t, e, truth, 1.0) * 1e6;
+        if settled.is_finite() {
+            prose.say(format_args!(
+                "n{node}_{dir}: RMS error {settled:.3} µm for t ≥ 1 s ({whole:.3} µm over the whole run)"
+            ));
+        } else {
+            prose.say(format_args!("n{node}_{dir}: RMS error {whole:.3} µm over the whole run (none after 1 s)"));
         }
     }
-    if !any_truth {
-        println!("(no truth_ columns: errors not computed)");
+    let truth_at = |node: usize, dir: &str| file.column(&format!("truth_n{node}_{dir}")).is_some();
+    if !(0..model.n_nodes()).any(|node| truth_at(node, "x") || truth_at(node, "y")) {
+        prose.say("(no truth_ columns: errors not computed)");
     }
 }
 

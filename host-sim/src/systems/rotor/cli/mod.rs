@@ -122,6 +122,10 @@ pub enum RotorCommand {
         /// Switch to the steady-state gain at this time, s (default: time-varying throughout).
         #[arg(long, value_name = "S")]
         steady_after: Option<f64>,
+        /// Print one JSON object on stdout (the text goes to stderr): per reported node its
+        /// displacement's statistics and RMS errors, per unbalance node its force.
+        #[arg(long)]
+        json: bool,
     },
     /// Tune the virtual-sensing filter's noise parameters on a reference simulation.
     ///
@@ -230,8 +234,8 @@ pub fn modes_table(modal: &ModalAnalysis, count: usize) -> String {
 /// Runs one `edgekf rotor` subcommand.
 pub fn run(command: RotorCommand) -> anyhow::Result<()> {
     match command {
-        RotorCommand::Estimate { config, data, out, f32, modes, random_walk, robust, steady_after } => {
-            let options = estimate::EstimateOptions { f32, modes, random_walk, robust, steady_after };
+        RotorCommand::Estimate { config, data, out, f32, modes, random_walk, robust, steady_after, json } => {
+            let options = estimate::EstimateOptions { f32, modes, random_walk, robust, steady_after, json };
             estimate::estimate(&config, &data, out.as_deref(), &options)
         }
         RotorCommand::Tune { config, method, seed, duration, budget, modes } => {
