@@ -20,8 +20,8 @@ pub const FLOOR_MARGIN: f64 = 2.0;
 ///
 /// ```
 /// use edgekf_sim::residual_loop::levels::LevelBaseline;
-/// let text = "system = \"press\"\ngain_floor = 1e-4\n\n[source]\ndata = \"healthy.csv\"\n\n\
-///             [[channel]]\nchannel = \"ax\"\ninnovation_rms = 5e-4\nnis_mean = 1.1\n";
+/// let text = "system = \"press\"\ngain_floor = 1e-4\nnis_mean = 1.1\n\n[source]\ndata = \"healthy.csv\"\n\n\
+///             [[channel]]\nchannel = \"ax\"\ninnovation_rms = 5e-4\n";
 /// let b = LevelBaseline::from_toml(text, "press").unwrap();
 /// assert_eq!(b.channels[0].channel, "ax");
 /// assert!(LevelBaseline::from_toml(text, "mill").is_err());
@@ -36,6 +36,9 @@ pub struct LevelBaseline {
     pub condition: Option<String>,
     /// What the healthy record leaves unexplained, per scalar measurement (see the module).
     pub gain_floor: f64,
+    /// The configured model's mean NIS per channel on the healthy record (1 when its noise
+    /// levels are right).
+    pub nis_mean: f64,
     /// Where it was learned.
     #[serde(default)]
     pub source: BaselineSource,
@@ -52,8 +55,6 @@ pub struct InnovationLevel {
     pub channel: String,
     /// RMS innovation, in the channel's unit.
     pub innovation_rms: f64,
-    /// The run's mean NIS per channel (1 when the model's noise is right).
-    pub nis_mean: f64,
 }
 
 impl LevelBaseline {
@@ -76,15 +77,12 @@ impl LevelBaseline {
             system: sys.name().to_string(),
             condition,
             gain_floor,
+            nis_mean: summary.nis_mean,
             source: BaselineSource { version: env!("CARGO_PKG_VERSION").into(), ..BaselineSource::default() },
             channels: summary
                 .innovation_rms
                 .iter()
-                .map(|(c, &rms)| InnovationLevel {
-                    channel: c.clone(),
-                    innovation_rms: rms,
-                    nis_mean: summary.nis_mean,
-                })
+                .map(|(c, &rms)| InnovationLevel { channel: c.clone(), innovation_rms: rms })
                 .collect(),
         })
     }
@@ -141,6 +139,7 @@ impl LevelBaseline {
             "data": self.source.data,
             "data_sha256": self.source.data_sha256,
             "gain_floor": self.gain_floor,
+            "nis_mean": self.nis_mean,
         });
         let section = &mut report.section;
         section.fields.insert("baseline".into(), about);
