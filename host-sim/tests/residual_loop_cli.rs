@@ -198,3 +198,56 @@ fn a_baseline_of_the_oscillator_is_learned_and_judged_against() {
     assert!(!out.status.success() && stderr.contains("a baseline of `boom`, not of `oscillator`"), "{stderr}");
     assert!(!report.exists());
 }
+
+/// `edgekf baseline boom` takes the loop's `--static` record (a usage error without it); under
+/// its baseline, `loop boom` on another healthy run adds nothing and reads the gyro's
+/// innovations at the healthy level, and on a run with 100 kg on the platform names the load.
+#[test]
+fn a_baseline_of_the_boom_takes_its_static_record() {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("residual-loop-cli-boom-baseline");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let config = concat!(env!("CARGO_MANIFEST_DIR"), "/configs/boom_ladder30.toml");
+    let loaded = dir.join("loaded.toml");
+    let text = std::fs::read_to_string(config).unwrap();
+    let declared = edgekf_sim::systems::boom::BoomConfig::from_toml_str(&text).unwrap();
+    let mut heavy = declared.clone();
+    heavy.tip.mass += 100.0;
+    heavy.tip.rotary_inertia *= heavy.tip.mass / declared.tip.mass;
+    std::fs::write(&loaded, toml::to_string(&heavy).unwrap()).unwrap();
+    let path = |name: &str| dir.join(name).to_str().unwrap().to_string();
+    let simulate = |config: &str, seed: &str, name: &str| {
+        let (data, statics) = (path(&format!("{name}.csv")), path(&format!("{name}_static.csv")));
+        let args =
+            ["boom", "simulate", "--config", config, "--scenario", "luffing", "--duration", "60", "--seed", seed];
+        let out = edgekf(&[&args[..], &["--out", &data, "--static", &statics]].concat());
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        (data, statics)
+    };
+    let (healthy, healthy_static) = simulate(config, "11", "healthy");
+    let (other, other_static) = simulate(config, "12", "other");
+    let (load, load_static) = simulate(loaded.to_str().unwrap(), "13", "load");
+    let b = path("b.toml");
+    let learn = ["baseline", "boom", "--config", config, "--data", &healthy, "--out", &b, "--quiet"];
+    let out = edgekf(&learn);
+    assert_eq!(out.status.code(), Some(2), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = edgekf(&[&learn[..], &["--static", &healthy_static]].concat());
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let judged = |data: &str, statics: &str, name: &str| {
+        let report = path(name);
+        let args = ["loop", "boom", "--config", config, "--data", data, "--static", statics, "--baseline", &b];
+        let out = edgekf(&[&args[..], &["--report", &report, "--quiet"]].concat());
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let text = std::fs::read_to_string(Path::new(&report).join("report.json")).unwrap();
+        serde_json::from_str::<serde_json::Value>(&text).unwrap()
+    };
+    let v = judged(&other, &other_static, "other");
+    let gyro = v["baseline_comparison"].as_array().unwrap().iter().find(|c| c["location"] == "gyro_rate").cloned();
+    let ratio = gyro.and_then(|c| c["ratio_to_baseline"].as_f64()).unwrap();
+    assert!((ratio - 1.0).abs() < 0.1 && v["effects_added"].as_array().unwrap().is_empty(), "×{ratio}: {v}");
+    let v = judged(&load, &load_static, "load");
+    let added = &v["effects_added"][0];
+    eprintln!("load under the baseline: {added}");
+    assert_eq!((added["location"].as_str(), added["parameter"].as_str()), (Some("tip"), Some("mass")), "{v}");
+    assert!((added["value"].as_f64().unwrap() / (heavy.tip.mass / declared.tip.mass) - 1.0).abs() < 0.1, "{added}");
+}
