@@ -14,6 +14,7 @@
 //!   with its plots, the printed table);
 //! * [`io`]: the data contract of every CSV a user gives or gets (time column `t`, SI channels,
 //!   `truth_*` columns), read with a report of what was noticed instead of hiding it;
+//! * [`matrix`]: effect matrices, the loop scored on a system's own simulator with one rule;
 //! * [`linalg`]: dense host linear algebra the simulators and the engine share (matrix
 //!   exponential of large systems);
 //! * [`cli`]: the `edgekf` command line, driven by the systems' registry.
@@ -34,6 +35,7 @@ pub mod cli;
 pub mod diagnostics;
 pub mod io;
 pub mod linalg;
+pub mod matrix;
 pub mod report;
 pub mod residual_loop;
 pub mod systems;

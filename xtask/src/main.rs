@@ -20,6 +20,9 @@
 //! * `cargo xtask fuzz [--seconds N] [TARGET…]` — the coverage-guided fuzz targets of `fuzz/`
 //!   for N seconds each (default 20), on stable (cargo-fuzz without a sanitizer; installed when
 //!   missing).
+//! * `cargo xtask loop-matrix [SYSTEM…]` — the residual loop's effect matrices (every case run
+//!   in parallel, scored by one rule) written into the README's tables between its
+//!   `<!-- loop-matrix SYSTEM -->` markers.
 //! * `cargo xtask provision` — install what a fresh Debian machine lacks (as root), or say what.
 //!
 //! Every build proves its image panic-free at link time (feature `no-panic-proof`); a failed
@@ -83,9 +86,10 @@ fn run() -> Result<()> {
             provision::ensure()?;
             bench::run(&firmware::workspace_root(), !flag("--check")).map(|_| ())
         }
+        Some("loop-matrix") => loop_matrix(&args[1..]),
         _ => {
             eprintln!(
-                "usage: cargo xtask <test [--long] | fw [{0}] | panics [{0}] | run [--data FILE.csv] | bench [--check] | soak | fuzz [--seconds N] [TARGET…] | provision>",
+                "usage: cargo xtask <test [--long] | fw [{0}] | panics [{0}] | run [--data FILE.csv] | bench [--check] | soak | fuzz [--seconds N] [TARGET…] | loop-matrix [SYSTEM…] | provision>",
                 images::flags()
             );
             std::process::exit(2);
@@ -135,6 +139,16 @@ fn test(long: bool) -> Result<()> {
     status(hil, "HIL tests")?;
     step("all tests passed");
     Ok(())
+}
+
+/// The effect matrices of `systems` (all without one) into the README.
+fn loop_matrix(systems: &[String]) -> Result<()> {
+    let root = firmware::workspace_root();
+    step("the residual loop's effect matrices (every case in parallel)");
+    let mut run = cargo_here();
+    run.current_dir(&root).args(["run", "--release", "-p", "edgekf-sim", "--example", "loop_matrix", "--"]);
+    run.args(systems).arg("--readme").arg(root.join("README.md"));
+    status(run, "the effect matrices")
 }
 
 /// The long QEMU soak: the soak image on every filter's `qemu_long_steps`, with the

@@ -22,6 +22,7 @@
 //!   a system's data as the summaries and the report's traces read them;
 //! * [`baseline`]: a healthy baseline's source and the comparison of a record with it;
 //!   [`levels`]: the baseline any system can have (its gain floor, its innovation levels);
+//! * [`limits`]: the smallest change of an effect the data could tell (a test case's unit);
 //! * [`filter`]: a dynamic-size Kalman filter for the host search (time-varying gain until the
 //!   covariance converges, then frozen);
 //! * [`modal_form`]: the transition in real modal form, so that a covariance step is `O(n²)`;
@@ -33,6 +34,7 @@ pub mod filter;
 pub mod fit;
 pub mod identifiability;
 pub mod levels;
+pub mod limits;
 pub mod modal_form;
 pub mod onset;
 pub mod optimize;

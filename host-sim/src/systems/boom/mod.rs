@@ -13,6 +13,7 @@
 //! * [`estimate`](mod@estimate): the shared estimators (`edgekf::systems::boom`) over a file;
 //! * [`peaks`]: the peak error of the paper's Table 1;
 //! * [`ablation`]: the paper's method with each step replaced by what it stands for;
+//! * [`matrix`]: the loop's effect matrix on the simulator's runs;
 //! * [`cli`]: `edgekf boom simulate | estimate`.
 
 pub mod ablation;
@@ -22,6 +23,7 @@ pub mod cli;
 pub mod config;
 pub mod estimate;
 pub mod loop_system;
+pub mod matrix;
 pub mod modal;
 pub mod peaks;
 pub mod plot;

@@ -1,0 +1,82 @@
+//! The loop's effect matrices (`edgekf_sim::matrix`): every case of a system run in parallel
+//! over the cores, scored by the one rule, printed as the README's table; with
+//! `--readme README.md` the table replaces the one between the README's markers
+//! `<!-- loop-matrix boom -->` and `<!-- /loop-matrix boom -->`.
+//!
+//! `cargo run --release -p edgekf-sim --example loop_matrix -- [boom] [--readme README.md]`
+//! (`cargo xtask loop-matrix` runs it).
+
+use anyhow::{bail, Context, Result};
+use edgekf_sim::matrix::{table, Outcome};
+use edgekf_sim::systems::boom::{matrix as boom, BoomConfig};
+use rayon::prelude::*;
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+/// The systems with a matrix.
+const SYSTEMS: [&str; 1] = ["boom"];
+
+fn main() -> Result<()> {
+    let mut args = std::env::args().skip(1);
+    let (mut systems, mut readme) = (Vec::new(), None);
+    while let Some(a) = args.next() {
+        match a.as_str() {
+            "--readme" => readme = Some(PathBuf::from(args.next().context("--readme takes a file")?)),
+            s if SYSTEMS.contains(&s) => systems.push(s.to_string()),
+            other => bail!("unknown argument `{other}` (systems with a matrix: {})", SYSTEMS.join(", ")),
+        }
+    }
+    if systems.is_empty() {
+        systems = SYSTEMS.iter().map(|s| s.to_string()).collect();
+    }
+    for system in systems {
+        let text = match system.as_str() {
+            "boom" => boom_table()?,
+            _ => unreachable!("checked above"),
+        };
+        print!("{text}");
+        if let Some(path) = &readme {
+            replace_between_markers(path, &system, &text)?;
+        }
+    }
+    Ok(())
+}
+
+/// The boom's matrix, its cases run in parallel.
+fn boom_table() -> Result<String> {
+    let declared = BoomConfig::default();
+    let cases = boom::cases(&declared)?;
+    eprintln!("boom: {} cases", cases.len());
+    let mut seeds: Vec<u64> = cases.iter().map(|c| c.seed).collect();
+    seeds.sort_unstable();
+    seeds.dedup();
+    let clean: BTreeMap<u64, f64> =
+        seeds.par_iter().map(|&s| Ok((s, boom::clean_error(&declared, s)?))).collect::<Result<_>>()?;
+    let outcomes: Vec<Outcome> = cases
+        .par_iter()
+        .map(|c| {
+            let o = boom::run_case(c, &declared, clean[&c.seed]);
+            if let Ok(o) = &o {
+                eprintln!("  {}: {:?}", o.case, o.verdict);
+            }
+            o
+        })
+        .collect::<Result<_>>()?;
+    Ok(table("boom", &outcomes))
+}
+
+/// Puts `text` between the README's markers for `system`, the rest of the file as it was.
+fn replace_between_markers(path: &PathBuf, system: &str, text: &str) -> Result<()> {
+    let readme = std::fs::read_to_string(path).with_context(|| format!("{}: cannot read", path.display()))?;
+    let (open, close) = (format!("<!-- loop-matrix {system} -->\n"), format!("<!-- /loop-matrix {system} -->"));
+    let (Some(a), Some(b)) = (readme.find(&open), readme.find(&close)) else {
+        bail!("{}: no `{}` … `{close}` markers", path.display(), open.trim_end());
+    };
+    if b < a {
+        bail!("{}: the markers for {system} are out of order", path.display());
+    }
+    let updated = format!("{}{open}{text}{}", &readme[..a], &readme[b..]);
+    edgekf_sim::io::output::write_atomic(path, updated).with_context(|| format!("{}: cannot write", path.display()))?;
+    eprintln!("wrote the {system} table into {}", path.display());
+    Ok(())
+}

@@ -1,0 +1,159 @@
+//! Effect matrices: a system's loop run on recordings of its own reference simulator, each
+//! with one effect its configuration does not declare (or none), its `truth_` columns taken
+//! out before the loop runs (a real recording has none) and used only to score. One rule
+//! scores every case of every system ([`score`]); a system supplies its cases and runs them.
+//!
+//! The rule: the right kind at the right place (or a tie the report lists that includes it),
+//! its change from the declared value within a fifth of the true change, nothing else added,
+//! and the error after the loop at most 1.5 times the clean run's; where the effect is below
+//! what the data can tell, `not_identifiable` naming it; on a clean run, nothing.
+
+use crate::residual_loop::{EffectKind, LoopReport};
+
+/// What a case expects of the loop.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Expect {
+    /// A clean run: nothing is added.
+    Nothing,
+    /// This effect is added.
+    Effect(Expected),
+    /// Below what the data can tell: nothing is added and `not_identifiable` names it.
+    CannotTell(Expected),
+}
+
+/// An effect a case carries, as the report would name it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Expected {
+    /// Its kind.
+    pub kind: EffectKind,
+    /// Its place (`section 3`, `incl_angle`).
+    pub location: String,
+    /// The parameter, for a `parameter`.
+    pub parameter: Option<String>,
+    /// The value the report should give.
+    pub value: f64,
+    /// The value the declared model has (1 for a factor): the change is measured from it.
+    pub declared: f64,
+    /// Whether the value is a factor (its change is then a ratio, compared in `ln`).
+    pub factor: bool,
+}
+
+impl Expected {
+    /// The change from the declared value: `ln` of the ratio for a factor, else the difference.
+    fn change(&self, value: f64) -> f64 {
+        if self.factor {
+            (value / self.declared).ln()
+        } else {
+            value - self.declared
+        }
+    }
+
+    /// Whether a report's entry names this effect at `location`.
+    fn names(&self, kind: EffectKind, location: &str, parameter: Option<&str>) -> bool {
+        kind == self.kind && location == self.location && parameter == self.parameter.as_deref()
+    }
+}
+
+/// How a case came out.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Verdict {
+    /// The effect named rightly (or nothing, on a clean run).
+    Right,
+    /// Said, rightly, that the data cannot tell it.
+    CannotTell,
+    /// Anything else, with why.
+    Wrong(String),
+}
+
+/// Scores `report` against `expect`; `errors` are the error after the loop and the clean
+/// run's (the system's own error measure, against the truth columns), where it has one.
+pub fn score(expect: &Expect, report: &LoopReport, errors: Option<(f64, f64)>) -> Verdict {
+    let added = |e: &crate::residual_loop::AddedEffect| format!("{} at {} = {:.4}", e.kind, e.location, e.value);
+    let unseen =
+        |x: &Expected| report.not_identifiable.iter().any(|n| x.names(n.kind, &n.location, n.parameter.as_deref()));
+    match expect {
+        Expect::Nothing => match report.effects_added.first() {
+            None => Verdict::Right,
+            Some(e) => Verdict::Wrong(format!("added {} to a clean run", added(e))),
+        },
+        Expect::CannotTell(x) => match report.effects_added.first() {
+            Some(e) if !x.names(e.kind, &e.location, e.detail.parameter.as_deref()) => {
+                Verdict::Wrong(format!("added {} for an effect below the limit", added(e)))
+            }
+            Some(_) => Verdict::Right,
+            None if unseen(x) => Verdict::CannotTell,
+            None => Verdict::Wrong("nothing added, and not_identifiable does not name it".into()),
+        },
+        Expect::Effect(x) => {
+            let tie = |e: &crate::residual_loop::AddedEffect| {
+                report.not_identifiable.iter().any(|n| {
+                    n.statistic == "delta_log_likelihood_gap" && x.names(n.kind, &n.location, n.parameter.as_deref())
+                }) && e.kind == x.kind
+            };
+            let hit =
+                report.effects_added.iter().position(|e| x.names(e.kind, &e.location, e.detail.parameter.as_deref()));
+            let hit = hit.or_else(|| report.effects_added.iter().position(tie));
+            let Some(i) = hit else {
+                return match report.effects_added.first() {
+                    Some(e) => Verdict::Wrong(format!("added {} instead", added(e))),
+                    None if unseen(x) => Verdict::CannotTell,
+                    None => Verdict::Wrong(format!("nothing added ({})", report.stopped)),
+                };
+            };
+            if let Some(e) = report.effects_added.iter().enumerate().find(|(j, _)| *j != i).map(|(_, e)| e) {
+                return Verdict::Wrong(format!("also added {}", added(e)));
+            }
+            let e = &report.effects_added[i];
+            let (fitted, truth) = (x.change(e.value), x.change(x.value));
+            if e.location == x.location && (fitted - truth).abs() > 0.2 * truth.abs() {
+                return Verdict::Wrong(format!("{} off: {:.4} for {:.4}", added(e), e.value, x.value));
+            }
+            match errors {
+                Some((after, clean)) if after > 1.5 * clean => Verdict::Wrong(format!(
+                    "{}, but the error after is {after:.3}, the clean run's {clean:.3}",
+                    added(e)
+                )),
+                _ => Verdict::Right,
+            }
+        }
+    }
+}
+
+/// One case's outcome, for the table.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Outcome {
+    /// The case, in words (`section 3 EI ×0.93 (10× the limit), seed 2`).
+    pub case: String,
+    /// How it came out.
+    pub verdict: Verdict,
+    /// What the loop added, in words.
+    pub added: String,
+    /// Seconds the loop took.
+    pub seconds: f64,
+}
+
+/// The README's table for `system`: the counts, the loop's time per run, and every case
+/// with what was added and, for a wrong one, why.
+pub fn table(system: &str, outcomes: &[Outcome]) -> String {
+    let count = |f: fn(&Verdict) -> bool| outcomes.iter().filter(|o| f(&o.verdict)).count();
+    let right = count(|v| *v == Verdict::Right);
+    let cannot = count(|v| *v == Verdict::CannotTell);
+    let wrong = count(|v| matches!(v, Verdict::Wrong(_)));
+    let n = outcomes.len().max(1) as f64;
+    let mean = outcomes.iter().map(|o| o.seconds).sum::<f64>() / n;
+    let mut out = format!(
+        "{system}: {} cases, **{right} right, {cannot} rightly 'cannot tell', {wrong} wrong** ({:.0} % right or rightly cannot tell); the loop takes {mean:.1} s a run on average.\n\n",
+        outcomes.len(),
+        100.0 * (right + cannot) as f64 / n
+    );
+    out += "| case | the loop added | verdict |\n|---|---|---|\n";
+    for o in outcomes {
+        let verdict = match &o.verdict {
+            Verdict::Right => "right".to_string(),
+            Verdict::CannotTell => "cannot tell (right)".to_string(),
+            Verdict::Wrong(why) => format!("**wrong**: {why}"),
+        };
+        out += &format!("| {} | {} | {verdict} |\n", o.case, if o.added.is_empty() { "nothing" } else { &o.added });
+    }
+    out
+}
