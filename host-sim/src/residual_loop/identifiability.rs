@@ -78,8 +78,11 @@ impl<S: LoopSystem> Engine<'_, S> {
     /// The declared effects ([`LoopSystem::declared`]) with a scalar that the data cannot see
     /// from the final model: moving the scalar to its [`probes`] changes the log-likelihood by
     /// less than an effect must gain to be added (its BIC cost and the model's floor, the
-    /// acceptance rule's own threshold: an effect below it could never be found). A trial whose
-    /// filter fails (diverges, cannot be built) counts as seen: the data reject it.
+    /// acceptance rule's own threshold: an effect below it could never be found). With a probe
+    /// on each side, the change is the likelihood's curvature's (the information the data carry
+    /// on the scalar), so that an effect already in the data, which tilts the likelihood
+    /// towards one side, does not make the data look more informative than they are. A trial
+    /// whose filter fails (diverges, cannot be built) counts as seen: the data reject it.
     pub(super) fn screen(&self, effects: &[Applied<S::Effect>], run: &Run) -> Vec<NotIdentifiable> {
         let base = run.log_likelihood();
         let screened: Vec<(S::Effect, Probes)> = self
@@ -92,18 +95,14 @@ impl<S: LoopSystem> Engine<'_, S> {
         let worsts: Vec<f64> = screened
             .par_iter()
             .map(|(e, probes)| {
-                let penalty = self.penalty(e, false);
-                let mut worst: f64 = 0.0;
+                let mut losses = Vec::new();
                 for &theta in &probes.thetas {
                     let mut trial = effects.to_vec();
                     trial.push(Applied::new(*e, theta));
                     let Ok((_, r)) = self.sys.run(&trial) else { return f64::INFINITY };
-                    worst = worst.max((r.log_likelihood() - base).abs());
-                    if worst > penalty {
-                        break;
-                    }
+                    losses.push((theta - probes.neutral, base - r.log_likelihood()));
                 }
-                worst
+                probes.change(&losses)
             })
             .collect();
         let mut out = Vec::new();
@@ -114,7 +113,7 @@ impl<S: LoopSystem> Engine<'_, S> {
             self.progress(|| format!("screen: {what} of {}: |Δ log-likelihood| ≤ {worst:.2}", label.location));
             if worst <= penalty {
                 let reason = format!(
-                    "{} changes the log-likelihood by at most {worst:.2}, less than the {penalty:.1} an effect must gain to be added: these sensors cannot see it{}",
+                    "{} changes the log-likelihood by about {worst:.2}, less than the {penalty:.1} an effect must gain to be added: these sensors cannot see it{}",
                     probes.what,
                     probes.limit(worst, penalty, &label.unit)
                 );
@@ -168,6 +167,25 @@ struct Probes {
 }
 
 impl Probes {
+    /// The log-likelihood's change at the farthest probe, from the `(distance, loss)` of each:
+    /// with a probe on each side, that of the parabola through both (the linear part, which an
+    /// effect already in the data puts there, taken out); else the largest change.
+    fn change(&self, losses: &[(f64, f64)]) -> f64 {
+        let largest = losses.iter().map(|(_, l)| l.abs()).fold(0.0, f64::max);
+        let &[(d1, l1), (d2, l2)] = losses else { return largest };
+        if d1 * d2 >= 0.0 {
+            return largest;
+        }
+        // l = −g d + ½ I d²: two probes give I without g.
+        let information = 2.0 * (l1 * d2 - l2 * d1) / (d1 * d2 * (d1 - d2));
+        let reach = d1.abs().max(d2.abs());
+        if information.is_finite() && information > 0.0 {
+            0.5 * information * reach * reach
+        } else {
+            largest
+        }
+    }
+
     /// The smallest change the data could tell, in words, from the log-likelihood's change
     /// `worst` at the farthest probe and the `penalty` an effect must gain: the likelihood is
     /// quadratic near the neutral value, so the change grows with the square of the distance.
