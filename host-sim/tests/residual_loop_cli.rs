@@ -143,21 +143,14 @@ fn a_baseline_of_the_oscillator_is_learned_and_judged_against() {
     assert!(learned.gain_floor.is_finite() && learned.gain_floor >= 0.0, "{learned:?}");
     assert_eq!(learned.source.data, healthy);
     assert_eq!(learned.source.data_sha256.len(), 64);
+    let close = |data: &str, baseline: &str, report: &Path| {
+        let report = report.to_str().unwrap();
+        let args = ["loop", "oscillator", "--config", demo, "--data", data, "--baseline", baseline, "--report", report];
+        edgekf(&[&args[..], &["--quiet"]].concat())
+    };
     let level = |data: &str, name: &str| {
         let report = dir.join(name);
-        let out = edgekf(&[
-            "loop",
-            "oscillator",
-            "--config",
-            demo,
-            "--data",
-            data,
-            "--baseline",
-            b,
-            "--report",
-            report.to_str().unwrap(),
-            "--quiet",
-        ]);
+        let out = close(data, b, &report);
         assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
         let v: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(report.join("report.json")).unwrap()).unwrap();
@@ -181,19 +174,7 @@ fn a_baseline_of_the_oscillator_is_learned_and_judged_against() {
     )
     .unwrap();
     let report = dir.join("refused");
-    let out = edgekf(&[
-        "loop",
-        "oscillator",
-        "--config",
-        demo,
-        "--data",
-        &other,
-        "--baseline",
-        foreign.to_str().unwrap(),
-        "--report",
-        report.to_str().unwrap(),
-        "--quiet",
-    ]);
+    let out = close(&other, foreign.to_str().unwrap(), &report);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success() && stderr.contains("a baseline of `boom`, not of `oscillator`"), "{stderr}");
     assert!(!report.exists());

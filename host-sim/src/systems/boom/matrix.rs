@@ -73,7 +73,8 @@ pub fn cases(declared: &BoomConfig) -> Result<Vec<Case>> {
         for (theta, size) in sizes {
             let mut truth = declared.clone();
             inject(&mut truth, effect, theta);
-            let value = sys.value(&(), &data_free_run(), &crate::residual_loop::Applied::new(effect, theta));
+            // The boom's value reads nothing of the run: a factor's `exp θ`, else `θ`.
+            let value = sys.value(&(), &Default::default(), &crate::residual_loop::Applied::new(effect, theta));
             let expected = Expected {
                 kind: label.kind,
                 location: label.location.clone(),
@@ -129,18 +130,20 @@ fn run(truth: &BoomConfig, seed: u64) -> Result<super::simulate::BoomRecording> 
     simulate(truth, &SimOptions { scenario: Scenario::Luffing, duration: DURATION, seed }, &mut |_| {})
 }
 
-/// The declared boom's loop system on `data`, the gyro's model from `truth`'s static record.
-fn system<'a>(truth: &BoomConfig, declared: &BoomConfig, data: &'a DataFile, seed: u64) -> Result<BoomSystem<'a>> {
+/// The declared boom's gyro model from `truth`'s 60 s static record at `seed`.
+fn gyro(truth: &BoomConfig, declared: &BoomConfig, seed: u64) -> Result<edgekf::systems::boom::Ar2> {
     let (_, statics) = static_record(truth, 60.0, seed)?;
-    let ar = gyro_model(declared, &statics)?;
-    BoomSystem::new(declared, data, ar, INCLINOMETER_NOISE, &options())
+    gyro_model(declared, &statics)
+}
+
+/// The declared boom's loop system on `data`.
+fn system<'a>(truth: &BoomConfig, declared: &BoomConfig, data: &'a DataFile, seed: u64) -> Result<BoomSystem<'a>> {
+    BoomSystem::new(declared, data, gyro(truth, declared, seed)?, INCLINOMETER_NOISE, &options())
 }
 
 /// The loop closed on `data` with `declared`.
 fn close(truth: &BoomConfig, declared: &BoomConfig, data: &DataFile, seed: u64) -> Result<LoopReport> {
-    let (_, statics) = static_record(truth, 60.0, seed)?;
-    let ar = gyro_model(declared, &statics)?;
-    super::loop_system::close_loop(declared, data, ar, INCLINOMETER_NOISE, &options())
+    super::loop_system::close_loop(declared, data, gyro(truth, declared, seed)?, INCLINOMETER_NOISE, &options())
 }
 
 /// `data` without its `truth_` columns: what a real recording has.
@@ -203,11 +206,6 @@ fn sideways(declared: &BoomConfig) -> Result<Case> {
     };
     let name = format!("sideways mode at {hz:.3} Hz, gyro leaning 0.05 rad");
     Ok(Case { name, truth, seed: EFFECT_SEED, expect: Expect::Effect(expected) })
-}
-
-/// A run with nothing in it, for [`LoopSystem::value`], which reads none of it for the boom.
-fn data_free_run() -> crate::residual_loop::filter::Run {
-    crate::residual_loop::filter::Run::default()
 }
 
 /// `×1.0312` for a factor, else the value to four significant digits.
