@@ -112,12 +112,28 @@ impl<S: LoopSystem> Engine<'_, S> {
             let what = label.detail.parameter.clone().unwrap_or_else(|| label.kind.to_string());
             self.progress(|| format!("screen: {what} of {}: |Δ log-likelihood| ≤ {worst:.2}", label.location));
             if worst <= penalty {
+                let rivals: Vec<String> = self
+                    .sys
+                    .rivals_of(e, effects)
+                    .iter()
+                    .map(|r| {
+                        let l = self.sys.label(r);
+                        format!("{} at {}", l.kind, l.location)
+                    })
+                    .collect();
+                let taken = if rivals.is_empty() {
+                    String::new()
+                } else {
+                    format!("; {} in the model gives the same innovations", rivals.join(" and "))
+                };
                 let reason = format!(
-                    "{} changes the log-likelihood by about {worst:.2}, less than the {penalty:.1} an effect must gain to be added: these sensors cannot see it{}",
+                    "{} changes the log-likelihood by about {worst:.2}, less than the {penalty:.1} an effect must gain to be added: these sensors cannot see it{taken}{}",
                     probes.what,
                     probes.limit(worst, penalty, &label.unit)
                 );
-                out.push(NotIdentifiable::of(&label, "max_delta_log_likelihood", worst, reason));
+                let mut verdict = NotIdentifiable::of(&label, "max_delta_log_likelihood", worst, reason);
+                verdict.rivals = rivals;
+                out.push(verdict);
             }
         }
         out

@@ -39,6 +39,10 @@ pub struct LevelBaseline {
     /// The configured model's mean NIS per channel on the healthy record (1 when its noise
     /// levels are right).
     pub nis_mean: f64,
+    /// The factor on the system's tunable process noise the healthy record asked for (see
+    /// [`tuning`](super::tuning)), if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub noise_scale: Option<f64>,
     /// Where it was learned.
     #[serde(default)]
     pub source: BaselineSource,
@@ -72,12 +76,15 @@ impl LevelBaseline {
         say("measuring what the healthy record leaves unexplained (one round of the loop)".into());
         let probe =
             LoopOptions { max_effects: 1, screen_parameters: false, progress: false, gain_floor: 0.0, ..*options };
-        let gain_floor = leftover_gain(&search(sys, &probe)?, n_meas, &say);
+        let report = search(sys, &probe)?;
+        let gain_floor = leftover_gain(&report, n_meas, &say);
+        let noise_scale = report.tuning.map(|t| t.scale);
         Ok(Self {
             system: sys.name().to_string(),
             condition,
             gain_floor,
             nis_mean: summary.nis_mean,
+            noise_scale,
             source: BaselineSource { version: env!("CARGO_PKG_VERSION").into(), ..BaselineSource::default() },
             channels: summary
                 .innovation_rms
@@ -119,7 +126,7 @@ impl LevelBaseline {
     /// `options` with this baseline's floor: an effect must gain [`FLOOR_MARGIN`] times what
     /// the healthy record leaves unexplained.
     pub fn options(&self, options: &LoopOptions) -> LoopOptions {
-        LoopOptions { gain_floor: FLOOR_MARGIN * self.gain_floor, ..*options }
+        LoopOptions { gain_floor: FLOOR_MARGIN * self.gain_floor, noise_scale: self.noise_scale, ..*options }
     }
 
     /// Puts the baseline (`baseline`) and the record's innovation levels against its
@@ -140,6 +147,7 @@ impl LevelBaseline {
             "data_sha256": self.source.data_sha256,
             "gain_floor": self.gain_floor,
             "nis_mean": self.nis_mean,
+            "noise_scale": self.noise_scale,
         });
         let section = &mut report.section;
         section.fields.insert("baseline".into(), about);

@@ -26,6 +26,7 @@
 //! * [`filter`]: a dynamic-size Kalman filter for the host search (time-varying gain until the
 //!   covariance converges, then frozen);
 //! * [`modal_form`]: the transition in real modal form, so that a covariance step is `O(n²)`;
+//! * [`tuning`]: the process noise set from the data before the search;
 //! * [`optimize`]: the one-dimensional maximum-likelihood fit of an effect's scalar.
 
 pub mod baseline;
@@ -44,6 +45,7 @@ pub mod report;
 pub mod search;
 pub mod signature;
 pub mod system;
+pub mod tuning;
 pub mod vocabulary;
 
 pub use correction::{Correction, EffectCorrection};

@@ -26,6 +26,10 @@ pub struct LoopOptions {
     /// Check at the end which declared parameters and settings the data cannot see (moving
     /// each over its range changes the log-likelihood by less than an effect must gain).
     pub screen_parameters: bool,
+    /// The factor on the system's tunable process noise a healthy baseline showed: applied
+    /// instead of fitted on a record that may carry the change (see
+    /// [`tuning`](super::tuning)).
+    pub noise_scale: Option<f64>,
     /// Print progress to standard error.
     pub progress: bool,
 }
@@ -39,6 +43,7 @@ impl Default for LoopOptions {
             gain_floor: 0.0,
             identifiable_margin: 2.0,
             screen_parameters: true,
+            noise_scale: None,
             progress: false,
         }
     }

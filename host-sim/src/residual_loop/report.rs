@@ -4,6 +4,7 @@
 use super::correction::EffectCorrection;
 use super::filter::Run;
 use super::signature::{Channel, RunSummary, Signature};
+use super::tuning::Tuning;
 use super::vocabulary::{EffectDetail, EffectKind, EffectLabel};
 use serde::Serialize;
 
@@ -118,6 +119,10 @@ pub struct NotIdentifiable {
     pub value: f64,
     /// Why, in words.
     pub reason: String,
+    /// What the model already carries that gives the same innovations (`kind at location`),
+    /// where the system names it ([`LoopSystem::rivals_of`](super::LoopSystem::rivals_of)).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub rivals: Vec<String>,
 }
 
 impl NotIdentifiable {
@@ -130,6 +135,7 @@ impl NotIdentifiable {
             statistic: statistic.into(),
             value,
             reason,
+            rivals: Vec::new(),
         }
     }
 
@@ -216,8 +222,12 @@ pub struct LoopReport {
     /// Effects kept, in order.
     pub effects_added: Vec<AddedEffect>,
     /// How each kept effect enters the configuration (`--corrected-config`), in the same
-    /// order.
+    /// order, then the tuning's.
     pub corrections: Vec<EffectCorrection>,
+    /// The process noise the engine set from the data before the search, if it paid
+    /// ([`tuning`](super::tuning)).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tuning: Option<Tuning>,
     /// The base model.
     pub before: RunSummary,
     /// The final model.

@@ -15,6 +15,7 @@ use super::options::LoopOptions;
 use super::report::{AddedEffect, LoopReport, NotIdentifiable, Refused, Source, Traces, Trial, SCHEMA_VERSION};
 use super::signature::{unexplained, RunSummary, Signature};
 use super::system::{LoopSystem, PreStage};
+use super::tuning::tune;
 use super::vocabulary::{Applied, EffectKind, EffectLabel};
 use anyhow::Result;
 
@@ -126,6 +127,42 @@ impl<S: LoopSystem> Engine<'_, S> {
         Ok(())
     }
 
+    /// Drops an effect that no longer pays for itself once the effects added after it are in
+    /// (they explain what it stood in for: an offset taken up first by a channel that a wrong
+    /// constant skewed): backward elimination, one effect at a time, each against its own cost.
+    /// A dropped effect is refused, with what it would have gained.
+    fn prune(&self, st: &mut State<S::Effect, S::Model>) {
+        'again: while st.effects.len() >= 2 {
+            let full = st.run.log_likelihood();
+            // The last one was kept against all the others already.
+            for i in 0..st.effects.len() - 1 {
+                let mut without = st.effects.clone();
+                let gone = without.remove(i);
+                let Ok((model, run)) = self.sys.run(&without) else { continue };
+                let (loss, penalty) = (full - run.log_likelihood(), self.penalty(&gone.effect, gone.onset_s.is_some()));
+                if loss > penalty {
+                    continue;
+                }
+                let value = self.sys.value(&st.model, &st.run, &gone);
+                let kept = st.added.remove(i);
+                self.progress(|| format!("dropped {} at {}: the later effects explain it", kept.label.kind, kept.label.location));
+                st.refused.push(Refused::of(
+                    &kept.label,
+                    Some(value),
+                    format!(
+                        "added first (Δ log-likelihood {:.1}), then explained by the effects added after it: with them in, it gains only {loss:.1}, less than its cost of {penalty:.1}",
+                        kept.delta
+                    ),
+                ));
+                st.effects = without;
+                (st.model, st.run) = (model, run);
+                st.summary = self.sys.summarise(&st.run);
+                continue 'again;
+            }
+            break;
+        }
+    }
+
     /// Puts `win` into the model.
     fn keep(&self, st: &mut State<S::Effect, S::Model>, iteration: usize, win: Fitted<S::Effect, S::Model>) {
         st.trials.push(self.trial(iteration, &win, true));
@@ -158,6 +195,11 @@ pub fn search<S: LoopSystem>(sys: &mut S, options: &LoopOptions) -> Result<LoopR
     let (mut model, mut run) = sys.run(&[])?;
     let base_run = run.clone();
     let before = sys.summarise(&run);
+    let tuning = tune(sys, &run, options)?;
+    let tuning = tuning.map(|(tuning, correction, m, r)| {
+        (model, run) = (m, r);
+        (tuning, correction)
+    });
     let PreStage { added: first, trials, refused, excludes, data_changed } = sys.prestage(&run, options)?;
     if data_changed {
         (model, run) = sys.run(&[])?;
@@ -191,6 +233,7 @@ pub fn search<S: LoopSystem>(sys: &mut S, options: &LoopOptions) -> Result<LoopR
             break why;
         }
     };
+    engine.prune(&mut st);
     if options.screen_parameters {
         st.not_identifiable.extend(engine.screen(&st.effects, &st.run));
     }
@@ -248,12 +291,17 @@ pub fn search<S: LoopSystem>(sys: &mut S, options: &LoopOptions) -> Result<LoopR
         u
     };
     let section = sys.section(&st.model, &st.run);
+    let tuning = tuning.map(|(tuning, correction)| {
+        corrections.push(correction);
+        tuning
+    });
     Ok(LoopReport {
         schema_version: SCHEMA_VERSION,
         system: sys.name().to_string(),
         source: Source { version: env!("CARGO_PKG_VERSION").into(), ..Source::default() },
         effects_added,
         corrections,
+        tuning,
         before,
         after: st.summary,
         not_identifiable: st.not_identifiable,

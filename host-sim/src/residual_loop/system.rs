@@ -11,6 +11,7 @@ use super::optimize::ScalarRange;
 use super::options::LoopOptions;
 use super::report::{AddedEffect, Refused, SystemSection, Traces, Trial};
 use super::signature::RunSummary;
+use super::tuning::TunableNoise;
 use super::vocabulary::{Applied, EffectKind, EffectLabel};
 use anyhow::Result;
 use std::fmt::Debug;
@@ -147,4 +148,17 @@ pub trait LoopSystem: Sync {
     fn prestage(&mut self, _run: &Run, _options: &LoopOptions) -> Result<PreStage<Self::Effect>> {
         Ok(PreStage::default())
     }
+    /// What the model (with `effects`) already carries that would take `effect` up whole where
+    /// the data cannot see it (a current for a speed sensor's offset at one heading): named as
+    /// its rivals in `not_identifiable` (none by default).
+    fn rivals_of(&self, _effect: &Self::Effect, _effects: &[Applied<Self::Effect>]) -> Vec<Self::Effect> {
+        Vec::new()
+    }
+    /// The process noise the engine may set from the data before the search (none by default;
+    /// see [`tuning`](super::tuning)).
+    fn tunable_noise(&self) -> Option<TunableNoise> {
+        None
+    }
+    /// Scales that noise by `scale` (1: the configuration's) in every later run.
+    fn set_noise_scale(&mut self, _scale: f64) {}
 }

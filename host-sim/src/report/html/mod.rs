@@ -187,6 +187,7 @@ mod tests {
             schema_version: crate::residual_loop::SCHEMA_VERSION,
             system: "rotor <test>".into(),
             source: Default::default(),
+            tuning: None,
             effects_added: vec![AddedEffect {
                 kind: EffectKind::SensorScale,
                 location: "n5_x".into(),

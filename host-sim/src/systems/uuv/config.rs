@@ -35,6 +35,9 @@ pub struct SensorConfig {
     /// A further accelerometer offset on every seed, body x, y, z, m/s² (an effect nobody
     /// declared, for the residual loop's tests; zero by default).
     pub acc_offset: [f64; 3],
+    /// A DVL offset on every seed, body u, v, w, m/s (an effect nobody declared, for the
+    /// residual loop's tests; zero by default).
+    pub dvl_offset: [f64; 3],
     /// Gyro white noise, rad/s.
     pub gyro_noise: f64,
     /// Gyro bias: stationary standard deviation of each axis, rad/s.
@@ -57,6 +60,7 @@ impl Default for SensorConfig {
             acc_noise: 0.02,
             acc_bias: 0.02,
             acc_offset: [0.0; 3],
+            dvl_offset: [0.0; 3],
             gyro_noise: 0.002,
             gyro_bias: 0.0015,
             gyro_bias_time: 300.0,
@@ -254,7 +258,7 @@ impl UuvConfig {
             return bad(format!("sensors.dvl_rate = {} must divide sensors.rate = {}", s.dvl_rate, s.rate));
         }
         let noises = [s.acc_noise, s.acc_bias, s.gyro_noise, s.gyro_bias, s.depth_noise, s.heading_noise, s.dvl_noise];
-        if noises.iter().chain(&s.acc_offset).any(|v| !v.is_finite()) || noises.iter().any(|v| *v < 0.0) {
+        if noises.iter().chain(&s.acc_offset).chain(&s.dvl_offset).any(|v| !v.is_finite()) || noises.iter().any(|v| *v < 0.0) {
             return bad("[sensors]: noises and biases must be finite and not negative".into());
         }
         let c = &self.current;

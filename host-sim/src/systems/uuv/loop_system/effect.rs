@@ -136,10 +136,13 @@ pub enum Effect {
     Current,
     /// A factor on a vehicle constant.
     Parameter(Parameter),
+    /// A fixed offset on a DVL axis 0–2, m/s: the scalar the engine's screen moves to ask
+    /// whether the data can see a DVL offset at all (the node's estimator carries none).
+    DvlOffset(usize),
 }
 
 impl Effect {
-    /// The filter states it occupies (none for a parameter).
+    /// The filter states it occupies (none for a parameter or a fixed offset).
     pub fn states(self) -> Range<usize> {
         let one = |i: usize| i..i + 1;
         match self {
@@ -149,7 +152,7 @@ impl Effect {
             Effect::Bias(Sensor::Gyro(a)) => one(GYRO_BIAS + a),
             Effect::Bias(Sensor::Dvl(a)) => one(DVL_BIAS + a),
             Effect::Current => CURRENT..CURRENT + 2,
-            Effect::Parameter(_) => 0..0,
+            Effect::Parameter(_) | Effect::DvlOffset(_) => 0..0,
         }
     }
 

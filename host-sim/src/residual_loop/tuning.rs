@@ -1,0 +1,109 @@
+//! The process noise set from the data before the search.
+//!
+//! A filter whose process noise is larger than what the data need is over-cautious (NIS below
+//! its bounds), and on such a filter any parameter that makes the model more damped or stiffer
+//! also shrinks the predicted spread and raises the likelihood whatever the data say: a damping
+//! factor's likelihood then rises to the edge of its range on healthy and changed runs alike.
+//! So a system may offer one scale on the noise its model's dynamics carry
+//! ([`LoopSystem::tunable_noise`]); the engine fits it by maximum likelihood on the base model,
+//! keeps it only if it pays for its parameter like an effect does, and writes it into the
+//! configuration's keys. It is a tuning, not an effect: a healthy record may need it too. It
+//! only lowers the noise (see `SPAN`).
+
+use super::correction::{Correction, EffectCorrection};
+use super::filter::Run;
+use super::optimize::maximise;
+use super::options::LoopOptions;
+use super::system::LoopSystem;
+use crate::io::config_edit::{ConfigEdit, Op};
+use anyhow::Result;
+use serde::Serialize;
+
+/// The noise a system lets the engine scale: what it covers and the configuration's keys.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TunableNoise {
+    /// What the noise stands for, in a few words ("the velocity and rate").
+    pub what: String,
+    /// The configuration keys the scale multiplies (each a process noise density).
+    pub keys: Vec<String>,
+}
+
+/// The scale the engine kept, in `report.json`'s `tuning`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Tuning {
+    /// What the noise stands for.
+    pub what: String,
+    /// The factor on the configuration's process noise densities.
+    pub scale: f64,
+    /// What it raised the base model's log-likelihood by.
+    pub delta_log_likelihood: f64,
+    /// What it had to raise it by to be kept (the BIC of one parameter and the gain floor).
+    pub penalty: f64,
+}
+
+impl Tuning {
+    /// How the scale enters the configuration: each key multiplied by it.
+    ///
+    /// ```
+    /// use edgekf_sim::residual_loop::tuning::Tuning;
+    /// let t = Tuning { what: "motion".into(), scale: 0.1, delta_log_likelihood: 50.0, penalty: 6.0 };
+    /// let c = t.correction(&["estimator.process.velocity".to_string()]);
+    /// assert_eq!(c.effect, "process_noise of motion");
+    /// assert_eq!(c.correction.edits().len(), 1);
+    /// ```
+    pub fn correction(&self, keys: &[String]) -> EffectCorrection {
+        EffectCorrection {
+            effect: format!("process_noise of {}", self.what),
+            correction: Correction::model(keys.iter().map(|k| ConfigEdit::new(k, Op::Scale(self.scale)))),
+        }
+    }
+}
+
+/// The smallest the scale may go, a factor on the configuration's. It never goes above 1:
+/// more noise than declared is what an effect the model lacks looks like, and naming that
+/// effect is the search's work (a fault the noise had swallowed would be found late, or not).
+const SPAN: f64 = 1000.0;
+/// Grid points over `ln` of the scale before Brent's method.
+const GRID: usize = 5;
+/// Tolerance of the fit in `ln` of the scale (5 %).
+const TOLERANCE: f64 = 0.05;
+
+/// Fits the scale on `sys`'s base model if it offers one (or takes a baseline's,
+/// [`LoopOptions::noise_scale`]), leaves it set on `sys` if it pays (else set back to 1) and
+/// returns it with its correction and the base run it gives.
+pub fn tune<S: LoopSystem>(
+    sys: &mut S,
+    base: &Run,
+    options: &LoopOptions,
+) -> Result<Option<(Tuning, EffectCorrection, S::Model, Run)>> {
+    let Some(noise) = sys.tunable_noise() else { return Ok(None) };
+    if options.progress {
+        eprintln!("loop: fitting the process noise of {} to the data", noise.what);
+    }
+    let base_ll = base.log_likelihood();
+    let n = base.measurements().max(2) as f64;
+    let penalty = 0.5 * n.ln() + options.gain_floor * n;
+    if let Some(scale) = options.noise_scale {
+        // A healthy baseline's level, not refitted on a record that may carry the change.
+        sys.set_noise_scale(scale);
+        let (model, run) = sys.run(&[])?;
+        let tuning = Tuning { what: noise.what, scale, delta_log_likelihood: run.log_likelihood() - base_ll, penalty };
+        let correction = tuning.correction(&noise.keys);
+        return Ok(Some((tuning, correction, model, run)));
+    }
+    let mut eval = |x: f64| {
+        sys.set_noise_scale(x.exp());
+        sys.run(&[]).ok().map(|(_, r)| r.log_likelihood())
+    };
+    let best = maximise(&mut eval, -SPAN.ln(), 0.0, GRID, TOLERANCE);
+    let kept = best.filter(|m| m.value - base_ll > penalty);
+    let Some(m) = kept else {
+        sys.set_noise_scale(1.0);
+        return Ok(None);
+    };
+    sys.set_noise_scale(m.x.exp());
+    let (model, run) = sys.run(&[])?;
+    let tuning = Tuning { what: noise.what, scale: m.x.exp(), delta_log_likelihood: m.value - base_ll, penalty };
+    let correction = tuning.correction(&noise.keys);
+    Ok(Some((tuning, correction, model, run)))
+}
