@@ -24,8 +24,10 @@ use serde::Serialize;
 pub struct TunableNoise {
     /// What the noise stands for, in a few words ("the velocity and rate").
     pub what: String,
-    /// The configuration keys the scale multiplies (each a process noise density).
-    pub keys: Vec<String>,
+    /// The configuration keys the scale multiplies (each a process noise density), each with
+    /// the value in effect (what the key is taken to hold where the configuration leaves it
+    /// out).
+    pub keys: Vec<(String, f64)>,
 }
 
 /// The scale the engine kept, in `report.json`'s `tuning`.
@@ -47,15 +49,13 @@ impl Tuning {
     /// ```
     /// use edgekf_sim::residual_loop::tuning::Tuning;
     /// let t = Tuning { what: "motion".into(), scale: 0.1, delta_log_likelihood: 50.0, penalty: 6.0 };
-    /// let c = t.correction(&["estimator.process.velocity".to_string()]);
+    /// let c = t.correction(&[("estimator.process.velocity".to_string(), 0.02)]);
     /// assert_eq!(c.effect, "process_noise of motion");
-    /// assert_eq!(c.correction.edits().len(), 1);
+    /// assert_eq!(c.correction.edits()[0].absent, Some(0.02));
     /// ```
-    pub fn correction(&self, keys: &[String]) -> EffectCorrection {
-        EffectCorrection {
-            effect: format!("process_noise of {}", self.what),
-            correction: Correction::model(keys.iter().map(|k| ConfigEdit::new(k, Op::Scale(self.scale)))),
-        }
+    pub fn correction(&self, keys: &[(String, f64)]) -> EffectCorrection {
+        let edits = keys.iter().map(|(k, v)| ConfigEdit::or_absent(k, Op::Scale(self.scale), *v));
+        EffectCorrection { effect: format!("process_noise of {}", self.what), correction: Correction::model(edits) }
     }
 }
 

@@ -324,7 +324,8 @@ impl LoopSystem for UuvSystem<'_> {
     /// higher-order terms, the current's pull): how much that is depends on the vehicle and
     /// the sea, so the data set it.
     fn tunable_noise(&self) -> Option<TunableNoise> {
-        let keys = ["estimator.process.velocity", "estimator.process.rate"].map(String::from).to_vec();
+        let (velocity, rate) = self.motion_noise;
+        let keys = vec![("estimator.process.velocity".into(), velocity), ("estimator.process.rate".into(), rate)];
         Some(TunableNoise { what: "the vehicle's velocity and rate".into(), keys })
     }
 
