@@ -1,20 +1,21 @@
 //! The loop's effect matrices (`edgekf_sim::matrix`): every case of a system run in parallel
 //! over the cores, scored by the one rule, printed as the README's table; with
 //! `--readme README.md` the table replaces the one between the README's markers
-//! `<!-- loop-matrix boom -->` and `<!-- /loop-matrix boom -->`.
+//! `<!-- loop-matrix SYSTEM -->` and `<!-- /loop-matrix SYSTEM -->`.
 //!
-//! `cargo run --release -p edgekf-sim --example loop_matrix -- [boom] [--readme README.md]`
+//! `cargo run --release -p edgekf-sim --example loop_matrix -- [boom] [uuv] [--readme README.md]`
 //! (`cargo xtask loop-matrix` runs it).
 
 use anyhow::{bail, Context, Result};
 use edgekf_sim::matrix::{table, Outcome};
 use edgekf_sim::systems::boom::{matrix as boom, BoomConfig};
+use edgekf_sim::systems::uuv::{matrix as uuv, UuvConfig};
 use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 /// The systems with a matrix.
-const SYSTEMS: [&str; 1] = ["boom"];
+const SYSTEMS: [&str; 2] = ["boom", "uuv"];
 
 fn main() -> Result<()> {
     let mut args = std::env::args().skip(1);
@@ -32,6 +33,7 @@ fn main() -> Result<()> {
     for system in systems {
         let text = match system.as_str() {
             "boom" => boom_table()?,
+            "uuv" => uuv_table()?,
             _ => unreachable!("checked above"),
         };
         print!("{text}");
@@ -42,27 +44,58 @@ fn main() -> Result<()> {
     Ok(())
 }
 
-/// The boom's matrix, its cases run in parallel.
+/// The boom's matrix.
 fn boom_table() -> Result<String> {
     let declared = BoomConfig::default();
     let cases = boom::cases(&declared)?;
-    eprintln!("boom: {} cases", cases.len());
-    let mut seeds: Vec<u64> = cases.iter().map(|c| c.seed).collect();
+    parallel_table(
+        "boom",
+        &cases,
+        |c| (c.seed, &c.name),
+        |s| boom::clean_error(&declared, s),
+        |c, clean| boom::run_case(c, &declared, clean),
+    )
+}
+
+/// The vehicle's matrix.
+fn uuv_table() -> Result<String> {
+    let declared = UuvConfig::default();
+    let cases = uuv::cases(&declared)?;
+    parallel_table(
+        "uuv",
+        &cases,
+        |c| (c.seed, &c.name),
+        |s| uuv::clean_error(&declared, s),
+        |c, clean| uuv::run_case(c, &declared, clean),
+    )
+}
+
+/// A system's cases run in parallel, each against the clean run's error at its seed (each
+/// seed's clean run once), as the README's table.
+fn parallel_table<C: Sync>(
+    system: &str,
+    cases: &[C],
+    about: impl Fn(&C) -> (u64, &String) + Sync,
+    clean: impl Fn(u64) -> Result<f64> + Sync,
+    run: impl Fn(&C, f64) -> Result<Outcome> + Sync,
+) -> Result<String> {
+    eprintln!("{system}: {} cases", cases.len());
+    let mut seeds: Vec<u64> = cases.iter().map(|c| about(c).0).collect();
     seeds.sort_unstable();
     seeds.dedup();
-    let clean: BTreeMap<u64, f64> =
-        seeds.par_iter().map(|&s| Ok((s, boom::clean_error(&declared, s)?))).collect::<Result<_>>()?;
+    let clean: BTreeMap<u64, f64> = seeds.par_iter().map(|&s| Ok((s, clean(s)?))).collect::<Result<_>>()?;
     let outcomes: Vec<Outcome> = cases
         .par_iter()
         .map(|c| {
-            let o = boom::run_case(c, &declared, clean[&c.seed]);
-            if let Ok(o) = &o {
-                eprintln!("  {}: {:?}", o.case, o.verdict);
+            let o = run(c, clean[&about(c).0]);
+            match &o {
+                Ok(o) => eprintln!("  {}: {:?}", o.case, o.verdict),
+                Err(e) => eprintln!("  {}: {e:#}", about(c).1),
             }
             o
         })
         .collect::<Result<_>>()?;
-    Ok(table("boom", &outcomes))
+    Ok(table(system, &outcomes))
 }
 
 /// Puts `text` between the README's markers for `system`, the rest of the file as it was.

@@ -8,7 +8,26 @@
 //! and the error after the loop at most 1.5 times the clean run's; where the effect is below
 //! what the data can tell, `not_identifiable` naming it; on a clean run, nothing.
 
+use crate::io::data::DataFile;
 use crate::residual_loop::{EffectKind, LoopReport};
+
+/// `data` without its `truth_` columns: what a real recording has, and what the loop is given.
+///
+/// ```
+/// use edgekf_sim::io::data::DataFile;
+/// use edgekf_sim::matrix::without_truth;
+/// let d = DataFile { names: vec!["x".into(), "truth_x".into()], t: vec![0.0], columns: vec![vec![1.0], vec![2.0]], sha256: None };
+/// assert_eq!(without_truth(&d).names, ["x"]);
+/// ```
+pub fn without_truth(data: &DataFile) -> DataFile {
+    let keep: Vec<usize> = (0..data.names.len()).filter(|&i| !data.names[i].starts_with("truth_")).collect();
+    DataFile {
+        names: keep.iter().map(|&i| data.names[i].clone()).collect(),
+        t: data.t.clone(),
+        columns: keep.iter().map(|&i| data.columns[i].clone()).collect(),
+        sha256: None,
+    }
+}
 
 /// What a case expects of the loop.
 #[derive(Debug, Clone, PartialEq)]
@@ -156,4 +175,45 @@ pub fn table(system: &str, outcomes: &[Outcome]) -> String {
         out += &format!("| {} | {} | {verdict} |\n", o.case, if o.added.is_empty() { "nothing" } else { &o.added });
     }
     out
+}
+
+/// The rows `(case, added, verdict)` of `system`'s table in `readme`, between its
+/// `<!-- loop-matrix SYSTEM -->` markers (`None` without them): what a CI slice checks its
+/// cases against.
+///
+/// ```
+/// use edgekf_sim::matrix::readme_rows;
+/// let md = "<!-- loop-matrix uuv -->\n| case | the loop added | verdict |\n|---|---|---|\n| clean, seed 1 | nothing | right |\n<!-- /loop-matrix uuv -->";
+/// let rows = readme_rows(md, "uuv").unwrap();
+/// assert_eq!(rows, [["clean, seed 1".to_string(), "nothing".into(), "right".into()]]);
+/// assert!(readme_rows(md, "boom").is_none());
+/// ```
+pub fn readme_rows(readme: &str, system: &str) -> Option<Vec<[String; 3]>> {
+    let start = readme.find(&format!("<!-- loop-matrix {system} -->"))?;
+    let end = readme.find(&format!("<!-- /loop-matrix {system} -->"))?;
+    Some(
+        readme
+            .get(start..end)?
+            .lines()
+            .filter(|l| l.starts_with("| ") && !l.starts_with("| case "))
+            .map(cells)
+            .collect(),
+    )
+}
+
+/// The three cells of a table row `| a | b | c |`.
+fn cells(line: &str) -> [String; 3] {
+    let mut c = line.trim().trim_matches('|').split(" | ").map(|s| s.trim().to_string());
+    [(); 3].map(|_| c.next().unwrap_or_default())
+}
+
+/// `outcome` as its table row's cells.
+///
+/// ```
+/// use edgekf_sim::matrix::{row, Outcome, Verdict};
+/// let o = Outcome { case: "clean, seed 1".into(), verdict: Verdict::Right, added: String::new(), seconds: 1.0 };
+/// assert_eq!(row(&o), ["clean, seed 1".to_string(), "nothing".into(), "right".into()]);
+/// ```
+pub fn row(outcome: &Outcome) -> [String; 3] {
+    cells(table("", std::slice::from_ref(outcome)).lines().last().unwrap_or_default())
 }

@@ -49,10 +49,7 @@ pub fn summary_table(r: &LoopReport) -> String {
     if let Some(t) = &r.tuning {
         s.push_str(&format!(
             "  tuned: process noise of {} ×{:.4} (Δ log-likelihood {:.1}, cost {:.1})\n",
-            t.what,
-            t.scale,
-            t.delta_log_likelihood,
-            t.penalty
+            t.what, t.scale, t.delta_log_likelihood, t.penalty
         ));
     }
     let row = |name: &str, f: &dyn Fn(&RunSummary) -> String| {

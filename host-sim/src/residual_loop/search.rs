@@ -145,7 +145,9 @@ impl<S: LoopSystem> Engine<'_, S> {
                 }
                 let value = self.sys.value(&st.model, &st.run, &gone);
                 let kept = st.added.remove(i);
-                self.progress(|| format!("dropped {} at {}: the later effects explain it", kept.label.kind, kept.label.location));
+                self.progress(|| {
+                    format!("dropped {} at {}: the later effects explain it", kept.label.kind, kept.label.location)
+                });
                 st.refused.push(Refused::of(
                     &kept.label,
                     Some(value),

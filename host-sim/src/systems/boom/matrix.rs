@@ -13,7 +13,7 @@ use super::peaks::peak_errors;
 use super::runs::Scenario;
 use super::simulate::{simulate, static_record, SimOptions};
 use crate::io::data::DataFile;
-use crate::matrix::{score, Expect, Expected, Outcome};
+use crate::matrix::{score, without_truth, Expect, Expected, Outcome};
 use crate::residual_loop::limits::detection_limit;
 use crate::residual_loop::{EffectKind, LoopOptions, LoopReport, LoopSystem};
 use anyhow::{anyhow, Result};
@@ -144,17 +144,6 @@ fn system<'a>(truth: &BoomConfig, declared: &BoomConfig, data: &'a DataFile, see
 /// The loop closed on `data` with `declared`.
 fn close(truth: &BoomConfig, declared: &BoomConfig, data: &DataFile, seed: u64) -> Result<LoopReport> {
     super::loop_system::close_loop(declared, data, gyro(truth, declared, seed)?, INCLINOMETER_NOISE, &options())
-}
-
-/// `data` without its `truth_` columns: what a real recording has.
-fn without_truth(data: &DataFile) -> DataFile {
-    let keep: Vec<usize> = (0..data.names.len()).filter(|&i| !data.names[i].starts_with("truth_")).collect();
-    DataFile {
-        names: keep.iter().map(|&i| data.names[i].clone()).collect(),
-        t: data.t.clone(),
-        columns: keep.iter().map(|&i| data.columns[i].clone()).collect(),
-        sha256: None,
-    }
 }
 
 /// The paper's mean peak error of `estimate` against `full`'s truth, %.

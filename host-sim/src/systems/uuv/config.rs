@@ -258,7 +258,9 @@ impl UuvConfig {
             return bad(format!("sensors.dvl_rate = {} must divide sensors.rate = {}", s.dvl_rate, s.rate));
         }
         let noises = [s.acc_noise, s.acc_bias, s.gyro_noise, s.gyro_bias, s.depth_noise, s.heading_noise, s.dvl_noise];
-        if noises.iter().chain(&s.acc_offset).chain(&s.dvl_offset).any(|v| !v.is_finite()) || noises.iter().any(|v| *v < 0.0) {
+        if noises.iter().chain(&s.acc_offset).chain(&s.dvl_offset).any(|v| !v.is_finite())
+            || noises.iter().any(|v| *v < 0.0)
+        {
             return bad("[sensors]: noises and biases must be finite and not negative".into());
         }
         let c = &self.current;

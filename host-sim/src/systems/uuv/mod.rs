@@ -9,6 +9,7 @@
 //! * [`estimate`](mod@estimate): the shared estimator (`edgekf::systems::uuv`) over a data
 //!   file;
 //! * [`loop_system`]: the vehicle as a system of the residual loop (`edgekf loop uuv`);
+//! * [`matrix`]: its effect matrix (`cargo xtask loop-matrix uuv`);
 //! * [`plot`]: the health factors against truth (`edgekf uuv estimate --plot`);
 //! * [`cli`]: `edgekf uuv simulate | estimate`, `edgekf loop uuv`.
 
@@ -18,6 +19,7 @@ pub mod config;
 mod error;
 pub mod estimate;
 pub mod loop_system;
+pub mod matrix;
 pub mod plot;
 pub mod reference;
 pub mod scenario;

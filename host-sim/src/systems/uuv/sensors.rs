@@ -71,7 +71,8 @@ impl Sensors {
         let gyro = [0, 1, 2].map(|i| s.nu[3 + i] + self.gyro_bias[i] + c.gyro_noise * normal());
         let depth = s.depth + c.depth_noise * normal();
         let heading = wrap(s.heading + c.heading_noise * normal());
-        let dvl = (self.samples % self.dvl_every == 0).then(|| [0, 1, 2].map(|i| s.nu[i] + c.dvl_offset[i] + c.dvl_noise * normal()));
+        let dvl = (self.samples % self.dvl_every == 0)
+            .then(|| [0, 1, 2].map(|i| s.nu[i] + c.dvl_offset[i] + c.dvl_noise * normal()));
         // First-order Gauss–Markov wander with stationary deviation `gyro_bias`.
         let decay = (-1.0 / (c.rate * c.gyro_bias_time)).exp();
         let kick = c.gyro_bias * (1.0 - decay * decay).sqrt();

@@ -22,11 +22,11 @@ use crate::residual_loop::filter::Run;
 use crate::residual_loop::onset::settled_mean;
 use crate::residual_loop::optimize::ScalarRange;
 use crate::residual_loop::signature::ReferenceLines;
+use crate::residual_loop::tuning::TunableNoise;
 use crate::residual_loop::{
     search, Applied, Channel, EffectDetail, EffectKind, EffectLabel, Fitting, LoopOptions, LoopReport, LoopSystem,
     RunSummary, SystemSection, Traces,
 };
-use crate::residual_loop::tuning::TunableNoise;
 use crate::residual_loop::{Correction, Recording};
 use anyhow::Result;
 use edgekf::systems::uuv::{EstimatorSettings, Sample, Vehicle};
@@ -193,10 +193,13 @@ impl LoopSystem for UuvSystem<'_> {
         // An IMU offset shows where the attitude and rates it corrupts are measured (an
         // accelerometer's x offset reads as pitch, seen in the depth and the DVL), so every IMU
         // axis is a candidate once any channel is biased; a DVL axis when its own channel is.
+        // A horizontal DVL offset is taken up by the current, which the vehicle's roll and pitch
+        // project onto the other axes: so every DVL axis is a candidate once one is biased.
         let any_biased = (0..CHANNELS.len()).any(biased);
+        let dvl_biased = (8..11).any(biased);
         for c in 0..CHANNELS.len() {
-            let imu = c < 6;
-            if let Some(sensor) = Sensor::of_channel(c).filter(|_| biased(c) || (imu && any_biased)) {
+            let also = if c < 6 { any_biased } else { dvl_biased };
+            if let Some(sensor) = Sensor::of_channel(c).filter(|_| biased(c) || also) {
                 named.push(Effect::Bias(sensor));
             }
         }

@@ -1,0 +1,159 @@
+//! The vehicle's effect matrix ([`crate::matrix`]): the loop on healthy flights of the
+//! reference simulator (its 6-DOF hull, not the node's reduced dynamics), one effect the
+//! configuration does not declare per flight. Each declared setting (the mass, the surge
+//! drag, each DVL axis's offset) is sized at 3× and 10× its detection limit on a clean flight
+//! (seed 1), the limit computed by the engine from the node's model ([`detection_limit`]); a
+//! setting the data cannot see at all is expected as "cannot tell". Clean flights at five
+//! seeds must get nothing.
+
+use super::config::UuvConfig;
+use super::loop_system::effect::{Effect, Parameter};
+use super::loop_system::{close_loop, UuvSystem, MODEL_FLOOR};
+use super::scenario::Scenario;
+use super::simulate::{simulate, SimOptions};
+use crate::io::data::DataFile;
+use crate::matrix::{score, without_truth, Expect, Expected, Outcome};
+use crate::residual_loop::limits::detection_limit;
+use crate::residual_loop::tuning::tune;
+use crate::residual_loop::{LoopOptions, LoopSystem};
+use anyhow::{anyhow, Result};
+use std::time::Instant;
+
+/// Length of every flight, s.
+const DURATION: f64 = 150.0;
+/// Seeds of the clean flights.
+const CLEAN_SEEDS: [u64; 5] = [1, 2, 3, 4, 5];
+/// Seed of the flights that carry an effect.
+const EFFECT_SEED: u64 = 2;
+/// Sizes, as multiples of the detection limit.
+const MULTIPLES: [f64; 2] = [3.0, 10.0];
+
+/// One case: what the simulated vehicle or its sensors have that the declared ones lack.
+#[derive(Debug, Clone)]
+pub struct Case {
+    /// In words, for the table.
+    pub name: String,
+    /// The simulated vehicle.
+    pub truth: UuvConfig,
+    /// The seed of its flight.
+    pub seed: u64,
+    /// What the loop should say.
+    pub expect: Expect,
+}
+
+/// The whole matrix for `declared`: clean flights, then each declared setting at 3× and 10×
+/// its detection limit (or a fifth of the way to the end of its range, expected as "cannot
+/// tell", where the data cannot see it).
+pub fn cases(declared: &UuvConfig) -> Result<Vec<Case>> {
+    let mut out: Vec<Case> = CLEAN_SEEDS
+        .iter()
+        .map(|&seed| Case {
+            name: format!("clean, seed {seed}"),
+            truth: declared.clone(),
+            seed,
+            expect: Expect::Nothing,
+        })
+        .collect();
+    let data = flight(declared, 1)?;
+    let options = options();
+    let mut sys = UuvSystem::new(declared, &data, &options)?;
+    // The limits on the model the loop would fit with: its noise set from the clean flight.
+    let base = sys.run(&[])?.1;
+    tune(&mut sys, &base, &options)?;
+    for effect in sys.declared() {
+        let Some((range, _)) = sys.fitting(&effect).scalar else { continue };
+        let label = sys.label(&effect);
+        let what = label.detail.parameter.clone().unwrap_or_else(|| label.kind.to_string());
+        let limit = detection_limit(&sys, effect, &options)?;
+        let sizes: Vec<(f64, String)> = match limit {
+            Some(d) => MULTIPLES
+                .iter()
+                .filter(|k| (range.low..=range.high).contains(&(range.neutral + *k * d)))
+                .map(|k| (range.neutral + k * d, format!("{k}× the limit")))
+                .collect(),
+            None => vec![(range.neutral + 0.2 * (range.high - range.neutral), "below the limit".into())],
+        };
+        for (theta, size) in sizes {
+            let mut truth = declared.clone();
+            inject(&mut truth, effect, theta);
+            let value = if range.log { theta.exp() } else { theta };
+            let expected = Expected {
+                kind: label.kind,
+                location: label.location.clone(),
+                parameter: label.detail.parameter.clone(),
+                value,
+                declared: if range.log { 1.0 } else { range.neutral },
+                factor: range.log,
+            };
+            let expect = if limit.is_some() { Expect::Effect(expected) } else { Expect::CannotTell(expected) };
+            let shown = if range.log { format!("×{value:.4}") } else { format!("{value:.4} {}", label.unit) };
+            let name = format!("{what} at {} = {shown} ({size})", label.location);
+            out.push(Case { name, truth, seed: EFFECT_SEED, expect });
+        }
+    }
+    Ok(out)
+}
+
+/// Runs `case` with `declared`: the loop on the flight without its truth columns, scored
+/// against them (the thrust gain's RMS error after the loop against the clean flight's).
+pub fn run_case(case: &Case, declared: &UuvConfig, clean_error: f64) -> Result<Outcome> {
+    let full = flight(&case.truth, case.seed)?;
+    let started = Instant::now();
+    let report = close_loop(declared, &without_truth(&full), &options())?;
+    let seconds = started.elapsed().as_secs_f64();
+    let after = k_t_error(&full, &report.traces.after.outputs[0])?;
+    let verdict = score(&case.expect, &report, Some((after, clean_error)));
+    let added = report
+        .effects_added
+        .iter()
+        .map(|e| format!("{} at {} = {:.4}", e.kind, e.location, e.value))
+        .collect::<Vec<_>>()
+        .join("; ");
+    Ok(Outcome { case: case.name.clone(), verdict, added, seconds })
+}
+
+/// The clean flight's thrust-gain RMS error at `seed` with the declared model (before the
+/// loop: the model as declared on data that match it).
+pub fn clean_error(declared: &UuvConfig, seed: u64) -> Result<f64> {
+    let full = flight(declared, seed)?;
+    let report = close_loop(declared, &without_truth(&full), &options())?;
+    k_t_error(&full, &report.traces.before.outputs[0])
+}
+
+/// The loop's options on every flight, as `edgekf loop uuv` has them (the model floor is
+/// `close_loop`'s).
+fn options() -> LoopOptions {
+    LoopOptions { gain_floor: MODEL_FLOOR, ..LoopOptions::default() }
+}
+
+/// A healthy flight of `truth` at `seed`.
+fn flight(truth: &UuvConfig, seed: u64) -> Result<DataFile> {
+    let options = SimOptions { scenario: Scenario::Healthy, duration: DURATION, seed };
+    Ok(simulate(truth, &options, &mut |_| {})?.to_data_file())
+}
+
+/// RMS of the estimated `k_t` against `full`'s truth after the filter's first 10 s.
+fn k_t_error(full: &DataFile, estimate: &[f64]) -> Result<f64> {
+    let truth = full.column("truth_k_t").ok_or_else(|| anyhow!("the flight has no `truth_k_t`"))?;
+    let pairs: Vec<f64> = full
+        .t
+        .iter()
+        .zip(truth.iter().zip(estimate))
+        .filter(|(t, (a, b))| **t >= 10.0 && a.is_finite() && b.is_finite())
+        .map(|(_, (a, b))| (a - b).powi(2))
+        .collect();
+    if pairs.is_empty() {
+        return Err(anyhow!("no k_t estimate after 10 s"));
+    }
+    Ok((pairs.iter().sum::<f64>() / pairs.len() as f64).sqrt())
+}
+
+/// Puts `effect` with scalar `theta` into the simulated vehicle, as the loop's model takes it.
+fn inject(truth: &mut UuvConfig, effect: Effect, theta: f64) {
+    match effect {
+        Effect::Parameter(Parameter::Mass) => truth.vehicle.weight *= theta.exp(),
+        Effect::Parameter(Parameter::SurgeDrag) => truth.vehicle.hydro.x_uu *= theta.exp(),
+        Effect::DvlOffset(axis) => truth.sensors.dvl_offset[axis] = theta,
+        Effect::Health(_) | Effect::Bias(_) | Effect::Current => {}
+    }
+}

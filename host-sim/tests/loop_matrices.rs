@@ -1,0 +1,56 @@
+//! Fixed slices of the systems' effect matrices (`edgekf_sim::matrix`), run as CI runs them:
+//! every sixth of the boom's cases (clean runs, a stiffness, a section, a lag, the sideways
+//! mode) and every third of the vehicle's (clean flights, the mass, a DVL offset) come out as
+//! the README's tables, written by `cargo xtask loop-matrix`, say they do: the same effects
+//! added, the same verdict. A change of the loop's behaviour on these cases fails here until
+//! the tables are written again.
+
+use edgekf_sim::matrix::{readme_rows, row, Outcome};
+use edgekf_sim::systems::{boom, uuv};
+
+/// Checks every `step`-th of `system`'s `cases` (named by `name`) against the README's rows.
+fn check_slice<C>(system: &str, cases: &[C], step: usize, name: fn(&C) -> &str, outcome: impl Fn(&C) -> Outcome) {
+    let readme = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../README.md")).unwrap();
+    let rows = readme_rows(&readme, system).unwrap_or_else(|| panic!("the README's {system} matrix"));
+    let names: Vec<&str> = cases.iter().map(name).collect();
+    let listed: Vec<&str> = rows.iter().map(|r| r[0].as_str()).collect();
+    assert_eq!(names, listed, "the README's table lists other cases: run `cargo xtask loop-matrix {system}`");
+    for (case, listed) in cases.iter().zip(&rows).step_by(step) {
+        let o = outcome(case);
+        let ours = row(&o);
+        eprintln!("{system}: {ours:?}  ({:.1} s)", o.seconds);
+        assert_eq!(ours[1..], listed[1..], "{}", name(case));
+    }
+}
+
+#[test]
+fn a_slice_of_the_boom_matrix_comes_out_as_the_readme_says() {
+    let declared = boom::BoomConfig::default();
+    let cases = boom::matrix::cases(&declared).unwrap();
+    check_slice(
+        "boom",
+        &cases,
+        6,
+        |c| &c.name,
+        |c| {
+            let clean = boom::matrix::clean_error(&declared, c.seed).unwrap();
+            boom::matrix::run_case(c, &declared, clean).unwrap()
+        },
+    );
+}
+
+#[test]
+fn a_slice_of_the_vehicle_matrix_comes_out_as_the_readme_says() {
+    let declared = uuv::UuvConfig::default();
+    let cases = uuv::matrix::cases(&declared).unwrap();
+    check_slice(
+        "uuv",
+        &cases,
+        3,
+        |c| &c.name,
+        |c| {
+            let clean = uuv::matrix::clean_error(&declared, c.seed).unwrap();
+            uuv::matrix::run_case(c, &declared, clean).unwrap()
+        },
+    );
+}
