@@ -50,5 +50,8 @@ pub fn first_difference(firmware: &report::RunReport, host: &report::RunReport) 
     if firmware.health != host.health {
         return Some(format!("health differs: firmware {:?} host {:?}", firmware.health, host.health));
     }
+    if firmware.mismatches != host.mismatches {
+        return Some(format!("mismatch frames differ: firmware {:?} host {:?}", firmware.mismatches, host.mismatches));
+    }
     None
 }

@@ -67,13 +67,30 @@ pub struct MonitorSettings {
     pub window: u32,
     /// The growth of the innovation variance the CUSUM is tuned for (its reference value).
     pub variance_ratio: f64,
+    /// Seconds after start-up (or a reset) before the statistics start: an estimator started
+    /// away from the truth has innovations far beyond its covariance until it has converged,
+    /// which is not the model failing.
+    pub settle_s: f64,
+    /// Autocorrelation the whiteness test tolerates before it counts (0: a test of whiteness
+    /// itself). A steady-state filter tuned for robustness, with more process noise than the
+    /// truth has, leaves its innovations a little anti-correlated on data it explains (the
+    /// oscillator's ρ(1) = −0.16): the test then flags correlation beyond that, and its false
+    /// alarms on white innovations fall below the stated rate.
+    pub whiteness_tolerance: f64,
 }
 
 impl MonitorSettings {
     /// One false alarm per 100 hours at `sample_rate_hz`, windows of 256 samples, the CUSUM tuned
-    /// for the innovation variance doubling.
+    /// for the innovation variance doubling, no settling time, no tolerated correlation.
     pub fn new(sample_rate_hz: f64) -> Self {
-        Self { sample_rate_hz, false_alarms_per_hour: 0.01, window: 256, variance_ratio: 2.0 }
+        Self {
+            sample_rate_hz,
+            false_alarms_per_hour: 0.01,
+            window: 256,
+            variance_ratio: 2.0,
+            settle_s: 0.0,
+            whiteness_tolerance: 0.0,
+        }
     }
 
     /// The thresholds for a monitor of `channels` channels (in `f64`, once at start-up).
@@ -95,6 +112,8 @@ impl MonitorSettings {
             bias: -normal_quantile(0.5 * p),
             whiteness: -normal_quantile(0.5 * p / WHITENESS_LAGS as f64),
             window,
+            settle: (self.settle_s * self.sample_rate_hz).clamp(0.0, u32::MAX as f64) as u32,
+            whiteness_tolerance: self.whiteness_tolerance.max(0.0),
         }
     }
 }
@@ -108,11 +127,15 @@ pub struct Thresholds {
     pub cusum_threshold: f64,
     /// The bias limit on `|Σz| / √W`, standard deviations of the window's mean.
     pub bias: f64,
-    /// The whiteness limit on the largest standardised autocorrelation `|ρ(k) + 1/W| ·
+    /// The whiteness limit on the largest standardised autocorrelation `(|ρ(k) + 1/W| − tol) ·
     /// √(W(W+2)/(W−k))`.
     pub whiteness: f64,
     /// Samples per window.
     pub window: u32,
+    /// Samples after start-up or a reset before the statistics start.
+    pub settle: u32,
+    /// `|ρ(k)|` tolerated on top of the whiteness limit ([`MonitorSettings::whiteness_tolerance`]).
+    pub whiteness_tolerance: f64,
 }
 
 /// One channel's statistics: the CUSUM, and the sums of the current window.
@@ -175,7 +198,7 @@ impl<T: Real> Channel<T> {
     }
 
     /// At the end of a full window: `(bias alarm, whiteness alarm)`; the window is then emptied.
-    fn close_window(&mut self, bias_limit: T, white_limit: T) -> (bool, bool) {
+    fn close_window(&mut self, bias_limit: T, white_limit: T, tolerance: T) -> (bool, bool) {
         let n = T::of_f64(f64::from(self.n));
         let bias = self.sum_z.abs() > bias_limit * n.sqrt();
         let mean = self.sum_y / n;
@@ -190,9 +213,9 @@ impl<T: Real> Channel<T> {
                 let kf = T::of_f64(k as f64);
                 // Σ (yₜ − ȳ)(yₜ₋ₖ − ȳ) over the window's n − k pairs.
                 let ck = lag - mean * (self.sum_y + self.sum_y - head - tail) + (n - kf) * mean * mean;
-                let rho = ck / c0 + T::one() / n;
-                let z2 = rho * rho * n * (n + T::of_f64(2.0)) / (n - kf);
-                white |= z2 > white_limit * white_limit;
+                let excess = (ck / c0 + T::one() / n).abs() - tolerance;
+                let z2 = excess * excess * n * (n + T::of_f64(2.0)) / (n - kf);
+                white |= excess > T::zero() && z2 > white_limit * white_limit;
             }
         }
         self.clear_window();
@@ -253,8 +276,10 @@ impl<T: Real> Channel<T> {
 pub struct ModelMonitor<T, const C: usize> {
     channels: [Channel<T>; C],
     window: u32,
+    settle: u32,
     bias: T,
     whiteness: T,
+    tolerance: T,
     samples: u32,
     alarms: [u32; 3],
     /// Per channel, a bit per [`Statistic`] latched, and one not yet handed over.
@@ -269,8 +294,10 @@ impl<T: Real, const C: usize> ModelMonitor<T, C> {
         Self {
             channels: [Channel::new(t); C],
             window: t.window.max(2 * WHITENESS_LAGS as u32),
+            settle: t.settle,
             bias: T::of_f64(t.bias),
             whiteness: T::of_f64(t.whiteness),
+            tolerance: T::of_f64(t.whiteness_tolerance),
             samples: 0,
             alarms: [0; 3],
             latched: [0; C],
@@ -281,9 +308,13 @@ impl<T: Real, const C: usize> ModelMonitor<T, C> {
 
     /// One sample of every channel's normalised innovation (a non-finite value: no update of
     /// that channel, skipped by all three statistics). `true` when a new mismatch was latched.
+    /// The first [`Thresholds::settle`] samples are counted, not tested.
     pub fn push(&mut self, z: &[T; C]) -> bool {
         self.samples = self.samples.saturating_add(1);
         let now = self.samples;
+        if now <= self.settle {
+            return false;
+        }
         let mut raised = false;
         for (ch, &z) in z.iter().enumerate() {
             if !z.is_finite() {
@@ -298,7 +329,7 @@ impl<T: Real, const C: usize> ModelMonitor<T, C> {
             c.accumulate(z);
             if c.n >= self.window {
                 let start = now.saturating_sub(c.n) + 1;
-                let (bias, white) = c.close_window(self.bias, self.whiteness);
+                let (bias, white) = c.close_window(self.bias, self.whiteness, self.tolerance);
                 hits[1] = bias.then_some(start);
                 hits[2] = white.then_some(start);
             }

@@ -118,6 +118,34 @@ fn correlation_raises_the_whiteness_statistic() {
 }
 
 #[test]
+fn a_tolerated_correlation_is_not_flagged_and_a_larger_one_is() {
+    // A ρ(1) of −0.3 is 4.8 standard deviations of ρ̂(1) in a window of 256: without a
+    // tolerance it often passes the limit (5.45 at 1 kHz). With 0.2 tolerated, innovations with
+    // ρ(1) = −0.16, as the oscillator's filter leaves them, raise nothing in 20 minutes, and a
+    // ρ(1) of 0.8 is flagged in its first window.
+    // MA(1) e + θ e₋₁ (ρ(1) = θ / (1 + θ²): −0.16 for θ = −0.164, −0.3 for θ = −1/3), then
+    // AR(1) with `phi`; unit
+    // variance.
+    let run = |tolerance: f64, theta: f64, phi: f64, samples: u32| {
+        let settings = MonitorSettings { whiteness_tolerance: tolerance, ..MonitorSettings::new(1000.0) };
+        let mut m = ModelMonitor::<f32, 1>::new(&settings.thresholds(1));
+        let (mut rng, mut last, mut y) = (Rng::new(4), 0.0, 0.0);
+        for _ in 0..samples {
+            let e = rng.gauss();
+            let x = (e + theta * last) / (1.0 + theta * theta).sqrt();
+            last = e;
+            y = phi * y + (1.0 - phi * phi).sqrt() * x;
+            m.push(&[y as f32]);
+        }
+        m.alarms_of(Statistic::Whiteness)
+    };
+    let untolerated = run(0.0, -1.0 / 3.0, 0.0, 120_000);
+    assert!(untolerated > 10, "{untolerated}");
+    assert_eq!(run(0.2, -0.164, 0.0, 1_200_000), 0);
+    assert!(run(0.2, 0.0, 0.8, 512) > 0);
+}
+
+#[test]
 fn missing_values_and_reset() {
     let t = MonitorSettings::new(100.0).thresholds(1);
     let mut m = ModelMonitor::<f64, 1>::new(&t);
@@ -152,4 +180,18 @@ fn thresholds_follow_the_rate() {
     let more = base.thresholds(4);
     assert!(more.cusum_threshold > t.cusum_threshold && more.bias > t.bias && more.whiteness > t.whiteness);
     assert_eq!(MonitorSettings { window: 3, ..base }.thresholds(1).window, 2 * WHITENESS_LAGS as u32);
+    assert_eq!((t.settle, MonitorSettings { settle_s: 0.5, ..base }.thresholds(1).settle), (0, 500));
+    assert_eq!(MonitorSettings { whiteness_tolerance: -1.0, ..base }.thresholds(1).whiteness_tolerance, 0.0);
+}
+
+#[test]
+fn nothing_is_tested_while_the_estimator_settles() {
+    let t = MonitorSettings { settle_s: 1.0, ..MonitorSettings::new(100.0) }.thresholds(1);
+    let mut m = ModelMonitor::<f32, 1>::new(&t);
+    // A start-up transient of 100 σ for the first second is not tested; the same after it is.
+    assert!((0..100).all(|_| !m.push(&[100.0])) && m.alarms() == 0);
+    assert!(m.push(&[100.0]));
+    assert_eq!(m.take_event().map(|e| (e.statistic, e.since_sample)), Some((Statistic::Cusum, 101)));
+    m.reset();
+    assert!((0..100).all(|_| !m.push(&[100.0])));
 }
