@@ -106,25 +106,3 @@ impl<E: Normalised<C>, const C: usize> NodeEstimator for Monitored<E, C> {
         self.monitor.take_event().map(MismatchFrame::from)
     }
 }
-
-/// The normalised innovation of a scalar measurement from its innovation and NIS: `√NIS` with
-/// the innovation's sign (NaN when either is missing).
-///
-/// ```
-/// use edgekf_firmware::monitor::signed_root;
-/// assert_eq!(signed_root(Some(-0.3), Some(4.0)), -2.0);
-/// assert!(signed_root(None, Some(1.0)).is_nan());
-/// ```
-pub fn signed_root(innovation: Option<f32>, nis: Option<f32>) -> f32 {
-    match (innovation, nis) {
-        (Some(r), Some(n)) if n >= 0.0 => {
-            let z = libm::sqrtf(n);
-            if r < 0.0 {
-                -z
-            } else {
-                z
-            }
-        }
-        _ => f32::NAN,
-    }
-}

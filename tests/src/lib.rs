@@ -15,6 +15,7 @@ pub mod checks;
 pub mod crank;
 pub mod faulty;
 pub mod host;
+pub mod monitor;
 pub mod qemu;
 pub mod report;
 pub mod rotor;

@@ -38,11 +38,21 @@ impl<T: Real> Cusum<T> {
     /// Adds `x`; `true` while the sum is above the threshold (the caller decides whether to
     /// [`reset`](Self::reset)). A non-finite `x` is skipped.
     pub fn push(&mut self, x: T) -> bool {
-        if !x.is_finite() {
-            return false;
+        x.is_finite() && self.push_finite(x)
+    }
+
+    /// [`push`](Self::push) for an `x` known not to be NaN (the model monitor checks its input
+    /// once; an infinite `x` alarms).
+    #[inline]
+    pub(crate) fn push_finite(&mut self, x: T) -> bool {
+        let sum = self.sum + x - self.reference;
+        if sum > T::zero() {
+            self.sum = sum;
+            self.rising = self.rising.saturating_add(1);
+        } else {
+            self.sum = T::zero();
+            self.rising = 0;
         }
-        self.sum = (self.sum + x - self.reference).max(T::zero());
-        self.rising = if self.sum > T::zero() { self.rising.saturating_add(1) } else { 0 };
         self.sum > self.threshold
     }
 

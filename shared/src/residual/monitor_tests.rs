@@ -43,7 +43,7 @@ fn false_alarm_rate_over_many_hours() {
     // Poisson, 4 standard deviations: no statistic alarms more often than its share (hours/3)
     // allows, nor less than 0.7 of it. Below is the safe side, and measured over 1000 h (seeds
     // 2, 3): the CUSUM at 0.94 and 0.96 of its share (its approximation runs 3 % short), the
-    // bias at 0.87 and 1.05, the whiteness at 0.78 and 0.69 (the standardised autocorrelation is
+    // bias at 0.87 and 1.05, the whiteness at 0.79 and 0.74 (the standardised autocorrelation is
     // bounded: its far tail is lighter than the normal's).
     let share = hours / 3.0;
     let spread = |mean: f64| 4.0 * mean.sqrt();
@@ -120,7 +120,7 @@ fn correlation_raises_the_whiteness_statistic() {
 #[test]
 fn a_tolerated_correlation_is_not_flagged_and_a_larger_one_is() {
     // A ρ(1) of −0.3 is 4.8 standard deviations of ρ̂(1) in a window of 256: without a
-    // tolerance it often passes the limit (5.45 at 1 kHz). With 0.2 tolerated, innovations with
+    // tolerance it often passes the limit (5.41 at 1 kHz). With 0.2 tolerated, innovations with
     // ρ(1) = −0.16, as the oscillator's filter leaves them, raise nothing in 20 minutes, and a
     // ρ(1) of 0.8 is flagged in its first window.
     // MA(1) e + θ e₋₁ (ρ(1) = θ / (1 + θ²): −0.16 for θ = −0.164, −0.3 for θ = −1/3), then

@@ -27,7 +27,7 @@ fn monitored<M: Markers>() {
     };
     let settings = edgekf::residual::MonitorSettings { settle_s: 0.0, ..monitor_settings(config.sample_rate_hz) };
     let window = settings.window;
-    let mut node = Monitored::new(est, &settings);
+    let mut node = Monitored::new(super::Watched::compiled(est), &settings);
     let input = |k: u32| Some(0.01 * (k % 7) as f32 - 0.03);
     for k in 1..window {
         if k == 10 {
