@@ -175,7 +175,7 @@ impl NodeEstimator for HarmonicForceEstimator<f32> {
 /// The estimator as the QEMU image runs it, for its model monitor: the compiled-in estimator
 /// and `1/√S` of its steady-state gain. `S` is a constant there, so the normalised innovation
 /// is a product: `√NIS` would be a software square root (libm's: the monitored step measured
-/// 1 040 instructions with it on the Cortex-M4F, against 773 now).
+/// 1 040 instructions with it on the Cortex-M4F, against 751 now).
 pub struct Watched {
     filter: HarmonicForceEstimator<f32>,
     inv_sd: f32,
