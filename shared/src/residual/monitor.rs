@@ -51,7 +51,8 @@ pub struct Mismatch {
     pub statistic: Statistic,
     /// The sample (counted from 1 since the monitor started or was reset) where the change is
     /// estimated to begin: where the CUSUM last left zero, or the first sample of the window
-    /// that alarmed.
+    /// that alarmed (counted back over the channel's finite values: a missing one in between
+    /// moves the date one sample later).
     pub since_sample: u32,
 }
 
