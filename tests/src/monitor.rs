@@ -25,7 +25,8 @@ pub fn offset_from(csv: &str, column: &str, from_s: f64, offset: f64) -> String 
 /// that step) and the same with an X-axis offset of five noise standard deviations (0.024 m/s²,
 /// 2.5 mg) from half-way on; the sample it starts at. The filter takes up about 85 % of an
 /// offset into its motion states: one standard deviation leaves an innovation bias of 0.15 σ,
-/// which 6 s do not show; three are found (seed 1: 0.12 s after the start), five on every seed.
+/// which 6 s do not show; three are found on seed 1 (a bias in the window from 6.12 s), five
+/// on every seed tried (1–3).
 pub fn oscillator_recordings(seed: u64) -> (String, String, u32) {
     let mut scenario = Scenario { seed, ..Scenario::default() };
     scenario.force.changes.clear();

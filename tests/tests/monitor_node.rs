@@ -41,9 +41,8 @@ fn boom_mismatches(duration: f64, offset: f64) -> Vec<MismatchFrame> {
 
 #[test]
 fn the_boom_node_flags_an_inclinometer_offset_on_its_channel() {
-    // The gyro's channel (0) does not fit the model even on a healthy run: an innovation of
-    // about 8σ when the luffing starts at 2 s raises its CUSUM, and its innovations are
-    // correlated throughout (ρ(1) from −0.15 to −0.48 over 5 s stretches, within this run's
+    // The gyro's channel (0) does not fit the model even on a healthy run: its CUSUM alarms,
+    // dated from the first sample tested (2.02 s), and its innovations are anti-correlated (ρ(1) from −0.15 to −0.48 over 5 s stretches, within this run's
     // tolerance of 0.2 plus the limit). The inclinometer's channel fits.
     let healthy = boom_mismatches(60.0, 0.0);
     eprintln!("boom, healthy: {healthy:?}");

@@ -96,7 +96,7 @@ pub fn nis_cusum_reference(ratio: f64) -> f64 {
 /// overshoot. For this `k`, `θ* = (1 − 1/ratio) / 2` exactly. The χ²(1) increments are skewed,
 /// so the Gaussian approximation (Siegmund's `b = h + 1.166 σ`) misplaces the exponent; their
 /// upper tail is exponential with rate ½, the overshoot past `h` then about Exp(½), and
-/// `E[e^{θ*R}] = 1/(1 − 2θ*)` gives `ρ = ln(ratio)/θ* = 2k`. Against simulation (10⁸ samples,
+/// `E[e^{θ*R}] = 1/(1 − 2θ*)` gives `ρ = ln(ratio)/θ* = 2k`. Against simulation (2·10⁸ samples,
 /// ratio 2, h = 6 … 18) the effective correction is 2.9 against 2k = 2.77: the formula's run
 /// lengths are 3 % short, on the side of fewer alarms than stated; the monitor's tests count them.
 ///

@@ -34,9 +34,9 @@ pub const SAMPLE_RATE_HZ: u32 = 100;
 /// The model monitor's settings: the shipped false-alarm rate (one per 100 h) at
 /// [`SAMPLE_RATE_HZ`], tests from 2 s after start-up (the filter starts from the boom at rest
 /// and its declared covariance), and the oscillator's tolerance of 0.2 autocorrelation. The
-/// gyro's channel does not fit the model on healthy runs: an innovation of about 8σ when the
-/// luffing starts raises its CUSUM, and its innovations' ρ(1) is −0.15 to −0.48 over 5 s
-/// stretches of the luffing run.
+/// gyro's channel does not fit the model on healthy runs: its CUSUM alarms, dated from the
+/// first sample tested, and its innovations' ρ(1) is −0.15 to −0.48 over 5 s stretches of the
+/// luffing run.
 pub fn monitor_settings() -> MonitorSettings {
     let rate = f64::from(SAMPLE_RATE_HZ);
     MonitorSettings { settle_s: 2.0, whiteness_tolerance: 0.2, ..MonitorSettings::new(rate) }

@@ -46,7 +46,7 @@ pub fn compiled_estimator(params: &HarmonicForceParams) -> Result<HarmonicForceE
 
 /// The model monitor's settings at `sample_rate_hz`: the shipped false-alarm rate (one per
 /// 100 h); tests from 1 s after start-up (started from rest with the steady-state gain, the
-/// estimator's NIS is 10⁴ in its first 0.13 s and back near 1 from 0.5 s on, on the default
+/// estimator's NIS averages 6·10⁴ over its first 0.13 s and back near 1 from 0.5 s on, on the default
 /// recording); 0.2 of autocorrelation tolerated (on healthy recordings the innovations have
 /// ρ(1) = −0.16, ρ(2) = −0.12, ρ(3) = −0.10: the steady-state gain's process noise is above the
 /// truth's).
