@@ -154,9 +154,17 @@ pub fn clocked_node<B: ByteSource, E: NodeEstimator<Input = [f32; M]>, X, const 
     Ok(Node::new(source, estimator().map_err(HilError::Start)?, Default::default()))
 }
 
-/// Polls `node` until its input has run out, every report to `sink`, then the image's
+/// Polls `node` until its input has run out, every report to `sink` followed by the model
+/// mismatches found in that poll ([`crate::monitor::MismatchFrame`]), then the image's
 /// end-of-run frames.
 pub fn run<I: HilImage, B: ByteSource>(node: &mut HilNode<'_, I, B>, sink: &mut impl FrameSink) {
-    node.run(|frame| sink.frame(frame));
+    while node.source_mut().advance() {
+        if let Some(frame) = node.poll() {
+            sink.frame(&frame);
+        }
+        while let Some(mismatch) = node.estimator_mut().take_mismatch() {
+            sink.frame(&mismatch);
+        }
+    }
     I::finish(node, sink);
 }

@@ -125,6 +125,12 @@ pub trait NodeEstimator {
 
     /// The poll's report, if it has one (a block estimate; a window's, once per window).
     fn report(&mut self, poll: &Poll) -> Option<Self::Frame>;
+
+    /// The next model mismatch its monitor found and has not handed over yet (none without a
+    /// monitor: see [`crate::monitor::Monitored`]). Asked after every poll until `None`.
+    fn take_mismatch(&mut self) -> Option<crate::monitor::MismatchFrame> {
+        None
+    }
 }
 
 /// The main loop's state: a source, an estimator and the node's counters.
@@ -170,6 +176,16 @@ impl<S: SampleSource, E: NodeEstimator<Input = S::Sample>> Node<S, E> {
     /// The estimator (its own counters, its running estimate).
     pub fn estimator(&self) -> &E {
         &self.estimator
+    }
+
+    /// The estimator, mutably (its monitor's events are taken through it).
+    pub fn estimator_mut(&mut self) -> &mut E {
+        &mut self.estimator
+    }
+
+    /// The same node with its estimator wrapped (by a [`crate::monitor::Monitored`], say).
+    pub fn map_estimator<F: NodeEstimator<Input = S::Sample>>(self, wrap: impl FnOnce(E) -> F) -> Node<S, F> {
+        Node { source: self.source, estimator: wrap(self.estimator), health: self.health }
     }
 
     /// The source (its counters; a virtual device's state).

@@ -15,6 +15,7 @@ pub mod checks;
 pub mod crank;
 pub mod faulty;
 pub mod host;
+pub mod monitor;
 pub mod qemu;
 pub mod report;
 pub mod rotor;
@@ -49,6 +50,9 @@ pub fn first_difference(firmware: &report::RunReport, host: &report::RunReport) 
     }
     if firmware.health != host.health {
         return Some(format!("health differs: firmware {:?} host {:?}", firmware.health, host.health));
+    }
+    if firmware.mismatches != host.mismatches {
+        return Some(format!("mismatch frames differ: firmware {:?} host {:?}", firmware.mismatches, host.mismatches));
     }
     None
 }

@@ -3,6 +3,7 @@
 
 use anyhow::{anyhow, Result};
 use edgekf_firmware::frame::{Done, Frame, StackFrame};
+use edgekf_firmware::monitor::MismatchFrame;
 use edgekf_firmware::node::Health;
 use edgekf_firmware::systems::oscillator::{BlockReport, EstimatorFrame, FeedFrame, VirtualFrame};
 
@@ -30,6 +31,8 @@ pub struct RunReport {
     pub feed: FeedFrame,
     /// Virtual device: samples loaded, NACKs sent, FIFO entries overwritten.
     pub virtual_device: VirtualFrame,
+    /// Model mismatches the node's monitor reported, in order.
+    pub mismatches: Vec<MismatchFrame>,
     /// Stack bytes used by start-up, by the main loop, and available (firmware runs only).
     pub stack: Option<StackFrame>,
     /// Whether the run reached its end.
@@ -65,6 +68,8 @@ impl RunReport {
                 r.feed = f;
             } else if let Some(v) = frame::<VirtualFrame>(line)? {
                 r.virtual_device = v;
+            } else if let Some(m) = frame::<MismatchFrame>(line)? {
+                r.mismatches.push(m);
             } else if let Some(s) = frame::<StackFrame>(line)? {
                 r.stack = Some(s);
             } else if frame::<Done>(line)?.is_some() {

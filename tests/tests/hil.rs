@@ -55,6 +55,22 @@ fn clean_run_matches_the_host_bit_for_bit() {
 }
 
 #[test]
+fn the_model_monitor_reports_in_qemu_what_it_reports_on_the_host() {
+    // The healthy recording: no `mismatch` frame; a 2.5 mg offset from 6 s on: a bias on the
+    // X axis, dated within a window of the offset's start, the same frames as the host's.
+    let (healthy, biased, start) = edgekf_tests::monitor::oscillator_recordings(2);
+    assert_eq!(firmware(healthy.as_bytes()).mismatches, []);
+    let (fw, host) = (firmware(biased.as_bytes()), host::run(biased.as_bytes()).unwrap());
+    if let Some(diff) = first_difference(&fw, &host) {
+        panic!("firmware and host disagree: {diff}");
+    }
+    let bias = fw.mismatches.iter().find(|m| m.statistic() == Some(edgekf::residual::Statistic::Bias));
+    let bias = bias.unwrap_or_else(|| panic!("no bias mismatch: {:?}", fw.mismatches));
+    eprintln!("HIL monitor: offset from sample {start}, frames {:?}", fw.mismatches);
+    assert!(bias.channel == 0 && bias.since + 256 > start && bias.since <= start + 256, "{bias:?}");
+}
+
+#[test]
 fn injected_i2c_faults_are_survived_counted_and_recovered_from() {
     let clean = firmware(Scenario::default().simulate().to_csv_string().as_bytes());
     let csv = fault_scenario().simulate().to_csv_string();

@@ -12,10 +12,10 @@ pub const IMAGES: &[Image] = &[Image {
     features: "qemu",
     what: "the boom tip-vibration QEMU image",
     role: Role::Hil { env: "EDGEKF_BOOM_ELF", tests: &["boom_node"] },
-    budgets: &[("boom_step", 14, 2, 65_000), ("boom_rereduce", 14, 2, 18_000_000)],
+    budgets: &[("boom_step", 14, 2, 65_000), ("boom_monitored", 14, 2, 65_000), ("boom_rereduce", 14, 2, 18_000_000)],
     real_time: Some(RealTime {
         rate_hz: 100,
-        phases: &[&[("boom_step", 14, 2, 1)]],
-        spikes: &[("boom_rereduce", 14, 2)],
+        phases: &[&[("boom_monitored", 14, 2, 1)]],
+        spikes: &[("boom_rereduce", 14, 2), ("boom_monitored_window", 14, 2)],
     }),
 }];

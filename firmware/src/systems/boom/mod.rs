@@ -14,6 +14,8 @@
 use crate::frame::FrameSink;
 use crate::hil::{clocked_node, FileEnd, HilError, HilImage, HilNode};
 use crate::line_feed::{ByteSource, ChannelReader};
+use crate::monitor::{Monitored, Normalised};
+use edgekf::residual::MonitorSettings;
 use crate::node::{Innovation, NodeEstimator, Poll};
 use crate::source::ChannelSource;
 use edgekf::systems::boom::{
@@ -28,6 +30,17 @@ pub mod soak;
 
 /// Sample rate, Hz (`[gyro] sample_rate`).
 pub const SAMPLE_RATE_HZ: u32 = 100;
+
+/// The model monitor's settings: the shipped false-alarm rate (one per 100 h) at
+/// [`SAMPLE_RATE_HZ`], tests from 2 s after start-up (the filter starts from the boom at rest
+/// and its declared covariance), and the oscillator's tolerance of 0.2 autocorrelation. The
+/// gyro's channel does not fit the model on healthy runs: its CUSUM alarms, dated from the
+/// first sample tested, and its innovations' ρ(1) is −0.15 to −0.48 over 5 s stretches of the
+/// luffing run.
+pub fn monitor_settings() -> MonitorSettings {
+    let rate = f64::from(SAMPLE_RATE_HZ);
+    MonitorSettings { settle_s: 2.0, whiteness_tolerance: 0.2, ..MonitorSettings::new(rate) }
+}
 
 /// The input channels, in the data file's names.
 pub const CHANNELS: [&str; 4] = ["gyro_rate", "incl_angle", "boom_length", "luff_rate_cmd"];
@@ -110,6 +123,12 @@ impl<'s> BoomNode<'s> {
     /// assert!(f.tip_angle.is_finite() && f.sample == 2);
     /// ```
     pub fn step(&mut self, row: Option<[f32; 4]>) -> BoomFrame {
+        self.step_variances(row).0
+    }
+
+    /// [`step`](Self::step), with the variances of its innovations (NaN where a reading was
+    /// missing).
+    fn step_variances(&mut self, row: Option<[f32; 4]>) -> (BoomFrame, [f32; 2]) {
         let [gyro, incl, length, command] = row.unwrap_or([f32::NAN; 4]);
         self.samples = self.samples.saturating_add(1);
         let e: ModelEstimate<f32> = self.model.step(gyro, incl, length, command);
@@ -118,7 +137,7 @@ impl<'s> BoomNode<'s> {
         }
         let p = self.paper.step(gyro, incl, self.length);
         self.fusions = self.fusions.saturating_add(u32::from(p.fused));
-        BoomFrame {
+        let frame = BoomFrame {
             sample: self.samples,
             tip_angle: e.tip_angle,
             vibration: e.vibration,
@@ -127,7 +146,8 @@ impl<'s> BoomNode<'s> {
             innovation_gyro: e.innovation[0],
             innovation_incl: e.innovation[1],
             nis: e.nis,
-        }
+        };
+        (frame, e.variance)
     }
 
     /// Samples stepped (rows, and missing rows bridged).
@@ -199,10 +219,26 @@ impl NodeEstimator for BoomNode<'_> {
     }
 }
 
+/// Its two channels: the gyro's innovation (channel 0) and the inclinometer's (channel 1), each
+/// over its own variance (the updates are sequential, so each is standard normal on its own).
+impl Normalised<2> for BoomNode<'_> {
+    fn step_normalised(&mut self, input: Option<[f32; 4]>, z: &mut [f32; 2]) -> Innovation {
+        let (f, variance) = self.step_variances(input);
+        self.pending = Some(f);
+        for ((z, nu), var) in z.iter_mut().zip([f.innovation_gyro, f.innovation_incl]).zip(variance) {
+            // A missing reading's variance is NaN, and so is its z.
+            *z = nu / libm::sqrtf(var);
+        }
+        Innovation { residual: None, nis: Some(f.nis) }
+    }
+}
+
 /// The QEMU image `edgekf-boom-qemu`: the boom's channels from the HIL file (other columns
 /// ignored; an empty or NaN cell is a missing reading of that channel alone, lines that do not
 /// parse are stepped as missing samples and counted, lines missing by their `t` are bridged
-/// for up to [`crate::source::MAX_GAP_S`]); a `boom` frame per sample, then `file` ([`FileEnd`]) and `boomend`.
+/// for up to [`crate::source::MAX_GAP_S`]); a `boom` frame per sample (a `mismatch` after it when
+/// the model monitor found one: channel 0 the gyro, 1 the inclinometer), then `file`
+/// ([`FileEnd`]) and `boomend`.
 pub struct BoomImage;
 
 impl HilImage for BoomImage {
@@ -211,7 +247,7 @@ impl HilImage for BoomImage {
     type Input = [f32; 4];
     type Storage = Storage;
     type Source<B: ByteSource> = ChannelSource<B, 4>;
-    type Estimator<'s> = BoomNode<'s>;
+    type Estimator<'s> = Monitored<BoomNode<'s>, 2>;
     type StartError = ModelError;
 
     fn storage() -> Storage {
@@ -223,7 +259,7 @@ impl HilImage for BoomImage {
         let reader = ChannelReader::new(input, CHANNELS).map(ChannelReader::with_empty_cells);
         clocked_node(reader, SAMPLE_RATE_HZ, move || {
             let (model, paper) = storage.insert(estimators()?);
-            Ok(BoomNode::new(model, paper))
+            Ok(Monitored::new(BoomNode::new(model, paper), &monitor_settings()))
         })
     }
 

@@ -7,7 +7,42 @@ use crate::semihost::exit;
 /// Runs and reports each kernel once.
 pub fn run<M: Markers>() {
     harmonic::<M>();
+    monitored::<M>();
     adxl_poll::<M>();
+}
+
+/// The step as the image runs it, with the model monitor (`crate::monitor`): an ordinary
+/// sample (`harmonic_monitored`: the step, `√NIS` and the monitor's CUSUM and window sums) and
+/// the sample that closes a monitor window (`harmonic_monitored_window`: plus the bias and
+/// whiteness tests). Its settling time is left out so that the monitor runs from the first
+/// sample.
+fn monitored<M: Markers>() {
+    use super::{compiled_estimator, monitor_settings, NodeConfig};
+    use crate::monitor::Monitored;
+    use crate::node::NodeEstimator;
+    let config = NodeConfig::default().estimator;
+    let Ok(est) = compiled_estimator(&config) else {
+        defmt::error!("bench harmonic_monitored: no estimator");
+        exit(1)
+    };
+    let settings = edgekf::residual::MonitorSettings { settle_s: 0.0, ..monitor_settings(config.sample_rate_hz) };
+    let window = settings.window;
+    let mut node = Monitored::new(super::Watched::compiled(est), &settings);
+    let input = |k: u32| Some(0.01 * (k % 7) as f32 - 0.03);
+    for k in 1..window {
+        if k == 10 {
+            M::start();
+            core::hint::black_box(node.step(core::hint::black_box(input(k))));
+            M::end();
+            defmt::info!("bench harmonic_monitored n={=usize} m={=usize} resets={=u32}", 4usize, 1usize, 0u32);
+        } else {
+            node.step(input(k));
+        }
+    }
+    M::start();
+    core::hint::black_box(node.step(core::hint::black_box(input(window))));
+    M::end();
+    defmt::info!("bench harmonic_monitored_window n={=usize} m={=usize} resets={=u32}", 4usize, 1usize, 0u32);
 }
 
 /// The ADXL355 source's poll on the virtual ADXL355, without the estimator: `adxl_poll`, an

@@ -18,13 +18,14 @@ pub const IMAGES: &[Image] = &[Image {
     role: Role::Hil { env: "EDGEKF_FW_ELF", tests: &["hil"] },
     budgets: &[
         ("harmonic_step", 4, 1, 5_000),
+        ("harmonic_monitored", 4, 1, 5_000),
         ("adxl_poll", 16, 1, 10_000),
         ("adxl_poll_stall", 16, 1, 1_000),
         ("adxl_poll_reset", 16, 1, 2_000),
     ],
     real_time: Some(RealTime {
         rate_hz: 1000,
-        phases: &[&[("harmonic_step", 4, 1, 1), ("adxl_poll", 16, 1, 16)]],
-        spikes: &[("adxl_poll_reset", 16, 1)],
+        phases: &[&[("harmonic_monitored", 4, 1, 1), ("adxl_poll", 16, 1, 16)]],
+        spikes: &[("adxl_poll_reset", 16, 1), ("harmonic_monitored_window", 4, 1)],
     }),
 }];

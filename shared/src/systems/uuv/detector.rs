@@ -2,6 +2,7 @@
 
 use super::settings::DetectorSettings;
 use crate::filter::{Innovation, UnscentedKalmanFilter};
+use crate::residual::Cusum;
 use crate::Real;
 use nalgebra::SVector;
 
@@ -33,7 +34,7 @@ impl Status {
     }
 }
 
-/// One thruster's CUSUM and status.
+/// One thruster's CUSUM (two one-sided [`Cusum`]s on the whitened score) and status.
 ///
 /// ```
 /// use edgekf::systems::uuv::{DetectorSettings, Status, ThrusterMonitor};
@@ -48,10 +49,9 @@ impl Status {
 /// ```
 #[derive(Debug, Clone, Copy)]
 pub struct ThrusterMonitor<T> {
-    up: T,
-    down: T,
-    drift: T,
-    threshold: T,
+    /// CUSUMs of the score and of its negative: thrust above and below the model's.
+    up: Cusum<T>,
+    down: Cusum<T>,
     sigmas: T,
     degraded: T,
     failed: T,
@@ -64,10 +64,8 @@ impl<T: Real> ThrusterMonitor<T> {
     pub fn new(s: &DetectorSettings) -> Self {
         let t = T::of_f64;
         Self {
-            up: T::zero(),
-            down: T::zero(),
-            drift: t(s.drift),
-            threshold: t(s.threshold),
+            up: Cusum::new(t(s.drift), t(s.threshold)),
+            down: Cusum::new(t(s.drift), t(s.threshold)),
             sigmas: t(s.sigmas),
             degraded: t(s.degraded),
             failed: t(s.failed),
@@ -82,11 +80,11 @@ impl<T: Real> ThrusterMonitor<T> {
         if !z.is_finite() {
             return false;
         }
-        self.up = (self.up + z - self.drift).max(T::zero());
-        self.down = (self.down - z - self.drift).max(T::zero());
-        if self.up > self.threshold || self.down > self.threshold {
-            self.up = T::zero();
-            self.down = T::zero();
+        // `s + (−z)` rounds exactly as `s − z`: the same bits as the two sums written out.
+        let (up, down) = (self.up.push(z), self.down.push(-z));
+        if up || down {
+            self.up.reset();
+            self.down.reset();
             self.alarms = self.alarms.saturating_add(1);
             true
         } else {

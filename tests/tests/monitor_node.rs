@@ -1,0 +1,57 @@
+//! The model monitor on the nodes (`edgekf_firmware::monitor`, issue #36): the oscillator's and
+//! the boom's images, run on the host exactly as under QEMU (`hil.rs` and `boom_node.rs` check
+//! that the QEMU runs report the same frames), raise no `mismatch` frame on healthy recordings
+//! and raise one on the right channel, with the right statistic and date, when a sensor offset
+//! starts mid-run.
+
+use edgekf::residual::Statistic;
+use edgekf_firmware::monitor::MismatchFrame;
+use edgekf_firmware::systems::boom::{BoomImage, SAMPLE_RATE_HZ};
+use edgekf_sim::systems::boom::{simulate, BoomConfig, Scenario as BoomScenario, SimOptions};
+use edgekf_tests::host::{self, lines};
+use edgekf_tests::monitor::{offset_from, oscillator_recordings};
+use edgekf_tests::report::frames;
+
+#[test]
+fn the_oscillator_node_flags_an_offset_and_nothing_on_healthy_runs() {
+    for seed in [1, 2, 3] {
+        let (healthy, biased, start) = oscillator_recordings(seed);
+        let clean = host::run(healthy.as_bytes()).unwrap();
+        assert!(clean.done && clean.health.samples > 10_000, "{:?}", clean.health);
+        assert_eq!(clean.mismatches, [], "seed {seed}: a healthy run raised a mismatch");
+        let run = host::run(biased.as_bytes()).unwrap();
+        let m = &run.mismatches;
+        eprintln!("oscillator, seed {seed}, 5σ offset from sample {start}: {m:?}");
+        assert!(m.iter().all(|f| f.channel == 0 && f.statistic() != Some(Statistic::Whiteness)), "{m:?}");
+        // The bias: dated at most one window (256 samples) before the offset, found within two.
+        let bias = m.iter().find(|f| f.statistic() == Some(Statistic::Bias)).expect("a bias mismatch");
+        assert!(bias.since + 256 > start && bias.since <= start + 256, "{bias:?}");
+    }
+}
+
+/// The boom's run (`Luffing`, seed 2, `duration` s) with `offset` rad on the inclinometer from
+/// half-way on: its `mismatch` frames.
+fn boom_mismatches(duration: f64, offset: f64) -> Vec<MismatchFrame> {
+    let options = SimOptions { scenario: BoomScenario::Luffing, duration, seed: 2 };
+    let rec = simulate(&BoomConfig::default(), &options, &mut |_| {}).unwrap();
+    let csv = rec.to_csv(std::path::Path::new("boom.csv")).unwrap();
+    let csv = offset_from(&csv, "incl_angle", duration / 2.0, offset);
+    frames::<MismatchFrame>(&lines::<BoomImage>(csv.as_bytes()).unwrap()).unwrap()
+}
+
+#[test]
+fn the_boom_node_flags_an_inclinometer_offset_on_its_channel() {
+    // The gyro's channel (0) does not fit the model even on a healthy run: its CUSUM alarms,
+    // dated from the first sample tested (2.02 s), and its innovations are anti-correlated (ρ(1) from −0.15 to −0.48 over 5 s stretches, within this run's
+    // tolerance of 0.2 plus the limit). The inclinometer's channel fits.
+    let healthy = boom_mismatches(60.0, 0.0);
+    eprintln!("boom, healthy: {healthy:?}");
+    assert!(healthy.iter().all(|m| m.channel == 0), "{healthy:?}");
+    // 0.01 rad, the offset the loop's matrix declares, on channel 1 (the inclinometer) from 30 s.
+    let m = boom_mismatches(60.0, 0.01);
+    eprintln!("boom, 0.01 rad inclinometer offset from 30 s: {m:?}");
+    let on_incl: Vec<_> = m.iter().filter(|m| m.channel == 1).collect();
+    let bias = on_incl.iter().find(|m| m.statistic() == Some(Statistic::Bias)).expect("a bias on channel 1");
+    let start = 30 * SAMPLE_RATE_HZ + 1;
+    assert!(bias.since + 256 > start && bias.since <= start + 256, "{m:?}");
+}
