@@ -198,9 +198,9 @@ pub fn search<S: LoopSystem>(sys: &mut S, options: &LoopOptions) -> Result<LoopR
     let base_run = run.clone();
     let before = sys.summarise(&run);
     let tuning = tune(sys, &run, options)?;
-    let tuning = tuning.map(|(tuning, correction, m, r)| {
-        (model, run) = (m, r);
-        (tuning, correction)
+    let tuning = tuning.map(|t| {
+        (model, run) = (t.model, t.run);
+        (t.tuning, t.correction)
     });
     let PreStage { added: first, trials, refused, excludes, data_changed } = sys.prestage(&run, options)?;
     if data_changed {

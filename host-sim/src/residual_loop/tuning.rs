@@ -68,14 +68,22 @@ const GRID: usize = 5;
 /// Tolerance of the fit in `ln` of the scale (5 %).
 const TOLERANCE: f64 = 0.05;
 
+/// A scale kept: the tuning, its correction, and the base model and run it gives.
+pub struct Tuned<M> {
+    /// What was kept.
+    pub tuning: Tuning,
+    /// How it enters the configuration.
+    pub correction: EffectCorrection,
+    /// The base model with the scale.
+    pub model: M,
+    /// Its run.
+    pub run: Run,
+}
+
 /// Fits the scale on `sys`'s base model if it offers one (or takes a baseline's,
 /// [`LoopOptions::noise_scale`]), leaves it set on `sys` if it pays (else set back to 1) and
 /// returns it with its correction and the base run it gives.
-pub fn tune<S: LoopSystem>(
-    sys: &mut S,
-    base: &Run,
-    options: &LoopOptions,
-) -> Result<Option<(Tuning, EffectCorrection, S::Model, Run)>> {
+pub fn tune<S: LoopSystem>(sys: &mut S, base: &Run, options: &LoopOptions) -> Result<Option<Tuned<S::Model>>> {
     let Some(noise) = sys.tunable_noise() else { return Ok(None) };
     if options.progress {
         eprintln!("loop: fitting the process noise of {} to the data", noise.what);
@@ -89,7 +97,7 @@ pub fn tune<S: LoopSystem>(
         let (model, run) = sys.run(&[])?;
         let tuning = Tuning { what: noise.what, scale, delta_log_likelihood: run.log_likelihood() - base_ll, penalty };
         let correction = tuning.correction(&noise.keys);
-        return Ok(Some((tuning, correction, model, run)));
+        return Ok(Some(Tuned { tuning, correction, model, run }));
     }
     let mut eval = |x: f64| {
         sys.set_noise_scale(x.exp());
@@ -105,5 +113,5 @@ pub fn tune<S: LoopSystem>(
     let (model, run) = sys.run(&[])?;
     let tuning = Tuning { what: noise.what, scale: m.x.exp(), delta_log_likelihood: m.value - base_ll, penalty };
     let correction = tuning.correction(&noise.keys);
-    Ok(Some((tuning, correction, model, run)))
+    Ok(Some(Tuned { tuning, correction, model, run }))
 }
