@@ -9,7 +9,8 @@
 //! what the data can tell, `not_identifiable` naming it; on a clean run, nothing.
 
 use crate::io::data::DataFile;
-use crate::residual_loop::{EffectKind, LoopReport};
+use crate::residual_loop::limits::detection_limit;
+use crate::residual_loop::{EffectKind, LoopOptions, LoopReport, LoopSystem};
 
 /// `data` without its `truth_` columns: what a real recording has, and what the loop is given.
 ///
@@ -216,4 +217,68 @@ fn cells(line: &str) -> [String; 3] {
 /// ```
 pub fn row(outcome: &Outcome) -> [String; 3] {
     cells(table("", std::slice::from_ref(outcome)).lines().last().unwrap_or_default())
+}
+
+/// One size of a declared setting, for a case: the effect with its scalar, what the report
+/// should then say, and the case's words.
+#[derive(Debug, Clone)]
+pub struct SettingCase<E> {
+    /// The setting.
+    pub effect: E,
+    /// Its scalar in the simulated machine.
+    pub theta: f64,
+    /// Its value as the report gives it (`exp θ` for a factor, else `θ`).
+    pub value: f64,
+    /// Whether it is a factor.
+    pub factor: bool,
+    /// What the loop should say.
+    pub expect: Expect,
+    /// `parameter at place` (the parameter's name, or the kind's).
+    pub what: String,
+    /// `3× the limit`, or `below the limit`.
+    pub size: String,
+}
+
+/// Each declared setting with a scalar of `sys` at `multiples` of its detection limit on
+/// `sys`'s data (those within its range), or, where the data cannot see it at all, a fifth of
+/// the way to the end of its range, expected as "cannot tell" (see
+/// [`detection_limit`](crate::residual_loop::limits::detection_limit)).
+pub fn setting_cases<S: LoopSystem>(
+    sys: &S,
+    options: &LoopOptions,
+    multiples: &[f64],
+) -> anyhow::Result<Vec<SettingCase<S::Effect>>> {
+    let mut out = Vec::new();
+    for effect in sys.declared() {
+        let Some((range, _)) = sys.fitting(&effect).scalar else { continue };
+        let label = sys.label(&effect);
+        let what = format!(
+            "{} at {}",
+            label.detail.parameter.clone().unwrap_or_else(|| label.kind.to_string()),
+            label.location
+        );
+        let limit = detection_limit(sys, effect, options)?;
+        let sizes: Vec<(f64, String)> = match limit {
+            Some(d) => multiples
+                .iter()
+                .filter(|k| (range.low..=range.high).contains(&(range.neutral + *k * d)))
+                .map(|k| (range.neutral + k * d, format!("{k}× the limit")))
+                .collect(),
+            None => vec![(range.neutral + 0.2 * (range.high - range.neutral), "below the limit".into())],
+        };
+        for (theta, size) in sizes {
+            let value = if range.log { theta.exp() } else { theta };
+            let expected = Expected {
+                kind: label.kind,
+                location: label.location.clone(),
+                parameter: label.detail.parameter.clone(),
+                value,
+                declared: if range.log { 1.0 } else { range.neutral },
+                factor: range.log,
+            };
+            let expect = if limit.is_some() { Expect::Effect(expected) } else { Expect::CannotTell(expected) };
+            out.push(SettingCase { effect, theta, value, factor: range.log, expect, what: what.clone(), size });
+        }
+    }
+    Ok(out)
 }

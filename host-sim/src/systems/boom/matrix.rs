@@ -13,9 +13,8 @@ use super::peaks::peak_errors;
 use super::runs::Scenario;
 use super::simulate::{simulate, static_record, SimOptions};
 use crate::io::data::DataFile;
-use crate::matrix::{score, without_truth, Expect, Expected, Outcome};
-use crate::residual_loop::limits::detection_limit;
-use crate::residual_loop::{EffectKind, LoopOptions, LoopReport, LoopSystem};
+use crate::matrix::{score, setting_cases, without_truth, Expect, Expected, Outcome};
+use crate::residual_loop::{EffectKind, LoopOptions, LoopReport};
 use anyhow::{anyhow, Result};
 use std::time::Instant;
 
@@ -56,37 +55,11 @@ pub fn cases(declared: &BoomConfig) -> Result<Vec<Case>> {
         .collect();
     let data = run(declared, 1)?.to_data_file();
     let sys = system(declared, declared, &data, 1)?;
-    let options = options();
-    for effect in sys.declared() {
-        let Some((range, _)) = sys.fitting(&effect).scalar else { continue };
-        let label = sys.label(&effect);
-        let what = label.detail.parameter.clone().unwrap_or_else(|| label.kind.to_string());
-        let limit = detection_limit(&sys, effect, &options)?;
-        let sizes: Vec<(f64, String)> = match limit {
-            Some(d) => MULTIPLES
-                .iter()
-                .filter(|k| (range.low..=range.high).contains(&(range.neutral + *k * d)))
-                .map(|k| (range.neutral + k * d, format!("{k}× the limit")))
-                .collect(),
-            None => vec![(range.neutral + 0.2 * (range.high - range.neutral), "below the limit".into())],
-        };
-        for (theta, size) in sizes {
-            let mut truth = declared.clone();
-            inject(&mut truth, effect, theta);
-            // The boom's value reads nothing of the run: a factor's `exp θ`, else `θ`.
-            let value = sys.value(&(), &Default::default(), &crate::residual_loop::Applied::new(effect, theta));
-            let expected = Expected {
-                kind: label.kind,
-                location: label.location.clone(),
-                parameter: label.detail.parameter.clone(),
-                value,
-                declared: if range.log { 1.0 } else { range.neutral },
-                factor: range.log,
-            };
-            let expect = if limit.is_some() { Expect::Effect(expected) } else { Expect::CannotTell(expected) };
-            let name = format!("{what} at {} = {} ({size})", label.location, shown(value, range.log));
-            out.push(Case { name, truth, seed: EFFECT_SEED, expect });
-        }
+    for s in setting_cases(&sys, &options(), &MULTIPLES)? {
+        let mut truth = declared.clone();
+        inject(&mut truth, s.effect, s.theta);
+        let name = format!("{} = {} ({})", s.what, shown(s.value, s.factor), s.size);
+        out.push(Case { name, truth, seed: EFFECT_SEED, expect: s.expect });
     }
     out.push(sideways(declared)?);
     Ok(out)

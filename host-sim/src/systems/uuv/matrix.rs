@@ -12,8 +12,7 @@ use super::loop_system::{close_loop, UuvSystem, MODEL_FLOOR};
 use super::scenario::Scenario;
 use super::simulate::{simulate, SimOptions};
 use crate::io::data::DataFile;
-use crate::matrix::{score, without_truth, Expect, Expected, Outcome};
-use crate::residual_loop::limits::detection_limit;
+use crate::matrix::{score, setting_cases, without_truth, Expect, Outcome};
 use crate::residual_loop::tuning::tune;
 use crate::residual_loop::{LoopOptions, LoopSystem};
 use anyhow::{anyhow, Result};
@@ -60,36 +59,12 @@ pub fn cases(declared: &UuvConfig) -> Result<Vec<Case>> {
     // The limits on the model the loop would fit with: its noise set from the clean flight.
     let base = sys.run(&[])?.1;
     tune(&mut sys, &base, &options)?;
-    for effect in sys.declared() {
-        let Some((range, _)) = sys.fitting(&effect).scalar else { continue };
-        let label = sys.label(&effect);
-        let what = label.detail.parameter.clone().unwrap_or_else(|| label.kind.to_string());
-        let limit = detection_limit(&sys, effect, &options)?;
-        let sizes: Vec<(f64, String)> = match limit {
-            Some(d) => MULTIPLES
-                .iter()
-                .filter(|k| (range.low..=range.high).contains(&(range.neutral + *k * d)))
-                .map(|k| (range.neutral + k * d, format!("{k}× the limit")))
-                .collect(),
-            None => vec![(range.neutral + 0.2 * (range.high - range.neutral), "below the limit".into())],
-        };
-        for (theta, size) in sizes {
-            let mut truth = declared.clone();
-            inject(&mut truth, effect, theta);
-            let value = if range.log { theta.exp() } else { theta };
-            let expected = Expected {
-                kind: label.kind,
-                location: label.location.clone(),
-                parameter: label.detail.parameter.clone(),
-                value,
-                declared: if range.log { 1.0 } else { range.neutral },
-                factor: range.log,
-            };
-            let expect = if limit.is_some() { Expect::Effect(expected) } else { Expect::CannotTell(expected) };
-            let shown = if range.log { format!("×{value:.4}") } else { format!("{value:.4} {}", label.unit) };
-            let name = format!("{what} at {} = {shown} ({size})", label.location);
-            out.push(Case { name, truth, seed: EFFECT_SEED, expect });
-        }
+    for s in setting_cases(&sys, &options, &MULTIPLES)? {
+        let mut truth = declared.clone();
+        inject(&mut truth, s.effect, s.theta);
+        let shown = if s.factor { format!("×{:.4}", s.value) } else { format!("{:.4} m/s", s.value) };
+        let name = format!("{} = {shown} ({})", s.what, s.size);
+        out.push(Case { name, truth, seed: EFFECT_SEED, expect: s.expect });
     }
     Ok(out)
 }
