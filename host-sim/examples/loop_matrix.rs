@@ -3,19 +3,20 @@
 //! `--readme README.md` the table replaces the one between the README's markers
 //! `<!-- loop-matrix SYSTEM -->` and `<!-- /loop-matrix SYSTEM -->`.
 //!
-//! `cargo run --release -p edgekf-sim --example loop_matrix -- [boom] [uuv] [--readme README.md]`
+//! `cargo run --release -p edgekf-sim --example loop_matrix -- [boom] [oscillator] [uuv] [--readme README.md]`
 //! (`cargo xtask loop-matrix` runs it).
 
 use anyhow::{bail, Context, Result};
 use edgekf_sim::matrix::{table, Outcome};
 use edgekf_sim::systems::boom::{matrix as boom, BoomConfig};
+use edgekf_sim::systems::oscillator::{matrix as oscillator, scenario::Scenario};
 use edgekf_sim::systems::uuv::{matrix as uuv, UuvConfig};
 use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 /// The systems with a matrix.
-const SYSTEMS: [&str; 2] = ["boom", "uuv"];
+const SYSTEMS: [&str; 3] = ["boom", "oscillator", "uuv"];
 
 fn main() -> Result<()> {
     let mut args = std::env::args().skip(1);
@@ -34,6 +35,7 @@ fn main() -> Result<()> {
         let text = match system.as_str() {
             "boom" => boom_table()?,
             "uuv" => uuv_table()?,
+            "oscillator" => oscillator_table()?,
             _ => unreachable!("checked above"),
         };
         print!("{text}");
@@ -67,6 +69,19 @@ fn uuv_table() -> Result<String> {
         |c| (c.seed, &c.name),
         |s| uuv::clean_error(&declared, s),
         |c, clean| uuv::run_case(c, &declared, clean),
+    )
+}
+
+/// The oscillator's matrix (4 s runs of the demo's mode and drive).
+fn oscillator_table() -> Result<String> {
+    let declared = Scenario { duration_s: 4.0, ..Scenario::default() };
+    let cases = oscillator::cases(&declared)?;
+    parallel_table(
+        "oscillator",
+        &cases,
+        |c| (c.seed(), &c.name),
+        |s| oscillator::clean_error(&declared, s),
+        |c, clean| oscillator::run_case(c, &declared, clean),
     )
 }
 

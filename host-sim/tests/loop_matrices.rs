@@ -1,12 +1,12 @@
 //! Fixed slices of the systems' effect matrices (`edgekf_sim::matrix`), run as CI runs them:
 //! every sixth of the boom's cases (clean runs, a stiffness, a section, a lag, the sideways
-//! mode) and every third of the vehicle's (clean flights, the mass, a DVL offset) come out as
-//! the README's tables, written by `cargo xtask loop-matrix`, say they do: the same effects
-//! added, the same verdict. A change of the loop's behaviour on these cases fails here until
-//! the tables are written again.
+//! mode), every third of the vehicle's (clean flights, the mass, a DVL offset) and every
+//! other of the oscillator's come out as the README's tables (written by `cargo xtask
+//! loop-matrix`) say they do: the same effects added, the same verdict. A change of the
+//! loop's behaviour on these cases fails here until the tables are written again.
 
 use edgekf_sim::matrix::{readme_rows, row, Outcome};
-use edgekf_sim::systems::{boom, uuv};
+use edgekf_sim::systems::{boom, oscillator, uuv};
 
 /// Checks every `step`-th of `system`'s `cases` (named by `name`) against the README's rows.
 fn check_slice<C>(system: &str, cases: &[C], step: usize, name: fn(&C) -> &str, outcome: impl Fn(&C) -> Outcome) {
@@ -51,6 +51,22 @@ fn a_slice_of_the_vehicle_matrix_comes_out_as_the_readme_says() {
         |c| {
             let clean = uuv::matrix::clean_error(&declared, c.seed).unwrap();
             uuv::matrix::run_case(c, &declared, clean).unwrap()
+        },
+    );
+}
+
+#[test]
+fn a_slice_of_the_oscillator_matrix_comes_out_as_the_readme_says() {
+    let declared = oscillator::scenario::Scenario { duration_s: 4.0, ..Default::default() };
+    let cases = oscillator::matrix::cases(&declared).unwrap();
+    check_slice(
+        "oscillator",
+        &cases,
+        2,
+        |c| &c.name,
+        |c| {
+            let clean = oscillator::matrix::clean_error(&declared, c.seed()).unwrap();
+            oscillator::matrix::run_case(c, &declared, clean).unwrap()
         },
     );
 }

@@ -17,6 +17,7 @@ pub mod demo;
 pub mod estimate;
 pub mod export;
 pub mod loop_system;
+pub mod matrix;
 pub mod report;
 pub mod scenario;
 pub mod sensor;
