@@ -79,7 +79,7 @@ fn oscillator_table() -> Result<String> {
     parallel_table(
         "oscillator",
         &cases,
-        |c| (c.seed(), &c.name),
+        |c| (c.seed, &c.name),
         |s| oscillator::clean_error(&declared, s),
         |c, clean| oscillator::run_case(c, &declared, clean),
     )

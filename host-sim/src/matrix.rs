@@ -282,3 +282,72 @@ pub fn setting_cases<S: LoopSystem>(
     }
     Ok(out)
 }
+
+/// One case of a system's matrix: the simulated machine (`T`, its configuration), the seed of
+/// its run and what the loop should say.
+#[derive(Debug, Clone)]
+pub struct Case<T> {
+    /// In words, for the table.
+    pub name: String,
+    /// The simulated machine.
+    pub truth: T,
+    /// The seed of its run.
+    pub seed: u64,
+    /// What the loop should say.
+    pub expect: Expect,
+}
+
+/// The clean runs of `declared` at `seeds`: nothing should be added.
+///
+/// ```
+/// use edgekf_sim::matrix::{clean_cases, Expect};
+/// let cases = clean_cases(&"model", &[1, 2]);
+/// assert_eq!((cases[1].name.as_str(), cases[1].seed), ("clean, seed 2", 2));
+/// assert_eq!(cases[0].expect, Expect::Nothing);
+/// ```
+pub fn clean_cases<T: Clone>(declared: &T, seeds: &[u64]) -> Vec<Case<T>> {
+    seeds
+        .iter()
+        .map(|&seed| Case {
+            name: format!("clean, seed {seed}"),
+            truth: declared.clone(),
+            seed,
+            expect: Expect::Nothing,
+        })
+        .collect()
+}
+
+/// How `case` came out in `report`, which took `seconds`, scored with `errors` (see [`score`]).
+pub fn outcome<T>(case: &Case<T>, report: &LoopReport, errors: Option<(f64, f64)>, seconds: f64) -> Outcome {
+    let added = report
+        .effects_added
+        .iter()
+        .map(|e| format!("{} at {} = {:.4}", e.kind, e.location, e.value))
+        .collect::<Vec<_>>()
+        .join("; ");
+    Outcome { case: case.name.clone(), verdict: score(&case.expect, report, errors), added, seconds }
+}
+
+/// RMS of `estimate` against `full`'s column `truth` from `from_s` on (the filter's start left
+/// out), over the samples where both are finite.
+///
+/// ```
+/// use edgekf_sim::io::data::DataFile;
+/// use edgekf_sim::matrix::rms_error;
+/// let d = DataFile { names: vec!["truth_x".into()], t: vec![0.0, 1.0, 2.0], columns: vec![vec![0.0; 3]], sha256: None };
+/// assert_eq!(rms_error(&d, "truth_x", &[9.0, 3.0, 4.0], 1.0).unwrap(), 12.5f64.sqrt());
+/// ```
+pub fn rms_error(full: &DataFile, truth: &str, estimate: &[f64], from_s: f64) -> anyhow::Result<f64> {
+    let column = full.column(truth).ok_or_else(|| anyhow::anyhow!("the run has no `{truth}`"))?;
+    let squares: Vec<f64> = full
+        .t
+        .iter()
+        .zip(column.iter().zip(estimate))
+        .filter(|(t, (a, b))| **t >= from_s && a.is_finite() && b.is_finite())
+        .map(|(_, (a, b))| (a - b).powi(2))
+        .collect();
+    if squares.is_empty() {
+        anyhow::bail!("no estimate of `{truth}` after {from_s} s");
+    }
+    Ok((squares.iter().sum::<f64>() / squares.len() as f64).sqrt())
+}

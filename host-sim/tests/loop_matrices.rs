@@ -65,7 +65,7 @@ fn a_slice_of_the_oscillator_matrix_comes_out_as_the_readme_says() {
         2,
         |c| &c.name,
         |c| {
-            let clean = oscillator::matrix::clean_error(&declared, c.seed()).unwrap();
+            let clean = oscillator::matrix::clean_error(&declared, c.seed).unwrap();
             oscillator::matrix::run_case(c, &declared, clean).unwrap()
         },
     );

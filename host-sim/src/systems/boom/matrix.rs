@@ -13,7 +13,7 @@ use super::peaks::peak_errors;
 use super::runs::Scenario;
 use super::simulate::{simulate, static_record, SimOptions};
 use crate::io::data::DataFile;
-use crate::matrix::{score, setting_cases, without_truth, Expect, Expected, Outcome};
+use crate::matrix::{clean_cases, outcome, setting_cases, without_truth, Expect, Expected, Outcome};
 use crate::residual_loop::{EffectKind, LoopOptions, LoopReport};
 use anyhow::{anyhow, Result};
 use std::time::Instant;
@@ -28,31 +28,13 @@ const EFFECT_SEED: u64 = 2;
 const MULTIPLES: [f64; 2] = [3.0, 10.0];
 
 /// One case: what the simulator's boom has that the declared one lacks.
-#[derive(Debug, Clone)]
-pub struct Case {
-    /// In words, for the table.
-    pub name: String,
-    /// The simulated boom.
-    pub truth: BoomConfig,
-    /// The seed of its run.
-    pub seed: u64,
-    /// What the loop should say.
-    pub expect: Expect,
-}
+pub type Case = crate::matrix::Case<BoomConfig>;
 
 /// The whole matrix for `declared`: clean runs, then each declared setting at 3× and 10× its
 /// detection limit (or at the end of its range, expected as "cannot tell"), then the sideways
 /// mode.
 pub fn cases(declared: &BoomConfig) -> Result<Vec<Case>> {
-    let mut out: Vec<Case> = CLEAN_SEEDS
-        .iter()
-        .map(|&seed| Case {
-            name: format!("clean, seed {seed}"),
-            truth: declared.clone(),
-            seed,
-            expect: Expect::Nothing,
-        })
-        .collect();
+    let mut out = clean_cases(declared, &CLEAN_SEEDS);
     let data = run(declared, 1)?.to_data_file();
     let sys = system(declared, declared, &data, 1)?;
     for s in setting_cases(&sys, &options(), &MULTIPLES)? {
@@ -75,14 +57,7 @@ pub fn run_case(case: &Case, declared: &BoomConfig, clean_error: f64) -> Result<
     let report = close(&case.truth, declared, &bare, case.seed)?;
     let seconds = started.elapsed().as_secs_f64();
     let after = peak_error(&full, &report.traces.after.outputs[0])?;
-    let verdict = score(&case.expect, &report, Some((after, clean_error)));
-    let added = report
-        .effects_added
-        .iter()
-        .map(|e| format!("{} at {} = {:.4}", e.kind, e.location, e.value))
-        .collect::<Vec<_>>()
-        .join("; ");
-    Ok(Outcome { case: case.name.clone(), verdict, added, seconds })
+    Ok(outcome(case, &report, Some((after, clean_error)), seconds))
 }
 
 /// The clean run's peak error at `seed` with the declared boom (the model as declared on data

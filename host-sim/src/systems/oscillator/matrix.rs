@@ -10,65 +10,44 @@
 use super::loop_system::{close_loop, Effect, OscillatorSystem};
 use super::scenario::Scenario;
 use super::sim::ExtraHarmonic;
-use crate::io::data::DataFile;
-use crate::matrix::{score, setting_cases, without_truth, Expect, Expected, Outcome};
+use crate::matrix::{clean_cases, outcome, rms_error, setting_cases, without_truth, Expect, Expected, Outcome};
 use crate::residual_loop::{EffectKind, LoopOptions};
-use anyhow::{anyhow, Result};
+use anyhow::Result;
 use std::time::Instant;
 
 /// Seeds of the clean runs.
 const CLEAN_SEEDS: [u64; 5] = [1, 2, 3, 4, 5];
 /// Seed of the runs that carry an effect.
 const EFFECT_SEED: u64 = 2;
+/// Seconds of the filter's start left out of the errors.
+const SETTLE_S: f64 = 1.0;
 /// Sizes, as multiples of the detection limit.
 const MULTIPLES: [f64; 2] = [3.0, 10.0];
 
-/// One case: the simulated scenario and what the loop should say.
-#[derive(Debug, Clone)]
-pub struct Case {
-    /// In words, for the table.
-    pub name: String,
-    /// The simulated scenario (its seed included).
-    pub truth: Scenario,
-    /// What the loop should say.
-    pub expect: Expect,
-}
-
-impl Case {
-    /// The seed of its run.
-    pub fn seed(&self) -> u64 {
-        self.truth.seed
-    }
-}
+/// One case: the simulated scenario (run at the case's seed) and what the loop should say.
+pub type Case = crate::matrix::Case<Scenario>;
 
 /// The whole matrix for `declared`: clean runs, the mode's settings at 3× and 10× their
 /// limits, then an accelerometer offset and a second harmonic.
 pub fn cases(declared: &Scenario) -> Result<Vec<Case>> {
-    let mut out: Vec<Case> = CLEAN_SEEDS
-        .iter()
-        .map(|&seed| Case {
-            name: format!("clean, seed {seed}"),
-            truth: Scenario { seed, ..declared.clone() },
-            expect: Expect::Nothing,
-        })
-        .collect();
+    let mut out = clean_cases(declared, &CLEAN_SEEDS);
     let data = Scenario { seed: 1, ..declared.clone() }.simulate().to_data_file();
     let sys = OscillatorSystem::new(declared, &data, &options())?;
-    let at_effect_seed = Scenario { seed: EFFECT_SEED, ..declared.clone() };
+    let base = declared.clone();
     for s in setting_cases(&sys, &options(), &MULTIPLES)? {
-        let mut truth = at_effect_seed.clone();
+        let mut truth = base.clone();
         match s.effect {
             Effect::Frequency => truth.mode.natural_freq_hz *= s.value,
             Effect::Damping => truth.mode.damping_ratio *= s.value,
             Effect::SensorScale | Effect::SensorBias | Effect::HarmonicForce { .. } => continue,
         }
         let name = format!("{} = ×{:.4} ({})", s.what, s.value, s.size);
-        out.push(Case { name, truth, expect: s.expect });
+        out.push(Case { name, truth, seed: EFFECT_SEED, expect: s.expect });
     }
-    let mut biased = at_effect_seed.clone();
+    let mut biased = base.clone();
     biased.sensor.bias_m_s2[0] = 0.05;
     out.push(state_case("sensor_bias at ax = 0.05 m/s²", biased, EffectKind::SensorBias, "ax", 0.05));
-    let mut second = at_effect_seed;
+    let mut second = base;
     second.force.extra.push(ExtraHarmonic::new(2.0, 0.5, 0.0));
     out.push(state_case("harmonic_force 2× = 0.5 N", second, EffectKind::HarmonicForce, "mode", 0.5));
     Ok(out)
@@ -78,52 +57,28 @@ pub fn cases(declared: &Scenario) -> Result<Vec<Case>> {
 /// stated).
 fn state_case(name: &str, truth: Scenario, kind: EffectKind, location: &str, value: f64) -> Case {
     let expected = Expected { kind, location: location.into(), parameter: None, value, declared: 0.0, factor: false };
-    Case { name: name.into(), truth, expect: Expect::Effect(expected) }
+    Case { name: name.into(), truth, seed: EFFECT_SEED, expect: Expect::Effect(expected) }
 }
 
 /// Runs `case` with `declared`: the loop on the run without its truth columns, scored against
 /// them (the displacement's RMS error after the loop against the clean run's).
 pub fn run_case(case: &Case, declared: &Scenario, clean_error: f64) -> Result<Outcome> {
-    let full = case.truth.simulate().to_data_file();
+    let full = Scenario { seed: case.seed, ..case.truth.clone() }.simulate().to_data_file();
     let started = Instant::now();
     let report = close_loop(declared, &without_truth(&full), &options())?;
     let seconds = started.elapsed().as_secs_f64();
-    let after = x_error(&full, &report.traces.after.outputs[0])?;
-    let verdict = score(&case.expect, &report, Some((after, clean_error)));
-    let added = report
-        .effects_added
-        .iter()
-        .map(|e| format!("{} at {} = {:.4}", e.kind, e.location, e.value))
-        .collect::<Vec<_>>()
-        .join("; ");
-    Ok(Outcome { case: case.name.clone(), verdict, added, seconds })
+    let after = rms_error(&full, "truth_x", &report.traces.after.outputs[0], SETTLE_S)?;
+    Ok(outcome(case, &report, Some((after, clean_error)), seconds))
 }
 
 /// The clean run's displacement RMS error at `seed` with the declared scenario.
 pub fn clean_error(declared: &Scenario, seed: u64) -> Result<f64> {
     let full = Scenario { seed, ..declared.clone() }.simulate().to_data_file();
     let report = close_loop(declared, &without_truth(&full), &options())?;
-    x_error(&full, &report.traces.before.outputs[0])
+    rms_error(&full, "truth_x", &report.traces.before.outputs[0], SETTLE_S)
 }
 
 /// The loop's options on every run, as `edgekf loop oscillator` has them.
 fn options() -> LoopOptions {
     LoopOptions::default()
-}
-
-/// RMS of the displacement estimate against `full`'s truth after the first second (the
-/// filter's start).
-fn x_error(full: &DataFile, estimate: &[f64]) -> Result<f64> {
-    let truth = full.column("truth_x").ok_or_else(|| anyhow!("the run has no `truth_x`"))?;
-    let squares: Vec<f64> = full
-        .t
-        .iter()
-        .zip(truth.iter().zip(estimate))
-        .filter(|(t, (a, b))| **t >= 1.0 && a.is_finite() && b.is_finite())
-        .map(|(_, (a, b))| (a - b).powi(2))
-        .collect();
-    if squares.is_empty() {
-        return Err(anyhow!("no displacement estimate after 1 s"));
-    }
-    Ok((squares.iter().sum::<f64>() / squares.len() as f64).sqrt())
 }

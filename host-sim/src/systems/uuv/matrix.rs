@@ -12,10 +12,10 @@ use super::loop_system::{close_loop, UuvSystem, MODEL_FLOOR};
 use super::scenario::Scenario;
 use super::simulate::{simulate, SimOptions};
 use crate::io::data::DataFile;
-use crate::matrix::{score, setting_cases, without_truth, Expect, Outcome};
+use crate::matrix::{clean_cases, outcome, rms_error, setting_cases, without_truth, Outcome};
 use crate::residual_loop::tuning::tune;
 use crate::residual_loop::{LoopOptions, LoopSystem};
-use anyhow::{anyhow, Result};
+use anyhow::Result;
 use std::time::Instant;
 
 /// Length of every flight, s.
@@ -24,35 +24,19 @@ const DURATION: f64 = 150.0;
 const CLEAN_SEEDS: [u64; 5] = [1, 2, 3, 4, 5];
 /// Seed of the flights that carry an effect.
 const EFFECT_SEED: u64 = 2;
+/// Seconds of the filter's start left out of the errors.
+const SETTLE_S: f64 = 10.0;
 /// Sizes, as multiples of the detection limit.
 const MULTIPLES: [f64; 2] = [3.0, 10.0];
 
 /// One case: what the simulated vehicle or its sensors have that the declared ones lack.
-#[derive(Debug, Clone)]
-pub struct Case {
-    /// In words, for the table.
-    pub name: String,
-    /// The simulated vehicle.
-    pub truth: UuvConfig,
-    /// The seed of its flight.
-    pub seed: u64,
-    /// What the loop should say.
-    pub expect: Expect,
-}
+pub type Case = crate::matrix::Case<UuvConfig>;
 
 /// The whole matrix for `declared`: clean flights, then each declared setting at 3× and 10×
 /// its detection limit (or a fifth of the way to the end of its range, expected as "cannot
 /// tell", where the data cannot see it).
 pub fn cases(declared: &UuvConfig) -> Result<Vec<Case>> {
-    let mut out: Vec<Case> = CLEAN_SEEDS
-        .iter()
-        .map(|&seed| Case {
-            name: format!("clean, seed {seed}"),
-            truth: declared.clone(),
-            seed,
-            expect: Expect::Nothing,
-        })
-        .collect();
+    let mut out = clean_cases(declared, &CLEAN_SEEDS);
     let data = flight(declared, 1)?;
     let options = options();
     let mut sys = UuvSystem::new(declared, &data, &options)?;
@@ -76,15 +60,8 @@ pub fn run_case(case: &Case, declared: &UuvConfig, clean_error: f64) -> Result<O
     let started = Instant::now();
     let report = close_loop(declared, &without_truth(&full), &options())?;
     let seconds = started.elapsed().as_secs_f64();
-    let after = k_t_error(&full, &report.traces.after.outputs[0])?;
-    let verdict = score(&case.expect, &report, Some((after, clean_error)));
-    let added = report
-        .effects_added
-        .iter()
-        .map(|e| format!("{} at {} = {:.4}", e.kind, e.location, e.value))
-        .collect::<Vec<_>>()
-        .join("; ");
-    Ok(Outcome { case: case.name.clone(), verdict, added, seconds })
+    let after = rms_error(&full, "truth_k_t", &report.traces.after.outputs[0], SETTLE_S)?;
+    Ok(outcome(case, &report, Some((after, clean_error)), seconds))
 }
 
 /// The clean flight's thrust-gain RMS error at `seed` with the declared model (before the
@@ -92,7 +69,7 @@ pub fn run_case(case: &Case, declared: &UuvConfig, clean_error: f64) -> Result<O
 pub fn clean_error(declared: &UuvConfig, seed: u64) -> Result<f64> {
     let full = flight(declared, seed)?;
     let report = close_loop(declared, &without_truth(&full), &options())?;
-    k_t_error(&full, &report.traces.before.outputs[0])
+    rms_error(&full, "truth_k_t", &report.traces.before.outputs[0], SETTLE_S)
 }
 
 /// The loop's options on every flight, as `edgekf loop uuv` has them (the model floor is
@@ -105,22 +82,6 @@ fn options() -> LoopOptions {
 fn flight(truth: &UuvConfig, seed: u64) -> Result<DataFile> {
     let options = SimOptions { scenario: Scenario::Healthy, duration: DURATION, seed };
     Ok(simulate(truth, &options, &mut |_| {})?.to_data_file())
-}
-
-/// RMS of the estimated `k_t` against `full`'s truth after the filter's first 10 s.
-fn k_t_error(full: &DataFile, estimate: &[f64]) -> Result<f64> {
-    let truth = full.column("truth_k_t").ok_or_else(|| anyhow!("the flight has no `truth_k_t`"))?;
-    let pairs: Vec<f64> = full
-        .t
-        .iter()
-        .zip(truth.iter().zip(estimate))
-        .filter(|(t, (a, b))| **t >= 10.0 && a.is_finite() && b.is_finite())
-        .map(|(_, (a, b))| (a - b).powi(2))
-        .collect();
-    if pairs.is_empty() {
-        return Err(anyhow!("no k_t estimate after 10 s"));
-    }
-    Ok((pairs.iter().sum::<f64>() / pairs.len() as f64).sqrt())
 }
 
 /// Puts `effect` with scalar `theta` into the simulated vehicle, as the loop's model takes it.
