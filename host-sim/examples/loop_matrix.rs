@@ -7,7 +7,7 @@
 //! (`cargo xtask loop-matrix` runs it).
 
 use anyhow::{bail, Context, Result};
-use edgekf_sim::matrix::{table, Outcome};
+use edgekf_sim::matrix::{table, Case, Outcome};
 use edgekf_sim::systems::boom::{matrix as boom, BoomConfig};
 use edgekf_sim::systems::oscillator::{matrix as oscillator, scenario::Scenario};
 use edgekf_sim::systems::uuv::{matrix as uuv, UuvConfig};
@@ -50,26 +50,14 @@ fn main() -> Result<()> {
 fn boom_table() -> Result<String> {
     let declared = BoomConfig::default();
     let cases = boom::cases(&declared)?;
-    parallel_table(
-        "boom",
-        &cases,
-        |c| (c.seed, &c.name),
-        |s| boom::clean_error(&declared, s),
-        |c, clean| boom::run_case(c, &declared, clean),
-    )
+    parallel_table("boom", &cases, |s| boom::clean_error(&declared, s), |c, clean| boom::run_case(c, &declared, clean))
 }
 
 /// The vehicle's matrix.
 fn uuv_table() -> Result<String> {
     let declared = UuvConfig::default();
     let cases = uuv::cases(&declared)?;
-    parallel_table(
-        "uuv",
-        &cases,
-        |c| (c.seed, &c.name),
-        |s| uuv::clean_error(&declared, s),
-        |c, clean| uuv::run_case(c, &declared, clean),
-    )
+    parallel_table("uuv", &cases, |s| uuv::clean_error(&declared, s), |c, clean| uuv::run_case(c, &declared, clean))
 }
 
 /// The oscillator's matrix (4 s runs of the demo's mode and drive).
@@ -79,7 +67,6 @@ fn oscillator_table() -> Result<String> {
     parallel_table(
         "oscillator",
         &cases,
-        |c| (c.seed, &c.name),
         |s| oscillator::clean_error(&declared, s),
         |c, clean| oscillator::run_case(c, &declared, clean),
     )
@@ -87,25 +74,24 @@ fn oscillator_table() -> Result<String> {
 
 /// A system's cases run in parallel, each against the clean run's error at its seed (each
 /// seed's clean run once), as the README's table.
-fn parallel_table<C: Sync>(
+fn parallel_table<T: Sync>(
     system: &str,
-    cases: &[C],
-    about: impl Fn(&C) -> (u64, &String) + Sync,
+    cases: &[Case<T>],
     clean: impl Fn(u64) -> Result<f64> + Sync,
-    run: impl Fn(&C, f64) -> Result<Outcome> + Sync,
+    run: impl Fn(&Case<T>, f64) -> Result<Outcome> + Sync,
 ) -> Result<String> {
     eprintln!("{system}: {} cases", cases.len());
-    let mut seeds: Vec<u64> = cases.iter().map(|c| about(c).0).collect();
+    let mut seeds: Vec<u64> = cases.iter().map(|c| c.seed).collect();
     seeds.sort_unstable();
     seeds.dedup();
     let clean: BTreeMap<u64, f64> = seeds.par_iter().map(|&s| Ok((s, clean(s)?))).collect::<Result<_>>()?;
     let outcomes: Vec<Outcome> = cases
         .par_iter()
         .map(|c| {
-            let o = run(c, clean[&about(c).0]);
+            let o = run(c, clean[&c.seed]);
             match &o {
                 Ok(o) => eprintln!("  {}: {:?}", o.case, o.verdict),
-                Err(e) => eprintln!("  {}: {e:#}", about(c).1),
+                Err(e) => eprintln!("  {}: {e:#}", c.name),
             }
             o
         })

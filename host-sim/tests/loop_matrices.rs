@@ -5,21 +5,21 @@
 //! loop-matrix`) say they do: the same effects added, the same verdict. A change of the
 //! loop's behaviour on these cases fails here until the tables are written again.
 
-use edgekf_sim::matrix::{readme_rows, row, Outcome};
+use edgekf_sim::matrix::{readme_rows, row, Case, Outcome};
 use edgekf_sim::systems::{boom, oscillator, uuv};
 
-/// Checks every `step`-th of `system`'s `cases` (named by `name`) against the README's rows.
-fn check_slice<C>(system: &str, cases: &[C], step: usize, name: fn(&C) -> &str, outcome: impl Fn(&C) -> Outcome) {
+/// Checks every `step`-th of `system`'s `cases` against the README's rows.
+fn check_slice<T>(system: &str, cases: &[Case<T>], step: usize, outcome: impl Fn(&Case<T>) -> Outcome) {
     let readme = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../README.md")).unwrap();
     let rows = readme_rows(&readme, system).unwrap_or_else(|| panic!("the README's {system} matrix"));
-    let names: Vec<&str> = cases.iter().map(name).collect();
+    let names: Vec<&str> = cases.iter().map(|c| c.name.as_str()).collect();
     let listed: Vec<&str> = rows.iter().map(|r| r[0].as_str()).collect();
     assert_eq!(names, listed, "the README's table lists other cases: run `cargo xtask loop-matrix {system}`");
     for (case, listed) in cases.iter().zip(&rows).step_by(step) {
         let o = outcome(case);
         let ours = row(&o);
         eprintln!("{system}: {ours:?}  ({:.1} s)", o.seconds);
-        assert_eq!(ours[1..], listed[1..], "{}", name(case));
+        assert_eq!(ours[1..], listed[1..], "{}", case.name);
     }
 }
 
@@ -27,46 +27,28 @@ fn check_slice<C>(system: &str, cases: &[C], step: usize, name: fn(&C) -> &str, 
 fn a_slice_of_the_boom_matrix_comes_out_as_the_readme_says() {
     let declared = boom::BoomConfig::default();
     let cases = boom::matrix::cases(&declared).unwrap();
-    check_slice(
-        "boom",
-        &cases,
-        6,
-        |c| &c.name,
-        |c| {
-            let clean = boom::matrix::clean_error(&declared, c.seed).unwrap();
-            boom::matrix::run_case(c, &declared, clean).unwrap()
-        },
-    );
+    check_slice("boom", &cases, 6, |c| {
+        let clean = boom::matrix::clean_error(&declared, c.seed).unwrap();
+        boom::matrix::run_case(c, &declared, clean).unwrap()
+    });
 }
 
 #[test]
 fn a_slice_of_the_vehicle_matrix_comes_out_as_the_readme_says() {
     let declared = uuv::UuvConfig::default();
     let cases = uuv::matrix::cases(&declared).unwrap();
-    check_slice(
-        "uuv",
-        &cases,
-        3,
-        |c| &c.name,
-        |c| {
-            let clean = uuv::matrix::clean_error(&declared, c.seed).unwrap();
-            uuv::matrix::run_case(c, &declared, clean).unwrap()
-        },
-    );
+    check_slice("uuv", &cases, 3, |c| {
+        let clean = uuv::matrix::clean_error(&declared, c.seed).unwrap();
+        uuv::matrix::run_case(c, &declared, clean).unwrap()
+    });
 }
 
 #[test]
 fn a_slice_of_the_oscillator_matrix_comes_out_as_the_readme_says() {
     let declared = oscillator::scenario::Scenario { duration_s: 4.0, ..Default::default() };
     let cases = oscillator::matrix::cases(&declared).unwrap();
-    check_slice(
-        "oscillator",
-        &cases,
-        2,
-        |c| &c.name,
-        |c| {
-            let clean = oscillator::matrix::clean_error(&declared, c.seed).unwrap();
-            oscillator::matrix::run_case(c, &declared, clean).unwrap()
-        },
-    );
+    check_slice("oscillator", &cases, 2, |c| {
+        let clean = oscillator::matrix::clean_error(&declared, c.seed).unwrap();
+        oscillator::matrix::run_case(c, &declared, clean).unwrap()
+    });
 }
