@@ -4,7 +4,8 @@
 //! `<!-- loop-matrix SYSTEM -->` and `<!-- /loop-matrix SYSTEM -->`.
 //!
 //! `cargo run --release -p edgekf-sim --example loop_matrix -- [boom] [oscillator] [uuv] [--readme README.md]`
-//! (`cargo xtask loop-matrix` runs it).
+//! (`cargo xtask loop-matrix` runs it). `--case TEXT` runs only the cases whose name holds
+//! `TEXT` (to look at one row again; not with `--readme`, whose tables are whole).
 
 use anyhow::{bail, Context, Result};
 use edgekf_sim::matrix::{table, Case, Outcome};
@@ -20,22 +21,27 @@ const SYSTEMS: [&str; 3] = ["boom", "oscillator", "uuv"];
 
 fn main() -> Result<()> {
     let mut args = std::env::args().skip(1);
-    let (mut systems, mut readme) = (Vec::new(), None);
+    let (mut systems, mut readme, mut only) = (Vec::new(), None, None);
     while let Some(a) = args.next() {
         match a.as_str() {
             "--readme" => readme = Some(PathBuf::from(args.next().context("--readme takes a file")?)),
+            "--case" => only = Some(args.next().context("--case takes the text of a case's name")?),
             s if SYSTEMS.contains(&s) => systems.push(s.to_string()),
             other => bail!("unknown argument `{other}` (systems with a matrix: {})", SYSTEMS.join(", ")),
         }
     }
+    if readme.is_some() && only.is_some() {
+        bail!("--case runs part of a matrix; the README's tables are written from whole ones");
+    }
     if systems.is_empty() {
         systems = SYSTEMS.iter().map(|s| s.to_string()).collect();
     }
+    let only = only.as_deref().unwrap_or("");
     for system in systems {
         let text = match system.as_str() {
-            "boom" => boom_table()?,
-            "uuv" => uuv_table()?,
-            "oscillator" => oscillator_table()?,
+            "boom" => boom_table(only)?,
+            "uuv" => uuv_table(only)?,
+            "oscillator" => oscillator_table(only)?,
             _ => unreachable!("checked above"),
         };
         print!("{text}");
@@ -47,29 +53,39 @@ fn main() -> Result<()> {
 }
 
 /// The boom's matrix.
-fn boom_table() -> Result<String> {
+fn boom_table(only: &str) -> Result<String> {
     let declared = BoomConfig::default();
-    let cases = boom::cases(&declared)?;
+    let cases = matching(boom::cases(&declared)?, only)?;
     parallel_table("boom", &cases, |s| boom::clean_error(&declared, s), |c, clean| boom::run_case(c, &declared, clean))
 }
 
 /// The vehicle's matrix.
-fn uuv_table() -> Result<String> {
+fn uuv_table(only: &str) -> Result<String> {
     let declared = UuvConfig::default();
-    let cases = uuv::cases(&declared)?;
+    let cases = matching(uuv::cases(&declared)?, only)?;
     parallel_table("uuv", &cases, |s| uuv::clean_error(&declared, s), |c, clean| uuv::run_case(c, &declared, clean))
 }
 
 /// The oscillator's matrix (4 s runs of the demo's mode and drive).
-fn oscillator_table() -> Result<String> {
+fn oscillator_table(only: &str) -> Result<String> {
     let declared = Scenario { duration_s: 4.0, ..Scenario::default() };
-    let cases = oscillator::cases(&declared)?;
+    let cases = matching(oscillator::cases(&declared)?, only)?;
     parallel_table(
         "oscillator",
         &cases,
         |s| oscillator::clean_error(&declared, s),
         |c, clean| oscillator::run_case(c, &declared, clean),
     )
+}
+
+/// The cases whose name holds `only` (every case for an empty `only`); none is an error.
+fn matching<T>(cases: Vec<Case<T>>, only: &str) -> Result<Vec<Case<T>>> {
+    let names: Vec<String> = cases.iter().map(|c| c.name.clone()).collect();
+    let kept: Vec<Case<T>> = cases.into_iter().filter(|c| c.name.contains(only)).collect();
+    if kept.is_empty() {
+        bail!("no case's name holds `{only}`; the cases are:\n  {}", names.join("\n  "));
+    }
+    Ok(kept)
 }
 
 /// A system's cases run in parallel, each against the clean run's error at its seed (each

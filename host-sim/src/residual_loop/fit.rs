@@ -13,6 +13,15 @@ use super::vocabulary::{Applied, EffectLabel};
 use anyhow::{anyhow, Result};
 use rayon::prelude::*;
 
+/// A half whose data hold at most this share of the information the other half holds about
+/// an effect cannot show it: only its consistency with the other half is asked of it (a
+/// mode's frequency under a tracked drive shows in the transient, not in the steady state).
+const BLIND_HALF: f64 = 0.1;
+
+/// How much a half that cannot see an effect may lose to it by chance: half the 99 % point of
+/// χ²(1), the likelihood-ratio allowance for one parameter.
+const HALF_SLACK: f64 = 3.32;
+
 /// The reason of every refusal at a bound, as `report.json` writes it.
 pub const OUTSIDE: &str = "outside what the model allows";
 
@@ -64,6 +73,10 @@ pub(super) struct Fitted<E, M> {
     pub(super) run: Run,
     pub(super) delta: f64,
     pub(super) halves: [f64; 2],
+    /// What each half would gain from the effect at its fitted value if the effect lasted
+    /// through the run (from the curvature of that half's profile likelihood), computed only
+    /// for a scalar effect whose halves do not both pay; `None` otherwise.
+    pub(super) halves_expected: Option<[f64; 2]>,
     pub(super) penalty: f64,
     pub(super) label: EffectLabel,
 }
@@ -182,11 +195,39 @@ impl<S: LoopSystem> Engine<'_, S> {
             }
         }
         let delta = run.log_likelihood() - base.log_likelihood();
-        let halves = onset::halves(&run, base, applied.first_sample(&self.t));
+        let from = applied.first_sample(&self.t);
+        let halves = onset::halves(&run, base, from);
         let mut label = self.sys.label(&cand);
         label.detail.onset_s = onset_s;
         let penalty = self.penalty(&cand, onset_s.is_some());
-        Ok(Fitted { applied, model, run, delta, halves, penalty, label })
+        let short = halves[0].min(halves[1]) < self.options.half_gain * penalty;
+        let halves_expected = match fitting.scalar {
+            Some((range, _)) if short && delta > penalty => {
+                self.halves_expected(&with, theta - range.neutral, theta, &halves, base, from)
+            }
+            _ => None,
+        };
+        Ok(Fitted { applied, model, run, delta, halves, halves_expected, penalty, label })
+    }
+
+    /// What each half would gain from a lasting effect at `theta`, `delta` from neutral: the
+    /// half's gain in a quadratic model of its profile likelihood, `½ I δ²`, with the curvature
+    /// `I` from the gains at `theta ± δ/2` (then `½ I δ²` is twice the drop of the second
+    /// difference). A half whose data cannot see the effect expects nothing, and so need not
+    /// pay for it: a mode's frequency under a tracked drive shows only in the transient.
+    fn halves_expected(
+        &self,
+        with: &dyn Fn(f64) -> Vec<Applied<S::Effect>>,
+        delta: f64,
+        theta: f64,
+        halves: &[f64; 2],
+        base: &Run,
+        from: usize,
+    ) -> Option<[f64; 2]> {
+        let at = |th: f64| self.sys.run(&with(th)).ok().map(|(_, r)| onset::halves(&r, base, from));
+        let (lo, hi) = (at(theta - 0.5 * delta)?, at(theta + 0.5 * delta)?);
+        let expect = |h: usize| (2.0 * (2.0 * halves[h] - lo[h] - hi[h])).max(0.0);
+        Some([expect(0), expect(1)])
     }
 
     /// Fits `cand` with an onset: placed where the gain of the whole-run fit `whole` starts to
@@ -250,6 +291,7 @@ impl<S: LoopSystem> Engine<'_, S> {
             value: self.reported_value(f),
             delta_log_likelihood: f.delta,
             delta_halves: f.halves,
+            delta_halves_expected: f.halves_expected,
             bic_penalty: f.penalty,
             accepted,
         }
@@ -258,9 +300,16 @@ impl<S: LoopSystem> Engine<'_, S> {
     /// `kind at location [from t s]: Δ log-likelihood, BIC cost, halves`.
     pub(super) fn describe(&self, f: &Fitted<S::Effect, S::Model>) -> String {
         let from = f.applied.onset_s.map(|o| format!(" from {o:.3} s")).unwrap_or_default();
+        let expected = f.halves_expected.map(|e| format!(" (a lasting effect: {:.1} / {:.1})", e[0], e[1]));
         format!(
-            "{} at {}{from}: Δ log-likelihood {:.1}, BIC cost {:.1}, halves {:.1} / {:.1}",
-            f.label.kind, f.label.location, f.delta, f.penalty, f.halves[0], f.halves[1]
+            "{} at {}{from}: Δ log-likelihood {:.1}, BIC cost {:.1}, halves {:.1} / {:.1}{}",
+            f.label.kind,
+            f.label.location,
+            f.delta,
+            f.penalty,
+            f.halves[0],
+            f.halves[1],
+            expected.unwrap_or_default()
         )
     }
 
@@ -323,8 +372,13 @@ impl<S: LoopSystem> Engine<'_, S> {
         f.delta > f.penalty && self.pays_in_halves(f)
     }
 
+    /// Each half pays at least `half_gain` of the cost, or its data cannot show the effect: a
+    /// lasting effect would gain less than that there and less than [`BLIND_HALF`] of what it
+    /// gains in the other half, and the half is not hurt by more than [`HALF_SLACK`].
     pub(super) fn pays_in_halves(&self, f: &Fitted<S::Effect, S::Model>) -> bool {
-        f.halves[0].min(f.halves[1]) >= self.options.half_gain * f.penalty
+        let need = self.options.half_gain * f.penalty;
+        let blind = |e: [f64; 2], h: usize| e[h] < need && e[h] <= BLIND_HALF * e[1 - h] && f.halves[h] >= -HALF_SLACK;
+        (0..2).all(|h| f.halves[h] >= need || f.halves_expected.is_some_and(|e| blind(e, h)))
     }
 
     /// What the halves are of, in words.
@@ -357,12 +411,15 @@ impl<S: LoopSystem> Engine<'_, S> {
             &f.label,
             self.reported_value(f),
             format!(
-                "pays over the whole run (Δ log-likelihood {:.1} against a BIC cost of {:.1}) but not in {} ({:.1} / {:.1}): it helps only part of the run",
+                "pays over the whole run (Δ log-likelihood {:.1} against a BIC cost of {:.1}) but not in {} ({:.1} / {:.1}{}): it helps only part of the run",
                 f.delta,
                 f.penalty,
                 Self::stretch(f),
                 f.halves[0],
-                f.halves[1]
+                f.halves[1],
+                f.halves_expected
+                    .map(|e| format!(", where a lasting effect would gain {:.1} / {:.1}", e[0], e[1]))
+                    .unwrap_or_default()
             ),
         )
     }

@@ -178,6 +178,10 @@ pub struct Trial {
     /// The gain in the first and in the second half of the run (of the stretch after the
     /// onset, for a change-point fit).
     pub delta_halves: [f64; 2],
+    /// What each half would gain if the effect lasted through the run, where a half gained
+    /// less than it must (a half that cannot see the effect need not pay for it).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub delta_halves_expected: Option<[f64; 2]>,
     /// `½ p ln n`, plus a baseline's gain floor over the run.
     pub bic_penalty: f64,
     /// Kept.

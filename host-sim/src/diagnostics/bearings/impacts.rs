@@ -278,6 +278,7 @@ impl<E: Copy + PartialEq, L: Fn(&E) -> EffectLabel> Stage<'_, E, L> {
                 value: Some(value),
                 delta_log_likelihood: c.delta,
                 delta_halves: c.halves,
+                delta_halves_expected: None,
                 bic_penalty: c.penalty,
                 accepted: Some(i) == best,
             });

@@ -23,12 +23,17 @@ const EFFECT_SEED: u64 = 2;
 const SETTLE_S: f64 = 1.0;
 /// Sizes, as multiples of the detection limit.
 const MULTIPLES: [f64; 2] = [3.0, 10.0];
+/// Accelerometer offsets, m/s²: about 25× and 650× the standard error of the mean of the
+/// sensor's noise over a run (4.9e-3 m/s² over 4 000 samples).
+const BIASES: [f64; 2] = [0.002, 0.05];
+/// Extra harmonics of the force: (order, amplitude in N).
+const HARMONICS: [(f64, f64); 3] = [(2.0, 0.5), (2.0, 0.1), (3.0, 0.3)];
 
 /// One case: the simulated scenario (run at the case's seed) and what the loop should say.
 pub type Case = crate::matrix::Case<Scenario>;
 
 /// The whole matrix for `declared`: clean runs, the mode's settings at 3× and 10× their
-/// limits, then an accelerometer offset and a second harmonic.
+/// limits, then accelerometer offsets and extra harmonics of the force, each at two sizes or places.
 pub fn cases(declared: &Scenario) -> Result<Vec<Case>> {
     let mut out = clean_cases(declared, &CLEAN_SEEDS);
     let data = Scenario { seed: 1, ..declared.clone() }.simulate().to_data_file();
@@ -44,12 +49,18 @@ pub fn cases(declared: &Scenario) -> Result<Vec<Case>> {
         let name = format!("{} = ×{:.4} ({})", s.what, s.value, s.size);
         out.push(Case { name, truth, seed: EFFECT_SEED, expect: s.expect });
     }
-    let mut biased = base.clone();
-    biased.sensor.bias_m_s2[0] = 0.05;
-    out.push(state_case("sensor_bias at ax = 0.05 m/s²", biased, EffectKind::SensorBias, "ax", 0.05));
-    let mut second = base;
-    second.force.extra.push(ExtraHarmonic::new(2.0, 0.5, 0.0));
-    out.push(state_case("harmonic_force 2× = 0.5 N", second, EffectKind::HarmonicForce, "mode", 0.5));
+    for bias in BIASES {
+        let mut biased = base.clone();
+        biased.sensor.bias_m_s2[0] = bias;
+        let name = format!("sensor_bias at ax = {bias} m/s²");
+        out.push(state_case(&name, biased, EffectKind::SensorBias, "ax", bias));
+    }
+    for (order, amplitude) in HARMONICS {
+        let mut forced = base.clone();
+        forced.force.extra.push(ExtraHarmonic::new(order, amplitude, 0.0));
+        let name = format!("harmonic_force {order}× = {amplitude} N");
+        out.push(state_case(&name, forced, EffectKind::HarmonicForce, "mode", amplitude));
+    }
     Ok(out)
 }
 
