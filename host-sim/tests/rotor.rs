@@ -323,6 +323,17 @@ fn time_response_settles_on_the_steady_unbalance_response() {
 }
 
 #[test]
+fn a_steady_start_is_on_the_steady_unbalance_response_from_the_first_sample() {
+    // The undamped paper rotor, whose start-up transient from rest never decays: started on
+    // the steady orbit, it stays there from t = 0.
+    let model = RotorModel::from_config(&paper()).unwrap();
+    let opts = SimOptions { duration: 0.5, noise: false, steady_start: true, ..Default::default() };
+    let dev = deviation_from_steady(&model, &model.simulate(&opts).unwrap(), 0.0);
+    eprintln!("steady start: deviation from the steady response over 0-0.5 s: {dev:.2e}");
+    assert!(dev < 1e-6, "{dev}");
+}
+
+#[test]
 fn exact_and_newmark_time_responses_agree_through_the_transient() {
     // The undamped paper rotor from rest, transient included: the exact discretisation against
     // Newmark at 50 substeps (h = 20 µs).

@@ -358,7 +358,7 @@ fn simulate(
         MethodArg::Exact => Method::Exact,
         MethodArg::Newmark => Method::Trapezoidal { substeps },
     };
-    let opts = SimOptions { duration, seed, noise: true, method, speed: None };
+    let opts = SimOptions { duration, seed, noise: true, method, speed: None, steady_start: false };
     let start = Instant::now();
     let mut last_decile = 0;
     let rec = model
