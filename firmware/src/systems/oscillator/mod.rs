@@ -281,8 +281,9 @@ pub enum StartError<E> {
     Model(ModelError),
 }
 
-/// The oscillator node on an ADXL355 behind interface `IF`.
-pub type OscillatorNode<IF> = Node<Adxl355Source<IF>, HarmonicForceEstimator<f32>>;
+/// The oscillator node on an ADXL355 behind interface `IF`: the compiled-in estimator, the
+/// declared accelerometer offset taken off each sample ([`Watched`]), on the board as in QEMU.
+pub type OscillatorNode<IF> = Node<Adxl355Source<IF>, Watched>;
 
 /// Builds the estimator from the compiled-in model ([`compiled_estimator`]; `config.estimator`
 /// supplies its scaling) and initialises the accelerometer (with retries). On failure the
@@ -294,7 +295,7 @@ pub fn start<IF: Interface>(
     config: &NodeConfig,
 ) -> Result<OscillatorNode<IF>, (StartError<IF::Error>, Adxl355<IF>)> {
     let estimator = match compiled_estimator(&config.estimator) {
-        Ok(e) => e,
+        Ok(e) => Watched::compiled(e),
         Err(e) => return Err((StartError::Model(e), sensor)),
     };
     let mut health = Health::default();
@@ -353,7 +354,7 @@ impl HilImage for OscillatorImage {
         let node = start(sensor, &config).map_err(|(e, _)| HilError::Start(e))?;
         let settings = monitor_settings(config.estimator.sample_rate_hz);
         let rate = config.source.sensor.odr.hz() as u32;
-        Ok(node.map_estimator(|filter| Captured::new(Monitored::new(Watched::compiled(filter), &settings), ring, rate)))
+        Ok(node.map_estimator(|watched| Captured::new(Monitored::new(watched, &settings), ring, rate)))
     }
 
     fn started<B: ByteSource>(node: &HilNode<'_, Self, B>, sink: &mut impl FrameSink) {
