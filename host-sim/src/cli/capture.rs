@@ -170,7 +170,15 @@ fn write_new(out: &Path, text: &str, force: bool) -> Result<()> {
         Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
         _ => PathBuf::from("."),
     };
-    let mut tmp = tempfile::Builder::new().prefix(".edgekf-capture.").suffix(".partial").tempfile_in(&folder)?;
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(".edgekf-capture.").suffix(".partial");
+    // An ordinary file, readable as the umask allows (a temporary file is private).
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        builder.permissions(std::fs::Permissions::from_mode(0o666));
+    }
+    let mut tmp = builder.tempfile_in(&folder)?;
     tmp.write_all(text.as_bytes())?;
     tmp.as_file().sync_all()?;
     tmp.persist_noclobber(out).map_err(|e| anyhow!("{}: cannot write: {}", out.display(), e.error))?;
