@@ -132,8 +132,8 @@ impl std::fmt::Display for Figures {
         let m = &self.mismatch;
         let statistic = m.statistic().map_or("unknown", |s| s.name());
         let [(before, b), (after, a), (truth, t)] = self.fresh;
-        writeln!(f, "offset from t = {} s; the node's first alarm at {:.3} s ({:.3} s later): {statistic} on channel {}, since sample {} (t = {:.3} s)",
-            self.onset_s, self.alarm_s, self.alarm_s - self.onset_s, m.channel, m.since, f64::from(m.since.saturating_sub(1)) / 1000.0)?;
+        writeln!(f, "offset from t = {} s; the node's first alarm at {:.3} s ({:.3} s later): {statistic} on channel {}, since sample {}",
+            self.onset_s, self.alarm_s, self.alarm_s - self.onset_s, m.channel, m.since)?;
         writeln!(f, "window handed over: t = {:.3} … {:.3} s", self.window_s.0, self.window_s.1)?;
         writeln!(
             f,
@@ -273,8 +273,9 @@ pub fn oscillator(setup: &Setup, shipped: &Path, build: &dyn Fn(&Path) -> Result
     let lines = node(&shipped, &alarm_csv)?;
     let log = file("node.log");
     std::fs::write(&log, lines.join("\n") + "\n")?;
+    let rate = Scenario::load(&alarm_toml)?.sensor.odr_hz;
     let (alarm_s, mismatch) =
-        first_alarm(&lines, 1000.0)?.ok_or_else(|| anyhow!("the shipped node raised no mismatch"))?;
+        first_alarm(&lines, rate)?.ok_or_else(|| anyhow!("the shipped node raised no mismatch"))?;
     let window = file("window.csv");
     edgekf(&["capture", "--log", arg(&log), "--out", arg(&window)])?;
     let data = edgekf_sim::io::data::read(&window, &["ax"]).map_err(|e| anyhow!("{}: {e}", window.display()))?.0;
