@@ -155,8 +155,8 @@ pub fn clocked_node<B: ByteSource, E: NodeEstimator<Input = [f32; M]>, X, const 
 }
 
 /// Polls `node` until its input has run out, every report to `sink` followed by the model
-/// mismatches found in that poll ([`crate::monitor::MismatchFrame`]), then the image's
-/// end-of-run frames.
+/// mismatches found in that poll ([`crate::monitor::MismatchFrame`]) and the captured window's
+/// frames due ([`crate::capture`]), then the image's end-of-run frames.
 pub fn run<I: HilImage, B: ByteSource>(node: &mut HilNode<'_, I, B>, sink: &mut impl FrameSink) {
     while node.source_mut().advance() {
         if let Some(frame) = node.poll() {
@@ -165,6 +165,7 @@ pub fn run<I: HilImage, B: ByteSource>(node: &mut HilNode<'_, I, B>, sink: &mut 
         while let Some(mismatch) = node.estimator_mut().take_mismatch() {
             sink.frame(&mismatch);
         }
+        node.estimator_mut().hand_over(sink);
     }
     I::finish(node, sink);
 }

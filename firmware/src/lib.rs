@@ -31,6 +31,7 @@
 pub mod adxl355;
 #[cfg(all(target_os = "none", feature = "qemu"))]
 pub mod bench;
+pub mod capture;
 pub mod frame;
 pub mod hil;
 pub mod line_feed;

@@ -131,6 +131,12 @@ pub trait NodeEstimator {
     fn take_mismatch(&mut self) -> Option<crate::monitor::MismatchFrame> {
         None
     }
+
+    /// Frames of a captured window due after this poll (none without a ring: see
+    /// [`crate::capture::Captured`]). Asked after every poll, after the mismatches.
+    fn hand_over<S: crate::frame::FrameSink>(&mut self, sink: &mut S) {
+        let _ = sink;
+    }
 }
 
 /// The main loop's state: a source, an estimator and the node's counters.

@@ -8,17 +8,22 @@
 //!   the same data, which is what a firmware run is compared with;
 //! * [`rotor`] and [`crank`] do the same for the rotor and slider-crank images;
 //! * [`soak`] judges the numerical soak's figures, from the host or from QEMU;
-//! * [`checks`] holds the scenarios and acceptance measures the host and HIL tests share.
+//! * [`checks`] holds the scenarios and acceptance measures the host and HIL tests share;
+//! * [`cross`] is the firmware's cross-build recipe (xtask's and the round trip's);
+//! * [`roundtrip`] runs the oscillator's round trip: the alarm on the node, the captured window,
+//!   the loop's corrected configuration, the rebuilt node.
 #![deny(missing_docs)]
 
 pub mod checks;
 pub mod crank;
+pub mod cross;
 pub mod faulty;
 pub mod host;
 pub mod monitor;
 pub mod qemu;
 pub mod report;
 pub mod rotor;
+pub mod roundtrip;
 pub mod soak;
 
 /// Compares two runs block by block and returns a readable description of the first

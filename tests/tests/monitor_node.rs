@@ -55,3 +55,27 @@ fn the_boom_node_flags_an_inclinometer_offset_on_its_channel() {
     let start = 30 * SAMPLE_RATE_HZ + 1;
     assert!(bias.since + 256 > start && bias.since <= start + 256, "{m:?}");
 }
+
+/// The oscillator's window hand-over (`edgekf_firmware::capture`), on the host as under QEMU:
+/// after the bias mismatch the node sends its last 4096 raw samples once, all from at least
+/// one monitor window past the mismatch's date, and `edgekf capture`'s parser reads them back
+/// as the recording's `ax` (to the virtual ADXL355's 20-bit quantisation, 3.9 µg).
+#[test]
+fn the_oscillator_node_hands_over_the_window_that_edgekf_capture_reads() {
+    use edgekf_firmware::capture::{WindowSample, GUARD};
+    use edgekf_firmware::systems::oscillator::{OscillatorImage, WINDOW};
+    let (_, biased, _) = oscillator_recordings(2);
+    let lines = lines::<OscillatorImage>(biased.as_bytes()).unwrap();
+    let first = &frames::<MismatchFrame>(&lines).unwrap()[0];
+    assert_eq!(frames::<WindowSample>(&lines).unwrap().len(), WINDOW);
+    let window = edgekf_sim::cli::capture::parse_log(&lines.join("\n")).unwrap();
+    assert_eq!((window.mismatch.2, window.rate, window.samples.len()), (first.since, 1000, WINDOW));
+    assert!(window.first >= first.since + GUARD, "window from {} after a mismatch since {}", window.first, first.since);
+    let ax: Vec<f64> = biased.lines().skip(1).map(|l| l.split(',').nth(1).unwrap().parse().unwrap()).collect();
+    for (j, a) in window.samples.iter().enumerate() {
+        let k = window.first as usize - 1 + j;
+        assert!((f64::from(*a) - ax[k]).abs() < 4e-5, "sample {}: {a} against {}", k + 1, ax[k]);
+    }
+    let csv = window.to_csv("ax");
+    assert!(csv.starts_with("t,ax\n") && csv.lines().count() == WINDOW + 1);
+}

@@ -1,18 +1,12 @@
 //! Cross-building the firmware images and reporting their footprint.
 
 use crate::images::{Image, Role};
-use crate::provision::DEBIAN_CARGO;
 use anyhow::{bail, Context, Result};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Duration;
 
-const TARGET: &str = "thumbv7em-none-eabihf";
-const PROFILE: &str = "firmware";
-
-pub fn workspace_root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).parent().map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from("."))
-}
+pub use edgekf_tests::cross::workspace_root;
 
 /// Whether a build carries the no-panic proof (feature `no-panic-proof` of `edgekf-firmware`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -61,10 +55,14 @@ fn surviving(image: &Image, elf: &Path, sites: &[crate::panics::Site]) -> Result
     )
 }
 
-/// Builds `image` with Debian's cargo (`-Zbuild-std=core`) and returns the ELF path.
+/// Builds `image` with Debian's cargo (`-Zbuild-std=core`, the recipe of
+/// [`edgekf_tests::cross::build`]) and returns the ELF path.
 pub fn build_with(image: &Image, proof: Proof) -> Result<PathBuf> {
-    let root = workspace_root();
-    let path = std::env::var("PATH").unwrap_or_default();
+    build_env(image, proof, &[])
+}
+
+/// [`build_with`] with the environment `env` added (e.g. `EDGEKF_OSCILLATOR_MODEL`).
+pub fn build_env(image: &Image, proof: Proof, env: &[(&str, &std::ffi::OsStr)]) -> Result<PathBuf> {
     // The soak and bench images gather every system's rows: they are built with the features
     // of the systems behind one that this xtask's table holds (the firmware manifest's
     // `FEATURES`), so that they run the same systems as the table. A system's own image names
@@ -76,28 +74,7 @@ pub fn build_with(image: &Image, proof: Proof) -> Result<PathBuf> {
     if proof == Proof::NoPanic {
         features.push("no-panic-proof");
     }
-    let features = features.join(",");
-    let mut cmd = Command::new(DEBIAN_CARGO);
-    cmd.current_dir(&root)
-        .args(["build", "-p", "edgekf-firmware", "--bin", image.bin, "--features", &features])
-        .args(["--target", TARGET, "--profile", PROFILE, "-Zbuild-std=core"])
-        .env("PATH", format!("/usr/bin:{path}"))
-        .env("RUSTC_BOOTSTRAP", "1");
-    for var in
-        ["RUSTC", "RUSTDOC", "RUSTC_WRAPPER", "RUSTUP_TOOLCHAIN", "CARGO", "RUSTFLAGS", "CARGO_ENCODED_RUSTFLAGS"]
-    {
-        cmd.env_remove(var);
-    }
-    let st = cmd.status().context("running Debian's cargo for the cross build")?;
-    if !st.success() {
-        bail!("firmware build of {} failed ({st})", image.bin);
-    }
-    let target_dir = std::env::var_os("CARGO_TARGET_DIR").map(PathBuf::from).unwrap_or_else(|| root.join("target"));
-    let elf = target_dir.join(TARGET).join(PROFILE).join(image.bin);
-    if !elf.is_file() {
-        bail!("build succeeded but {} is missing", elf.display());
-    }
-    Ok(elf)
+    edgekf_tests::cross::build(image.bin, &features.join(","), env)
 }
 
 /// Flash and static RAM of an ELF, from its allocated sections.

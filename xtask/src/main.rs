@@ -23,6 +23,10 @@
 //! * `cargo xtask loop-matrix [SYSTEM…]` — the residual loop's effect matrices (every case run
 //!   in parallel, scored by one rule) written into the README's tables between its
 //!   `<!-- loop-matrix SYSTEM -->` markers.
+//! * `cargo xtask roundtrip oscillator` — issue #36's round trip in QEMU: an offset that starts
+//!   mid-run → the node's `mismatch` → its window → `edgekf capture` → `edgekf loop
+//!   --corrected-config` → `edgekf oscillator export` → the rebuilt node on a fresh recording;
+//!   prints the figures and checks them (files in `target/roundtrip/oscillator/`).
 //! * `cargo xtask provision` — install what a fresh Debian machine lacks (as root), or say what.
 //!
 //! Every build proves its image panic-free at link time (feature `no-panic-proof`); a failed
@@ -87,9 +91,13 @@ fn run() -> Result<()> {
             bench::run(&firmware::workspace_root(), !flag("--check")).map(|_| ())
         }
         Some("loop-matrix") => loop_matrix(&args[1..]),
+        Some("roundtrip") => {
+            provision::ensure()?;
+            roundtrip(args.get(1).map(String::as_str))
+        }
         _ => {
             eprintln!(
-                "usage: cargo xtask <test [--long] | fw [{0}] | panics [{0}] | run [--data FILE.csv] | bench [--check] | soak | fuzz [--seconds N] [TARGET…] | loop-matrix [SYSTEM…] | provision>",
+                "usage: cargo xtask <test [--long] | fw [{0}] | panics [{0}] | run [--data FILE.csv] | bench [--check] | soak | fuzz [--seconds N] [TARGET…] | loop-matrix [SYSTEM…] | roundtrip oscillator | provision>",
                 images::flags()
             );
             std::process::exit(2);
@@ -114,10 +122,14 @@ fn test(long: bool) -> Result<()> {
     let mut hil = cargo_here();
     hil.args(["test", "-p", "edgekf-tests", "--features", "hil"]);
     let mut tests: Vec<&str> = Vec::new();
+    let mut oscillator = None;
     for image in IMAGES.iter().filter(|i| i.role != Role::Bench) {
         step(&format!("firmware: cross-build {} and prove it panic-free", image.what));
         let elf = firmware::build(image)?;
         firmware::print_footprint(image, &elf)?;
+        if image.bin == images::default_image().bin {
+            oscillator = Some(elf.clone());
+        }
         if let Role::Hil { env, tests: these } = image.role {
             hil.env(env, &elf);
             for t in these {
@@ -137,6 +149,14 @@ fn test(long: bool) -> Result<()> {
     }
     hil.args(["--", "--nocapture", "--test-threads", "1"]);
     status(hil, "HIL tests")?;
+
+    // Last: it rebuilds the oscillator's image with other constants (the ELF the HIL tests
+    // read is then the corrected model's until the next build).
+    step("the oscillator's round trip in QEMU (tests/roundtrip.rs)");
+    let mut rt = cargo_here();
+    rt.args(["test", "-p", "edgekf-tests", "--features", "hil", "--test", "roundtrip"]);
+    rt.args(["--", "--nocapture"]).env("EDGEKF_FW_ELF", oscillator.context("no oscillator image was built")?);
+    status(rt, "the round trip")?;
     step("all tests passed");
     Ok(())
 }
@@ -149,6 +169,27 @@ fn loop_matrix(systems: &[String]) -> Result<()> {
     run.current_dir(&root).args(["run", "--release", "-p", "edgekf-sim", "--example", "loop_matrix", "--"]);
     run.args(systems).arg("--readme").arg(root.join("README.md"));
     status(run, "the effect matrices")
+}
+
+/// `cargo xtask roundtrip <system>`: the oscillator's only, so far (see
+/// `edgekf_tests::roundtrip`).
+fn roundtrip(system: Option<&str>) -> Result<()> {
+    if system != Some("oscillator") {
+        bail!("roundtrip: give the system; the round trip exists for: oscillator");
+    }
+    let image = images::default_image();
+    let shipped = firmware::build(image)?;
+    let target = std::env::var_os("CARGO_TARGET_DIR")
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(|| firmware::workspace_root().join("target"));
+    let setup = edgekf_tests::roundtrip::Setup::oscillator(target.join("roundtrip").join("oscillator"));
+    step(&format!("the oscillator's round trip in QEMU, files in {}", setup.dir.display()));
+    let build = |model: &std::path::Path| {
+        firmware::build_env(image, firmware::Proof::NoPanic, &[("EDGEKF_OSCILLATOR_MODEL", model.as_os_str())])
+    };
+    let figures = edgekf_tests::roundtrip::oscillator(&setup, &shipped, &build)?;
+    println!("{figures}");
+    figures.check(setup.offset_m_s2)
 }
 
 /// The long QEMU soak: the soak image on every filter's `qemu_long_steps`, with the

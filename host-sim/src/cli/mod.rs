@@ -8,7 +8,8 @@
 //!   demo's requests);
 //! * [`looping`]: `edgekf loop <system>`: the flags every loop shares, the run, the report files;
 //! * [`baseline`]: `edgekf baseline <system>`: a healthy baseline learned from a recording;
-//! * [`demo`]: `edgekf demo`: every system's demo part in the registry's order.
+//! * [`demo`]: `edgekf demo`: every system's demo part in the registry's order;
+//! * [`capture`]: `edgekf capture`: a node's handed-over window as a recording.
 //!
 //! ```
 //! use edgekf_sim::{cli, systems};
@@ -18,6 +19,7 @@
 //! ```
 
 pub mod baseline;
+pub mod capture;
 pub mod demo;
 pub mod looping;
 pub mod registry;
@@ -33,7 +35,8 @@ const EXAMPLES: &str = "Examples:
   edgekf demo --out out/
   edgekf oscillator simulate --config host-sim/configs/oscillator_demo.toml --out data.csv --faults
   edgekf oscillator estimate --config host-sim/configs/oscillator_demo.toml --data data.csv --out est.csv
-  edgekf loop rotor --config host-sim/configs/rotor_paper.toml --data data.csv --report report/";
+  edgekf loop rotor --config host-sim/configs/rotor_paper.toml --data data.csv --report report/
+  edgekf capture --log node.log --out window.csv";
 
 /// The whole command tree for `registry`.
 pub fn command(registry: &[SystemEntry]) -> clap::Command {
@@ -54,7 +57,7 @@ pub fn command(registry: &[SystemEntry]) -> clap::Command {
     for s in registry {
         cmd = cmd.subcommand((s.command)().name(s.name).about(s.about));
     }
-    cmd.subcommand(looping::command(registry)).subcommand(baseline::command(registry))
+    cmd.subcommand(looping::command(registry)).subcommand(baseline::command(registry)).subcommand(capture::command())
 }
 
 /// Runs the command line `args` (the program's name first) against `registry`. Usage errors,
@@ -72,6 +75,7 @@ where
         "demo" => demo::run(registry, sub),
         "loop" => looping::run(registry, sub, &command_line),
         "baseline" => baseline::run(registry, sub, &command_line),
+        "capture" => capture::run(sub),
         _ => {
             let system = registry.iter().find(|s| s.name == name).expect("clap only accepts registered names");
             (system.run)(sub)

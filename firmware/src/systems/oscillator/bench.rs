@@ -8,6 +8,7 @@ use crate::semihost::exit;
 pub fn run<M: Markers>() {
     harmonic::<M>();
     monitored::<M>();
+    captured::<M>();
     adxl_poll::<M>();
 }
 
@@ -43,6 +44,48 @@ fn monitored<M: Markers>() {
     core::hint::black_box(node.step(core::hint::black_box(input(window))));
     M::end();
     defmt::info!("bench harmonic_monitored_window n={=usize} m={=usize} resets={=u32}", 4usize, 1usize, 0u32);
+}
+
+/// The step as the image runs it since the window hand-over (`crate::capture`): the monitored
+/// step and the ring's store (`harmonic_captured`), and one poll's share of a hand-over
+/// (`window_chunk`: `CHUNK` = 64 `window` frames through defmt). The ring here is 64 samples:
+/// neither cost depends on its length.
+fn captured<M: Markers>() {
+    use super::{compiled_estimator, monitor_settings, NodeConfig};
+    use crate::capture::{Captured, CHUNK, GUARD};
+    use crate::frame::Defmt;
+    use crate::monitor::{MismatchFrame, Monitored};
+    use crate::node::NodeEstimator;
+    let config = NodeConfig::default().estimator;
+    let Ok(est) = compiled_estimator(&config) else {
+        defmt::error!("bench harmonic_captured: no estimator");
+        exit(1)
+    };
+    let settings = edgekf::residual::MonitorSettings { settle_s: 0.0, ..monitor_settings(config.sample_rate_hz) };
+    let mut ring = [0.0f32; CHUNK];
+    let mut node = Captured::new(Monitored::new(super::Watched::compiled(est), &settings), &mut ring, 1000);
+    let input = |k: u32| Some(0.01 * (k % 7) as f32 - 0.03);
+    for k in 1..10 {
+        node.step(input(k));
+    }
+    M::start();
+    core::hint::black_box(node.step(core::hint::black_box(input(10))));
+    M::end();
+    defmt::info!("bench harmonic_captured n={=usize} m={=usize} resets={=u32}", 4usize, 1usize, 0u32);
+    // Past the guard: the next call sends the header, the one after it the chunk.
+    node.request(MismatchFrame { channel: 0, statistic: 1, since: 1 });
+    for k in 11..GUARD + 2 * CHUNK as u32 {
+        node.step(input(k));
+    }
+    node.hand_over(&mut Defmt);
+    M::start();
+    node.hand_over(&mut Defmt);
+    M::end();
+    if !node.handed_over() {
+        defmt::error!("bench window_chunk: the window did not go out");
+        exit(1)
+    }
+    defmt::info!("bench window_chunk n={=usize} m={=usize} resets={=u32}", 4usize, 1usize, 0u32);
 }
 
 /// The ADXL355 source's poll on the virtual ADXL355, without the estimator: `adxl_poll`, an

@@ -7,8 +7,11 @@
 //! few hundred thousand software-`f64` operations on the Cortex-M4F). Regenerate after changing
 //! `NodeConfig::default().estimator` (a test below fails until then):
 //! `cargo run -p edgekf-sim -- oscillator export --out firmware/src/systems/oscillator/generated/harmonic.rs`.
+//! An image built with `EDGEKF_OSCILLATOR_MODEL=path/to/harmonic.rs` compiles that file in
+//! instead (see `build.rs`): how `cargo xtask roundtrip oscillator` runs a corrected model.
 
 use crate::adxl355::{self, Adxl355, Interface};
+use crate::capture::{Captured, WindowState};
 use crate::frame::FrameSink;
 use crate::hil::{HilError, HilImage, HilNode};
 use crate::line_feed::{ByteSource, LineFeed};
@@ -27,7 +30,7 @@ pub mod soak;
 
 #[allow(missing_docs, clippy::excessive_precision, clippy::unreadable_literal)]
 mod constants {
-    include!("generated/harmonic.rs");
+    include!(concat!(env!("OUT_DIR"), "/harmonic.rs"));
 }
 
 /// The estimator from the compiled-in model and gain, with `params` for the physical scaling
@@ -175,17 +178,27 @@ impl NodeEstimator for HarmonicForceEstimator<f32> {
 /// The estimator as the QEMU image runs it, for its model monitor: the compiled-in estimator
 /// and `1/√S` of its steady-state gain. `S` is a constant there, so the normalised innovation
 /// is a product: `√NIS` would be a software square root (libm's: the monitored step measured
-/// 1 040 instructions with it on the Cortex-M4F, against 751 now).
+/// 1 040 instructions with it on the Cortex-M4F, against 751 now). Each sample has the declared
+/// accelerometer offset (`HARMONIC_ACCEL_OFFSET`) taken off before the filter sees it: one
+/// subtraction, and with the committed offset of 0 the same bits as without it.
 pub struct Watched {
     filter: HarmonicForceEstimator<f32>,
     inv_sd: f32,
+    offset: f32,
 }
 
 impl Watched {
-    /// `filter`, built by [`compiled_estimator`] (whose `S` this takes), watched.
+    /// `filter`, built by [`compiled_estimator`] (whose `S` and offset this takes), watched.
     pub fn compiled(filter: HarmonicForceEstimator<f32>) -> Self {
-        Self { filter, inv_sd: (1.0 / libm::sqrt(constants::HARMONIC_S[0][0])) as f32 }
+        let inv_sd = (1.0 / libm::sqrt(constants::HARMONIC_S[0][0])) as f32;
+        Self { filter, inv_sd, offset: accel_offset() }
     }
+}
+
+/// The accelerometer offset the compiled-in model declares, m/s² (the scenario's `[filter]
+/// accel_offset_m_s2` it was exported from), subtracted from each sample by [`Watched`].
+pub fn accel_offset() -> f32 {
+    constants::HARMONIC_ACCEL_OFFSET as f32
 }
 
 impl core::ops::Deref for Watched {
@@ -200,7 +213,7 @@ impl NodeEstimator for Watched {
     type Frame = BlockReport;
 
     fn step(&mut self, input: Option<f32>) -> Innovation {
-        NodeEstimator::step(&mut self.filter, input)
+        NodeEstimator::step(&mut self.filter, input.map(|a| a - self.offset))
     }
 
     fn report(&mut self, poll: &Poll) -> Option<BlockReport> {
@@ -211,12 +224,50 @@ impl NodeEstimator for Watched {
 /// Its one channel, the accelerometer axis.
 impl Normalised<1> for Watched {
     fn step_normalised(&mut self, input: Option<f32>, [z]: &mut [f32; 1]) -> Innovation {
-        let s = HarmonicForceEstimator::step(&mut self.filter, input);
+        let s = HarmonicForceEstimator::step(&mut self.filter, input.map(|a| a - self.offset));
         *z = match (s.innovation, s.nis) {
             (Some(r), Some(_)) => r * self.inv_sd,
             _ => f32::NAN,
         };
         Innovation { residual: s.innovation, nis: s.nis }
+    }
+}
+
+/// Samples the oscillator's node keeps for the window hand-over ([`crate::capture`]): 4.096 s
+/// at 1 kHz. What the loop needs: `edgekf loop oscillator` names a 0.05 m/s² offset (and a
+/// second harmonic, the mode's frequency and damping at 3× their limits) on 4 s runs (its
+/// effect matrix), the filter settling in the first 0.5 s of them. RAM: 16 KB of `f32`, an
+/// eighth of the part's 128 KB, beside the node's few KB.
+pub const WINDOW: usize = 4096;
+
+crate::frame! {
+    /// The estimator's state when the window froze (at its last sample), and the offset the
+    /// node took off each sample (the window's samples are raw).
+    pub struct WindowStateFrame = "window_state displacement={=f32} velocity={=f32} force_cos={=f32} force_sin={=f32} offset={=f32}" {
+        /// Modal displacement, m.
+        pub displacement: f32,
+        /// Modal velocity, m/s.
+        pub velocity: f32,
+        /// In-phase force, N.
+        pub force_cos: f32,
+        /// Quadrature force, N.
+        pub force_sin: f32,
+        /// The declared accelerometer offset ([`accel_offset`]), m/s².
+        pub offset: f32,
+    }
+}
+
+impl WindowState for Monitored<Watched, 1> {
+    type State = WindowStateFrame;
+    fn window_state(&self) -> WindowStateFrame {
+        let now = self.current();
+        WindowStateFrame {
+            displacement: now.displacement,
+            velocity: now.velocity,
+            force_cos: now.force_cos,
+            force_sin: now.force_sin,
+            offset: self.offset,
+        }
     }
 }
 
@@ -230,8 +281,9 @@ pub enum StartError<E> {
     Model(ModelError),
 }
 
-/// The oscillator node on an ADXL355 behind interface `IF`.
-pub type OscillatorNode<IF> = Node<Adxl355Source<IF>, HarmonicForceEstimator<f32>>;
+/// The oscillator node on an ADXL355 behind interface `IF`: the compiled-in estimator, the
+/// declared accelerometer offset taken off each sample ([`Watched`]), on the board as in QEMU.
+pub type OscillatorNode<IF> = Node<Adxl355Source<IF>, Watched>;
 
 /// Builds the estimator from the compiled-in model ([`compiled_estimator`]; `config.estimator`
 /// supplies its scaling) and initialises the accelerometer (with retries). On failure the
@@ -243,7 +295,7 @@ pub fn start<IF: Interface>(
     config: &NodeConfig,
 ) -> Result<OscillatorNode<IF>, (StartError<IF::Error>, Adxl355<IF>)> {
     let estimator = match compiled_estimator(&config.estimator) {
-        Ok(e) => e,
+        Ok(e) => Watched::compiled(e),
         Err(e) => return Err((StartError::Model(e), sensor)),
     };
     let mut health = Health::default();
@@ -272,30 +324,37 @@ pub type VirtualFrame = crate::virtual_adxl355::VirtualCounters;
 
 /// The QEMU image `edgekf-qemu`: the real driver and loop on a virtual ADXL355 whose samples
 /// come from the HIL file (columns `t, ax, ay, az`, optional fault columns), with the model
-/// monitor on the estimator's one channel (the X axis, channel 0). Frames: `start`, one `blk`
-/// per poll (a `mismatch` after it when the monitor found one), then `health`, `estimator`,
-/// `feed`, `virtual`.
+/// monitor on the estimator's one channel (the X axis, channel 0) and the last [`WINDOW`]
+/// samples kept for the hand-over. Frames: `start`, one `blk` per poll (a `mismatch` after it
+/// when the monitor found one; after the first, the window's frames: [`crate::capture`]), then
+/// `health`, `estimator`, `feed`, `virtual`.
 pub struct OscillatorImage;
 
 impl HilImage for OscillatorImage {
     const NAME: &'static str = "edgekf-qemu";
     const COLUMNS: &'static [&'static str] = &["t", "ax", "ay", "az"];
     type Input = f32;
-    type Storage = ();
+    type Storage = [f32; WINDOW];
     type Source<B: ByteSource> = VirtualSource<B>;
-    type Estimator<'s> = Monitored<Watched, 1>;
+    type Estimator<'s> = Captured<'s, Monitored<Watched, 1>, WINDOW>;
     type StartError = StartError<crate::virtual_adxl355::VirtualBusError>;
 
-    fn storage() {}
+    fn storage() -> [f32; WINDOW] {
+        [f32::NAN; WINDOW]
+    }
 
     #[inline(never)] // start-up temporaries stay out of the caller's frame
-    fn start<B: ByteSource>(input: B, _: &mut ()) -> Result<HilNode<'_, Self, B>, HilError<Self::StartError>> {
+    fn start<B: ByteSource>(
+        input: B,
+        ring: &mut [f32; WINDOW],
+    ) -> Result<HilNode<'_, Self, B>, HilError<Self::StartError>> {
         let feed = LineFeed::new(input).map_err(HilError::Header)?;
         let config = NodeConfig::default();
         let sensor = Adxl355::new_i2c(VirtualAdxl355::new(feed), config.address);
         let node = start(sensor, &config).map_err(|(e, _)| HilError::Start(e))?;
         let settings = monitor_settings(config.estimator.sample_rate_hz);
-        Ok(node.map_estimator(|filter| Monitored::new(Watched::compiled(filter), &settings)))
+        let rate = config.source.sensor.odr.hz() as u32;
+        Ok(node.map_estimator(|watched| Captured::new(Monitored::new(watched, &settings), ring, rate)))
     }
 
     fn started<B: ByteSource>(node: &HilNode<'_, Self, B>, sink: &mut impl FrameSink) {

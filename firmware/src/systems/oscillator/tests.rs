@@ -117,6 +117,8 @@ fn compiled_constants_match_the_configured_model() {
     );
     assert_eq!(matrix(&constants::HARMONIC_GAIN), ss.gain);
     assert_eq!(matrix(&constants::HARMONIC_S), ss.innovation);
+    // The default node declares no accelerometer offset: its samples reach the filter as read.
+    assert_eq!(constants::HARMONIC_ACCEL_OFFSET.to_bits(), 0.0f64.to_bits());
 }
 
 #[test]

@@ -67,7 +67,10 @@ pub enum OscillatorCommand {
     /// Write the scenario's discrete model and steady-state gain as Rust constants.
     ///
     /// The firmware compiles such a file in with `include!` instead of discretising and solving
-    /// the Riccati equation at start-up. Constants: HARMONIC_A, _C, _Q, _R, _GAIN, _S.
+    /// the Riccati equation at start-up. Constants: HARMONIC_A, _C, _Q, _R, _GAIN, _S and
+    /// _ACCEL_OFFSET (the `[filter] accel_offset_m_s2` the node subtracts from each sample).
+    /// Build an image with another file than the committed one through the environment
+    /// variable EDGEKF_OSCILLATOR_MODEL (its path).
     Export {
         /// Scenario file (default: the built-in demo scenario).
         #[arg(long, value_name = "TOML")]
@@ -108,7 +111,7 @@ pub fn run(command: OscillatorCommand) -> anyhow::Result<()> {
         OscillatorCommand::Export { config, out } => {
             check(&[Some(&out)], &[config.as_deref()])?;
             let s = scenario(config.as_deref())?;
-            let text = harmonic_constants(&s.estimator_params())?;
+            let text = harmonic_constants(&s.estimator_params(), s.filter.accel_offset_m_s2)?;
             crate::io::output::write_atomic(&out, text).with_context(|| format!("writing {}", out.display()))?;
             println!("wrote {}: discrete model and steady-state gain of {}", out.display(), describe(&s));
             Ok(())
@@ -136,7 +139,8 @@ fn estimate_command(request: EstimateRequest) -> anyhow::Result<()> {
     let prose = Prose { json };
     check(&[out.as_deref()], &[Some(&path), config.as_deref()])?;
     let s = scenario(config.as_deref())?;
-    let (data, report) = data::read(&path, &KNOWN_CHANNELS)?;
+    let (mut data, report) = data::read(&path, &KNOWN_CHANNELS)?;
+    subtract_offset(&mut data, s.filter.accel_offset_m_s2);
     eprintln!("{}: {report}", path.display());
     let opts = EstimateOptions {
         settle_s: settle,
@@ -177,6 +181,14 @@ fn estimate_command(request: EstimateRequest) -> anyhow::Result<()> {
         j.print()?;
     }
     Ok(())
+}
+
+/// The declared accelerometer offset (`[filter] accel_offset_m_s2`) taken off `ax`, as the
+/// loop's filter and the node do.
+fn subtract_offset(data: &mut data::DataFile, offset: f64) {
+    if let Some(i) = data.names.iter().position(|n| n == "ax") {
+        data.columns[i].iter_mut().for_each(|a| *a -= offset);
+    }
 }
 
 /// The force amplitude and the displacement in the JSON object, with the table's figures:

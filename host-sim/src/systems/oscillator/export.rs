@@ -6,14 +6,21 @@ use edgekf::export::{write_model, write_steady_state};
 use edgekf::filter::solve_riccati;
 use edgekf::systems::oscillator::HarmonicForceParams;
 
-/// Rust source with `HARMONIC_{A,C,Q,R,GAIN,S}` for the harmonic-force model of `params`.
+/// Rust source with `HARMONIC_{A,C,Q,R,GAIN,S}` for the harmonic-force model of `params`, and
+/// `HARMONIC_ACCEL_OFFSET`, the accelerometer offset (m/s²) the node subtracts from each sample
+/// before its filter (the scenario's `[filter] accel_offset_m_s2`): the node then runs the model
+/// the host's loop declared, calibration included.
 ///
 /// ```
 /// use edgekf::systems::oscillator::HarmonicForceParams;
-/// let text = edgekf_sim::systems::oscillator::export::harmonic_constants(&HarmonicForceParams::default()).unwrap();
+/// let text = edgekf_sim::systems::oscillator::export::harmonic_constants(&HarmonicForceParams::default(), 0.05).unwrap();
 /// assert!(text.contains("pub const HARMONIC_GAIN: [[f64; 1]; 4]"));
+/// assert!(text.contains("pub const HARMONIC_ACCEL_OFFSET: f64 = 0.05;"));
 /// ```
-pub fn harmonic_constants(params: &HarmonicForceParams) -> Result<String> {
+pub fn harmonic_constants(params: &HarmonicForceParams, accel_offset_m_s2: f64) -> Result<String> {
+    if !accel_offset_m_s2.is_finite() {
+        return Err(anyhow!("the accelerometer offset {accel_offset_m_s2} is not a number"));
+    }
     let model = params.discrete_model().map_err(|e| anyhow!("cannot discretise the model: {e}"))?;
     let ss = solve_riccati(&model, 1e-12, 100_000).map_err(|e| anyhow!("no steady-state gain: {e:?}"))?;
     let mut text = format!(
@@ -24,5 +31,10 @@ pub fn harmonic_constants(params: &HarmonicForceParams) -> Result<String> {
     let fmt_err = |_| anyhow!("a model value is not finite");
     write_model(&mut text, "HARMONIC", &model).map_err(fmt_err)?;
     write_steady_state(&mut text, "HARMONIC", &ss).map_err(fmt_err)?;
+    // `{:?}` keeps a `.0` on whole numbers (a float literal) and round-trips the bits.
+    text.push_str(&format!(
+        "/// Accelerometer offset subtracted from each sample before the filter, m/s².\n\
+         pub const HARMONIC_ACCEL_OFFSET: f64 = {accel_offset_m_s2:?};\n"
+    ));
     Ok(text)
 }

@@ -74,9 +74,12 @@ impl<'a> OscillatorSystem<'a> {
         Recording { t, channels, rows, truth, sample_rate }
     }
 
-    /// The model of `scenario` (mode, drive, sensor, filter tuning) on `data`'s `ax` channel.
+    /// The model of `scenario` (mode, drive, sensor, filter tuning) on `data`'s `ax` channel,
+    /// less the offset the filter declares (`[filter] accel_offset_m_s2`), as the node's is.
     pub fn new(scenario: &Scenario, data: &'a DataFile, options: &LoopOptions) -> Result<Self> {
-        let ax = data.column(CHANNEL).ok_or_else(|| anyhow!("the data file has no channel {CHANNEL}"))?.to_vec();
+        let column = data.column(CHANNEL).ok_or_else(|| anyhow!("the data file has no channel {CHANNEL}"))?;
+        let offset = scenario.filter.accel_offset_m_s2;
+        let ax = column.iter().map(|a| a - offset).collect();
         Ok(Self {
             params: scenario.estimator_params(),
             data,
@@ -340,15 +343,20 @@ impl LoopSystem for OscillatorSystem<'_> {
         }
     }
 
-    /// The mode's frequency and damping are the scenario's `[mode]` keys; the scenario's
-    /// `[sensor]` keys are the simulated sensor's, and the filter declares no second force.
+    /// The mode's frequency and damping are the scenario's `[mode]` keys; an offset on `ax` is
+    /// the filter's declared one (`[filter] accel_offset_m_s2`, added to: the loop ran with the
+    /// declared offset already subtracted). The scenario's `[sensor]` keys are the simulated
+    /// sensor's, so a scale has no key; the filter declares no second force.
     fn correction(&self, effect: &Applied<Effect>, value: f64) -> Correction {
         match effect.effect {
             Effect::Frequency => Correction::model([ConfigEdit::new("mode.natural_freq_hz", Op::Scale(value))]),
             Effect::Damping => Correction::model([ConfigEdit::new("mode.damping_ratio", Op::Scale(value))]),
-            Effect::SensorBias | Effect::SensorScale => Correction::not_carried(
+            Effect::SensorBias => {
+                Correction::model([ConfigEdit::or_absent("filter.accel_offset_m_s2", Op::Add(value), 0.0)])
+            }
+            Effect::SensorScale => Correction::not_carried(
                 "the scenario's [sensor] keys describe the simulated sensor; the filter has no key for a declared \
-                 calibration",
+                 scale",
             ),
             Effect::HarmonicForce { .. } => {
                 Correction::not_carried("the filter carries one force, at the drive frequency; no key declares another")
@@ -380,3 +388,6 @@ pub fn learn_baseline(
         options,
     )
 }
+
+#[cfg(test)]
+mod tests;

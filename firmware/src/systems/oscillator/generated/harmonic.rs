@@ -33,3 +33,5 @@ pub const HARMONIC_GAIN: [[f64; 1]; 4] = [
 pub const HARMONIC_S: [[f64; 1]; 1] = [
     [3.859077682228706e-5],
 ];
+/// Accelerometer offset subtracted from each sample before the filter, m/s².
+pub const HARMONIC_ACCEL_OFFSET: f64 = 0.0;

@@ -3,7 +3,9 @@
 //! Six kinds are instructions for the *virtual accelerometer* of the hardware-in-the-loop tests
 //! (they travel as the `fault_nack`, `fault_timeout`, `fault_garbage`, `fault_stuck`,
 //! `fault_drop` and `fault_reset` columns of the recording, and the host simulation leaves `ax`
-//! untouched for them); one kind changes the physics the sensor sees.
+//! untouched for them); two change what the x axis reads: a saturation (the physics the sensor
+//! sees) and an offset that starts mid-run (a knock that shifts the sensor's zero, the effect
+//! the round trip of `cargo xtask roundtrip oscillator` finds and carries back to the node).
 
 use serde::Deserialize;
 
@@ -47,6 +49,11 @@ pub const TIME_TOLERANCE: f64 = 1e-9;
 /// t_start = 9.0
 /// t_end = 9.02
 /// accel = 30.0
+///
+/// [[faults]]
+/// kind = "offset"       # the x axis reads 0.05 m/s² more from t = 4 s to the end
+/// t = 4.0
+/// accel = 0.05
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
@@ -109,6 +116,15 @@ pub enum Fault {
         /// Acceleration the x axis sees, m/s².
         accel: f64,
     },
+    /// From the first sample at or after `t` to the end of the run, the x axis reads `accel`
+    /// more (added to the acceleration it sees, so it clips as the part's own offset would):
+    /// a shifted zero, which the scenario's `[sensor] bias_m_s2` holds from the start.
+    Offset {
+        /// When, s.
+        t: f64,
+        /// The offset, m/s².
+        accel: f64,
+    },
 }
 
 impl Fault {
@@ -147,7 +163,11 @@ impl Fault {
     /// `0.4 × 12.0 = 4.800000000000001` still selects the sample at 4.8 s.
     pub fn covers(&self, t: f64) -> bool {
         match *self {
-            Fault::NackBurst { .. } | Fault::Timeout { .. } | Fault::Garbage { .. } | Fault::Reset { .. } => false,
+            Fault::NackBurst { .. }
+            | Fault::Timeout { .. }
+            | Fault::Garbage { .. }
+            | Fault::Reset { .. }
+            | Fault::Offset { .. } => false,
             Fault::Stuck { t_start, t_end }
             | Fault::Dropout { t_start, t_end }
             | Fault::Saturation { t_start, t_end, .. } => t_start - TIME_TOLERANCE <= t && t < t_end - TIME_TOLERANCE,
@@ -164,6 +184,7 @@ impl Fault {
             Fault::Reset { .. } => "reset",
             Fault::Stuck { .. } => "stuck",
             Fault::Saturation { .. } => "saturation",
+            Fault::Offset { .. } => "offset",
         }
     }
 
@@ -171,9 +192,11 @@ impl Fault {
     /// (`None` for interval faults, or past the end).
     pub fn first_sample(&self, times: &[f64]) -> Option<usize> {
         match *self {
-            Fault::NackBurst { t, .. } | Fault::Timeout { t, .. } | Fault::Garbage { t, .. } | Fault::Reset { t } => {
-                times.iter().position(|&tk| tk >= t - TIME_TOLERANCE)
-            }
+            Fault::NackBurst { t, .. }
+            | Fault::Timeout { t, .. }
+            | Fault::Garbage { t, .. }
+            | Fault::Reset { t }
+            | Fault::Offset { t, .. } => times.iter().position(|&tk| tk >= t - TIME_TOLERANCE),
             _ => None,
         }
     }
@@ -181,7 +204,11 @@ impl Fault {
     /// Checks the times are finite and ordered.
     pub fn validate(&self) -> Result<(), String> {
         match *self {
-            Fault::NackBurst { t, .. } | Fault::Timeout { t, .. } | Fault::Garbage { t, .. } | Fault::Reset { t }
+            Fault::NackBurst { t, .. }
+            | Fault::Timeout { t, .. }
+            | Fault::Garbage { t, .. }
+            | Fault::Reset { t }
+            | Fault::Offset { t, .. }
                 if !t.is_finite() =>
             {
                 Err(format!("{}: t must be finite", self.kind()))
@@ -194,6 +221,7 @@ impl Fault {
                 Err(format!("fault interval [{t_start}, {t_end}) must be finite with t_start < t_end"))
             }
             Fault::Saturation { accel, .. } if !accel.is_finite() => Err("saturation: accel must be finite".into()),
+            Fault::Offset { accel, .. } if !accel.is_finite() => Err("offset: accel must be finite".into()),
             _ => Ok(()),
         }
     }

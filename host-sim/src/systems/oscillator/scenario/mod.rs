@@ -31,7 +31,13 @@ use serde::Deserialize;
 use std::path::Path;
 
 /// Tuning of the harmonic-force filter: the fields of [`HarmonicForceParams`] that are choices
-/// rather than physics. Defaults are those of `HarmonicForceParams::default()`.
+/// rather than physics, and what the filter assumes of its sensor. Defaults are those of
+/// `HarmonicForceParams::default()`, and no offset.
+///
+/// `[sensor]` describes the simulated sensor (what `simulate` produces); `[filter]` what the
+/// filter (the host's and, through `edgekf oscillator export`, the node's) assumes. They differ
+/// on purpose: a recording from a real part has no `[sensor]` to read, and a calibration found by
+/// `edgekf loop oscillator` is declared here (`--corrected-config` writes it).
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct FilterTuning {
@@ -47,6 +53,9 @@ pub struct FilterTuning {
     pub gate_max_consecutive: u32,
     /// How the Kalman gain is computed.
     pub gain: Gain,
+    /// The accelerometer's x-axis offset the filter subtracts from each sample before it
+    /// steps, m/s² (the node does the same with the exported `HARMONIC_ACCEL_OFFSET`).
+    pub accel_offset_m_s2: f64,
 }
 
 /// How the Kalman gain is computed (TOML: `gain = "steady_state"` or `"time_varying"`); mirrors
@@ -88,6 +97,7 @@ impl Default for FilterTuning {
             gate_nis: p.gate_nis,
             gate_max_consecutive: p.gate_max_consecutive,
             gain: p.gain.into(),
+            accel_offset_m_s2: 0.0,
         }
     }
 }
@@ -171,6 +181,12 @@ impl Scenario {
         if tuning.iter().any(|v| !(v.is_finite() && *v >= 0.0)) {
             anyhow::bail!("filter: force_psd, motion_psd, initial_force_std and gate_nis must be non-negative numbers");
         }
+        if !(f.accel_offset_m_s2.is_finite() && f.accel_offset_m_s2.abs() < self.sensor.range_m_s2()) {
+            anyhow::bail!(
+                "filter: accel_offset_m_s2 = {} must be a number within the sensor's range",
+                f.accel_offset_m_s2
+            );
+        }
         edgekf::systems::oscillator::HarmonicForceEstimator::<f64>::new(&self.estimator_params())
             .map_err(|e| anyhow::anyhow!("the filter cannot be built from this scenario: {e:?}"))?;
         Ok(())
@@ -188,8 +204,8 @@ impl Scenario {
 
     /// Runs the reference simulation and the sensor model.
     ///
-    /// The x axis reads the mode's acceleration (replaced during a [`Fault::Saturation`]) plus
-    /// noise and bias, clipped; y and z read noise and bias only. The `fault_*` columns carry
+    /// The x axis reads the mode's acceleration (replaced during a [`Fault::Saturation`], plus
+    /// the [`Fault::Offset`]s begun by then) plus noise and bias, clipped; y and z read noise and bias only. The `fault_*` columns carry
     /// the virtual-device faults; they do not alter `ax`.
     pub fn simulate(&self) -> Recording {
         let n = self.samples();
@@ -218,7 +234,15 @@ impl Scenario {
                 Fault::Saturation { accel, .. } if f.covers(s.t) => Some(accel),
                 _ => None,
             });
-            let [ax, ay, az] = sensor.measure([saturated.unwrap_or(s.a), 0.0, 0.0]);
+            let offset: f64 = self
+                .faults
+                .iter()
+                .filter_map(|f| match *f {
+                    Fault::Offset { t, accel } if s.t >= t - TIME_TOLERANCE => Some(accel),
+                    _ => None,
+                })
+                .sum();
+            let [ax, ay, az] = sensor.measure([saturated.unwrap_or(s.a) + offset, 0.0, 0.0]);
             rec.t.push(s.t);
             rec.ax.push(ax);
             rec.ay.push(ay);
@@ -258,7 +282,7 @@ impl Scenario {
                         }
                     }
                 }
-                Fault::Saturation { .. } => {}
+                Fault::Saturation { .. } | Fault::Offset { .. } => {}
             }
         }
         rec

@@ -141,3 +141,18 @@ fn bad_scenarios_are_refused_with_the_field_named() {
     assert!(e("[filter]\ngain = \"fast\"\n").contains("unknown variant `fast`"));
     assert!(e("duration_s = \"long\"\n").contains("duration_s"));
 }
+
+#[test]
+fn an_offset_fault_shifts_the_x_axis_from_its_time_on() {
+    let base = Scenario::from_toml_str("duration_s = 1.0\n").unwrap();
+    let shifted =
+        Scenario::from_toml_str("duration_s = 1.0\n[[faults]]\nkind = \"offset\"\nt = 0.5\naccel = 0.05\n").unwrap();
+    let (a, b) = (base.simulate(), shifted.simulate());
+    for k in 0..a.len() {
+        let expected = if a.t[k] >= 0.5 - TIME_TOLERANCE { 0.05 } else { 0.0 };
+        assert!((b.ax[k] - a.ax[k] - expected).abs() < 1e-12, "sample {k}");
+        assert_eq!((a.ay[k], a.truth_x[k]), (b.ay[k], b.truth_x[k]));
+    }
+    assert!(Scenario::from_toml_str("[[faults]]\nkind = \"offset\"\nt = 0.5\naccel = nan\n").is_err());
+    assert!(Scenario::from_toml_str("[filter]\naccel_offset_m_s2 = 100.0\n").is_err());
+}
