@@ -55,3 +55,35 @@ fn a_healthy_rig_adds_nothing() {
     assert!(r.effects_added.is_empty(), "{:?}", r.effects_added);
     assert!(r.after.consistent);
 }
+
+/// An unbalance the configuration does not declare, at node 3 (between the housing and the
+/// disk), on a machine that has run for a while (no start-up transient, as in service), read
+/// by the one housing's accelerometer pair: a 1× force at any node gives the same forward
+/// orbit at the housing up to its amplitude and phase, so one force is added and every other
+/// place it could act is listed as its rival, the true one among them.
+#[test]
+fn an_undeclared_unbalance_read_at_one_housing_lists_every_place_it_could_act() {
+    let model = rig();
+    let mut truth_cfg = model.config().clone();
+    let mut extra = truth_cfg.unbalances[0].clone();
+    (extra.node, extra.magnitude) = (3, 2e-4);
+    truth_cfg.unbalances.push(extra);
+    let truth = RotorModel::from_config(&truth_cfg).unwrap();
+    let speed = true_speed(&truth);
+    let opts = SimOptions { duration: 2.0, seed: 5, speed: Some(speed), steady_start: true, ..SimOptions::default() };
+    let r = close(&model, &truth.simulate(&opts).unwrap().to_data_file(), 4);
+    check_speed(&model, &r);
+    assert_eq!(r.effects_added.len(), 1, "{:?}", r.effects_added);
+    let force = &r.effects_added[0];
+    assert_eq!((force.kind.to_string().as_str(), force.detail.order), ("harmonic_force", Some(1.0)), "{force:?}");
+    let ties: Vec<&str> = r
+        .not_identifiable
+        .iter()
+        .filter(|n| n.kind.to_string() == "harmonic_force" && n.reason.contains("cannot tell where it acts"))
+        .map(|n| n.location.as_str())
+        .collect();
+    let places: Vec<&str> = std::iter::once(force.location.as_str()).chain(ties.iter().copied()).collect();
+    assert!(places.contains(&"node 3"), "the true place is neither added nor listed: {places:?}");
+    // Every node of the shaft but the declared unbalance's (its 1× force is in the model).
+    assert!(places.len() >= 7, "{places:?}");
+}

@@ -38,19 +38,23 @@ impl<S: LoopSystem> Engine<'_, S> {
     }
 
     /// Rivals of `winner` among `results`: same family, another location, a log-likelihood
-    /// within the [`tie_margin`](Self::tie_margin), each with its own fitted value.
+    /// within the [`tie_margin`](Self::tie_margin) or a response the system's signatures
+    /// cannot tell from the winner's ([`LoopSystem::signature_ties`]), each with its own fitted
+    /// value.
     pub(super) fn rivals(
         &self,
         winner: &Fitted<S::Effect, S::Model>,
         results: &[Fitted<S::Effect, S::Model>],
     ) -> Vec<NotIdentifiable> {
         let margin = self.tie_margin();
+        let ties = self.sys.signature_ties(&winner.applied.effect);
+        let signature_tie = |f: &Fitted<S::Effect, S::Model>| ties.contains(&f.applied.effect);
         results
             .iter()
             .filter(|f| {
                 family(&f.label) == family(&winner.label)
                     && f.label.location != winner.label.location
-                    && (winner.delta - f.delta).abs() < margin
+                    && ((winner.delta - f.delta).abs() < margin || signature_tie(f))
             })
             .map(|r| {
                 let gap = winner.delta - r.delta;
@@ -60,7 +64,11 @@ impl<S: LoopSystem> Engine<'_, S> {
                     None => String::new(),
                 };
                 let w = &winner.label.location;
-                let reason = if gap >= 0.0 {
+                let reason = if gap.abs() >= margin {
+                    format!(
+                        "its response at the sensors is {w}'s up to the effect's own amplitude and phase{value}: the sensors cannot tell where it acts; the fits are {gap:.1} apart in log-likelihood only through what the model assumes of the effect's noise and the run's start, not through the steady response"
+                    )
+                } else if gap >= 0.0 {
                     format!(
                         "fits the data as well as {w}{value}: log-likelihoods {gap:.2} apart, less than the {margin:.1} that tells two fits apart: the sensors cannot tell the two apart"
                     )

@@ -154,6 +154,13 @@ pub trait LoopSystem: Sync {
     fn rivals_of(&self, _effect: &Self::Effect, _effects: &[Applied<Self::Effect>]) -> Vec<Self::Effect> {
         Vec::new()
     }
+    /// Candidates of the last proposal whose responses at the sensors the system's own
+    /// signature analysis finds the same as `winner`'s up to the effect's own states (a 1×
+    /// force at any node of a shaft read at one housing): the sensors cannot tell them apart,
+    /// whatever gap their fits show, so each is listed as the winner's rival (none by default).
+    fn signature_ties(&self, _winner: &Self::Effect) -> Vec<Self::Effect> {
+        Vec::new()
+    }
     /// The process noise the engine may set from the data before the search (none by default;
     /// see [`tuning`](super::tuning)).
     fn tunable_noise(&self) -> Option<TunableNoise> {

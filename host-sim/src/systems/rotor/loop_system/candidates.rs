@@ -76,8 +76,11 @@ impl RotorSystem<'_> {
         }
         orders.sort_by(|a, b| b.0.total_cmp(&a.0));
         let shaft_hz = self.red.speed / TAU;
+        let mut ties = Vec::new();
         for (_, order) in orders {
-            for node in self.places(run, model, &[order as f64 * shaft_hz], order, Input::Rotating) {
+            let (places, tied) = self.places(run, model, &[order as f64 * shaft_hz], order, Input::Rotating);
+            ties.push((order, tied));
+            for node in places {
                 if order == 1 && self.red.force_nodes.contains(&node) {
                     continue;
                 }
@@ -105,18 +108,42 @@ impl RotorSystem<'_> {
                     .map(|p| p.frequency_hz),
             );
             let disks = self.disk_nodes();
-            let nodes = self.places(run, model, &lines, 1, Input::Inertial).into_iter().filter(|n| !disks.contains(n));
+            let nodes =
+                self.places(run, model, &lines, 1, Input::Inertial).0.into_iter().filter(|n| !disks.contains(n));
             named.extend(nodes.map(|node| Effect::PointMass { node }));
         }
         let catch_all = self.force_sites.iter().map(|&node| Effect::UnknownInput { node }).collect();
+        if let Ok(mut stored) = self.steady_ties.lock() {
+            *stored = ties;
+        }
         vec![named, catch_all]
+    }
+
+    /// The other nodes whose force at `order` was proposed as tied with `node`'s in the last
+    /// proposal (see [`places`](Self::places)).
+    pub(super) fn steady_rivals(&self, node: usize, order: u32) -> Vec<usize> {
+        let Ok(stored) = self.steady_ties.lock() else { return Vec::new() };
+        let tied = stored.iter().find(|(o, _)| *o == order).map_or(&[][..], |(_, t)| t.as_slice());
+        if !tied.contains(&node) {
+            return Vec::new();
+        }
+        tied.iter().copied().filter(|&n| n != node).collect()
     }
 
     /// The [`PLACES`] nodes of the shaft where an `input` at `order`'s columns explains most of
     /// the innovations of `run` (made with `model`) at the lines `hz`, and for a force any
     /// further ones that explain as much (up to eight); all the force sites if nothing can be
-    /// ranked.
-    fn places(&self, run: &Run, model: &AugmentedModel, hz: &[f64], order: u32, input: Input) -> Vec<usize> {
+    /// ranked. Second, of those, the nodes whose force explains as much as the best's (within
+    /// [`TIED_SHARE`]): the sensors see the same response from each, up to the force's own
+    /// amplitude and phase (at one housing, a 1× force at any node).
+    fn places(
+        &self,
+        run: &Run,
+        model: &AugmentedModel,
+        hz: &[f64],
+        order: u32,
+        input: Input,
+    ) -> (Vec<usize>, Vec<usize>) {
         let nodes = self.red.displacement.nrows() / 2;
         let n = model.a.nrows();
         let columns: Vec<(usize, DMatrix<f64>, DMatrix<f64>)> = (0..nodes)
@@ -142,7 +169,7 @@ impl RotorSystem<'_> {
         };
         let ranked = locate::rank(run, hz, self.red.sample_rate, (0..columns.len()).collect(), response);
         if ranked.is_empty() {
-            return self.force_sites.clone();
+            return (self.force_sites.clone(), Vec::new());
         }
         // A force's nodes the innovations cannot tell apart (a lever's worth of nodes on an
         // overhang) are all fitted, so that the fits list them as rivals; a mass's fits cost
@@ -151,6 +178,14 @@ impl RotorSystem<'_> {
         let tied = |i: usize, p: &locate::Placement<usize>| {
             i < PLACES || (matches!(input, Input::Rotating) && i < MAX_PLACES && p.explained >= best - TIED_SHARE)
         };
-        ranked.iter().enumerate().take_while(|(i, p)| tied(*i, p)).map(|(_, p)| columns[p.location].0).collect()
+        let places: Vec<usize> =
+            ranked.iter().enumerate().take_while(|(i, p)| tied(*i, p)).map(|(_, p)| columns[p.location].0).collect();
+        let same = ranked
+            .iter()
+            .take(places.len())
+            .filter(|p| matches!(input, Input::Rotating) && p.explained >= best - TIED_SHARE)
+            .map(|p| columns[p.location].0)
+            .collect();
+        (places, same)
     }
 }

@@ -41,6 +41,7 @@ use crate::systems::rotor::{RotorConfig, RotorModel};
 use anyhow::{anyhow, Result};
 use nalgebra::DMatrix;
 use std::f64::consts::TAU;
+use std::sync::Mutex;
 
 /// The rotor's own settings of the loop: its filter's tuning, its effects' noise and priors,
 /// and whether the running speed is read from the data.
@@ -92,6 +93,9 @@ pub struct RotorSystem<'a> {
     speed: RunningSpeed,
     options: LoopOptions,
     rotor: RotorLoopOptions,
+    /// The nodes of the last proposal whose force at an order explains the innovations' lines
+    /// as well as the best node's (per order): their responses at the sensors are the same.
+    steady_ties: Mutex<Vec<(u32, Vec<usize>)>>,
 }
 
 impl<'a> RotorSystem<'a> {
@@ -214,6 +218,7 @@ impl<'a> RotorSystem<'a> {
             speed: running,
             options: *options,
             rotor: *rotor,
+            steady_ties: Mutex::new(Vec::new()),
         })
     }
 

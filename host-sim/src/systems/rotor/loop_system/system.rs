@@ -43,6 +43,15 @@ impl LoopSystem for RotorSystem<'_> {
         self.propose(s, run, model)
     }
 
+    fn signature_ties(&self, winner: &Effect) -> Vec<Effect> {
+        match *winner {
+            Effect::HarmonicForce { node, order } => {
+                self.steady_rivals(node, order).into_iter().map(|node| Effect::HarmonicForce { node, order }).collect()
+            }
+            _ => Vec::new(),
+        }
+    }
+
     fn label(&self, e: &Effect) -> EffectLabel {
         let detail = EffectDetail {
             order: e.order(),
