@@ -163,10 +163,46 @@ fn a_small_folder_gives_a_trend_row_per_recording_and_names_the_file_that_failed
     let out = edgekf_loop(&config, &data, &report, &["--quiet"]);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(
+        String::from_utf8_lossy(&out.stdout).contains("failed: day04: "),
+        "{}",
+        String::from_utf8_lossy(&out.stdout)
+    );
     assert!(stderr.contains("1 of 4 recordings failed") && stderr.contains("day04"), "{stderr}");
     let (_, rows) = read_trend(&report.join("trend.csv"));
     assert_eq!(rows.len(), 3);
     assert!(std::fs::read_to_string(report.join("trend.html")).unwrap().contains("day04"));
+}
+
+/// With a healthy baseline, the history carries each level's ratio to it: the growing second
+/// harmonic, which the baseline's recording lacks, raises the declared model's innovations.
+#[test]
+fn with_a_baseline_the_history_carries_the_ratios_to_it() {
+    let root = scratch("trend-baseline");
+    let (data, config) = write_history(&root, 3);
+    let healthy = root.join("healthy.csv");
+    std::fs::write(&healthy, Scenario { duration_s: 4.0, seed: 999, ..Scenario::default() }.simulate().to_csv_string())
+        .unwrap();
+    let baseline = root.join("healthy.toml");
+    let learnt = Command::new(env!("CARGO_BIN_EXE_edgekf"))
+        .args(["baseline", "oscillator", "--quiet", "--config"])
+        .arg(&config)
+        .arg("--data")
+        .arg(&healthy)
+        .arg("--out")
+        .arg(&baseline)
+        .output()
+        .unwrap();
+    assert!(learnt.status.success(), "{}", String::from_utf8_lossy(&learnt.stderr));
+    let report = root.join("out");
+    let out = edgekf_loop(&config, &data, &report, &["--quiet", "--baseline", baseline.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let (header, rows) = read_trend(&report.join("trend.csv"));
+    let ratio = header.iter().position(|c| c == "ratio_innovation_rms_ax").unwrap_or_else(|| panic!("{header:?}"));
+    assert_eq!(rows.len(), 3);
+    for r in &rows {
+        assert!(r[ratio].is_some_and(|v| v > 1.0), "{r:?}");
+    }
 }
 
 #[test]

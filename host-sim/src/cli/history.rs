@@ -146,7 +146,7 @@ pub fn run(system: &str, entry: &LoopEntry, args: &LoopArgs, sub: &ArgMatches, c
     let page = crate::trend::render(system, &trend, &failed)?;
     write_atomic(&csv, trend.to_csv()).with_context(|| format!("writing {}", csv.display()))?;
     write_atomic(&html, page).with_context(|| format!("writing {}", html.display()))?;
-    print!("{}", summary(&trend));
+    print!("{}", summary(&trend, &failed));
     println!(
         "wrote {} and {} ({} reports under {})",
         csv.display(),
@@ -161,8 +161,9 @@ pub fn run(system: &str, entry: &LoopEntry, args: &LoopArgs, sub: &ArgMatches, c
     Ok(())
 }
 
-/// The printed history: each effect's first recording and rate of change.
-fn summary(trend: &Trend) -> String {
+/// The printed history: each effect's first recording and rate of change, then the
+/// recordings that failed and why.
+fn summary(trend: &Trend, failed: &[(String, String)]) -> String {
     let mut s = format!("history of {} recording(s):\n", trend.recordings.len());
     if trend.effects.is_empty() {
         s.push_str("  no effect added on any recording\n");
@@ -178,6 +179,9 @@ fn summary(trend: &Trend) -> String {
             e.seen,
             trend.recordings.len()
         ));
+    }
+    for (name, why) in failed {
+        s.push_str(&format!("  failed: {name}: {why}\n"));
     }
     s
 }
