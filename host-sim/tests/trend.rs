@@ -174,6 +174,41 @@ fn a_small_folder_gives_a_trend_row_per_recording_and_names_the_file_that_failed
     assert!(std::fs::read_to_string(report.join("trend.html")).unwrap().contains("day04"));
 }
 
+/// Recordings whose `t` is absolute (s since 1970) are ordered by it, whatever their names,
+/// and the growth is also given per day.
+#[test]
+fn absolute_starts_order_the_history_and_give_a_rate_per_day() {
+    let root = scratch("trend-absolute");
+    let data = root.join("data");
+    std::fs::create_dir_all(&data).unwrap();
+    let config = root.join("declared.toml");
+    std::fs::write(&config, DECLARED).unwrap();
+    // 2023-11-14 22:13:20 UTC, then one recording a day; the names sort against time.
+    let day0 = 1.7e9;
+    for (k, name) in [(1, "c"), (2, "b"), (3, "a")] {
+        let mut file = recording(k).simulate().to_data_file();
+        let start = day0 + 86_400.0 * (k - 1) as f64;
+        file.t.iter_mut().for_each(|t| *t += start);
+        std::fs::write(data.join(format!("{name}.csv")), file.to_csv_string().unwrap()).unwrap();
+    }
+    let report = root.join("out");
+    let out = edgekf_loop(&config, &data, &report, &["--quiet"]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let (header, rows) = read_trend(&report.join("trend.csv"));
+    assert_eq!(
+        rows.iter().map(|r| r[0]).collect::<Vec<_>>(),
+        [Some(day0), Some(day0 + 86_400.0), Some(day0 + 172_800.0)]
+    );
+    let harmonic = header.iter().position(|c| c == "harmonic_force_mode_2x").unwrap();
+    let values: Vec<f64> = rows.iter().map(|r| r[harmonic].unwrap()).collect();
+    assert!(values.windows(2).all(|w| w[1] > w[0]), "ordered by time, the harmonic grows: {values:?}");
+    let per_day = stdout.split("per recording, ").nth(1).and_then(|s| s.split(" per day").next());
+    let per_day: f64 = per_day.unwrap_or_else(|| panic!("{stdout}")).parse().unwrap();
+    assert!((per_day / HARMONIC.1 - 1.0).abs() < 0.1, "{per_day} N per day, truth {}", HARMONIC.1);
+    assert!(stdout.contains("first in recording 1 (c)"), "{stdout}");
+}
+
 /// With a healthy baseline, the history carries each level's ratio to it: the growing second
 /// harmonic, which the baseline's recording lacks, raises the declared model's innovations.
 #[test]
