@@ -156,6 +156,10 @@ fn a_small_folder_gives_a_trend_row_per_recording_and_names_the_file_that_failed
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(report.join("day02/report.json")).unwrap()).unwrap();
     assert!(v["source"]["data"].as_str().unwrap().ends_with("day02.csv"), "{}", v["source"]);
+    // Its command reruns that recording alone, into its own folder.
+    let command = v["source"]["command"].as_str().unwrap();
+    let expected = format!("--data {} --report {}", data.join("day02.csv").display(), report.join("day02").display());
+    assert!(command.contains(&expected), "{command}");
     assert!(report.join("day02/report.html").is_file());
 
     // A malformed file: the others still make the history, the command names it and fails.

@@ -90,11 +90,45 @@ fn run_one(entry: &LoopEntry, args: &LoopArgs, sub: &ArgMatches, path: &Path, co
         options: LoopOptions { max_effects: args.max_effects, progress: false, ..LoopOptions::default() },
     };
     let mut report = (entry.run)(&request, sub)?;
-    fill_source(&mut report, path, &args.config, command_line);
-    report.source.baseline = args.baseline.as_ref().map(|b| b.display().to_string());
     let name = stem(path);
+    let single = single_command(command_line, args, path, &args.report.join(&name));
+    fill_source(&mut report, path, &args.config, &single);
+    report.source.baseline = args.baseline.as_ref().map(|b| b.display().to_string());
     write_report(&report, &args.report.join(&name))?;
     Ok(Point::from_report(&name, &report))
+}
+
+/// The command that makes one recording's report alone: `command_line` with the folder's
+/// `--data` and `--report` replaced by the recording's (as given where they are not spelt
+/// `--data DIR --report OUT`), so that every report's `source.command` reruns it.
+///
+/// ```
+/// # use edgekf_sim::cli::history::single_command;
+/// # use edgekf_sim::cli::looping::LoopArgs;
+/// # use std::path::{Path, PathBuf};
+/// let args = LoopArgs {
+///     config: "c.toml".into(),
+///     data: "recs".into(),
+///     report: "out".into(),
+///     baseline: None,
+///     corrected_config: None,
+///     max_effects: 4,
+///     quiet: true,
+/// };
+/// let line = "edgekf loop oscillator --config c.toml --data recs --report out --quiet";
+/// let one = single_command(line, &args, Path::new("recs/day1.csv"), Path::new("out/day1"));
+/// assert_eq!(one, "edgekf loop oscillator --config c.toml --data recs/day1.csv --report out/day1 --quiet");
+/// ```
+pub fn single_command(command_line: &str, args: &LoopArgs, data: &Path, report: &Path) -> String {
+    let mut words: Vec<String> = command_line.split(' ').map(str::to_string).collect();
+    for (flag, from, to) in [("--data", &args.data, data), ("--report", &args.report, report)] {
+        for k in 1..words.len() {
+            if words[k - 1] == flag && Path::new(&words[k]) == from.as_path() {
+                words[k] = to.display().to_string();
+            }
+        }
+    }
+    words.join(" ")
 }
 
 /// A progress bar over `n` recordings on stderr (hidden with `quiet`, and by indicatif when
@@ -120,8 +154,13 @@ pub fn run(system: &str, entry: &LoopEntry, args: &LoopArgs, sub: &ArgMatches, c
     let results: Vec<(String, Result<Point>)> = files
         .par_iter()
         .map(|f| {
-            let result = run_one(entry, args, sub, f, command_line);
+            // A recording the loop cannot take must not take the history down with it: a
+            // panic (a defect, reported by the default hook) is that recording's failure.
+            let run = std::panic::AssertUnwindSafe(|| run_one(entry, args, sub, f, command_line));
+            let result = std::panic::catch_unwind(run)
+                .unwrap_or_else(|_| Err(anyhow::anyhow!("the loop stopped on an internal error (reported above)")));
             bar.inc(1);
+            bar.set_message(stem(f));
             (stem(f), result)
         })
         .collect();
