@@ -133,7 +133,8 @@ fn the_history_names_where_the_offset_appears_and_how_fast_the_harmonic_grows() 
     assert!((growth / HARMONIC.1 - 1.0).abs() < 0.1, "growth {growth} N per recording, truth {}", HARMONIC.1);
     // The page names the same, and every recording has its report.
     let html = std::fs::read_to_string(report.join("trend.html")).unwrap();
-    assert!(html.contains(&format!("<td>sensor_bias_ax</td><td>recording {OFFSET_FROM} (day{OFFSET_FROM})</td>")));
+    let row = format!("<td>sensor_bias_ax</td><td>m/s^2</td><td>recording {OFFSET_FROM} (day{OFFSET_FROM})</td>");
+    assert!(html.contains(&row), "{row}");
     for k in [1, OFFSET_FROM, RECORDINGS] {
         assert!(report.join(format!("day{k:02}")).join("report.json").is_file(), "day{k:02}");
     }

@@ -51,8 +51,9 @@ pub fn render(system: &str, trend: &Trend, failed: &[(String, String)]) -> Resul
     out.push_str("<h2>Indicators</h2>\n");
     out.push_str(&plots(trend)?);
     out.push_str(
-        "<p class=\"note\">Each indicator against the recording's start: the effects' values (absent where \
-         the loop did not add the effect), the mean NIS per channel before (orange) and after (blue) the \
+        "<p class=\"note\">Each indicator against the recording's start: the effects' values in their \
+         reports' units with their 95 % intervals where the reports give them (absent where the loop did \
+         not add the effect), the mean NIS per channel before (orange) and after (blue) the \
          loop, and with a baseline each level's ratio to it.</p>\n",
     );
     recordings_table(&mut out, trend, failed);
@@ -89,8 +90,9 @@ fn effects_table(out: &mut String, trend: &Trend) {
     for e in &trend.effects {
         let first = trend.recordings.get(e.first.wrapping_sub(1)).map_or("-", |p| p.name.as_str());
         out.push_str(&format!(
-            "<tr><td>{}</td><td>recording {} ({})</td><td class=\"num\">{} of {}</td><td class=\"num\">{}</td>",
+            "<tr><td>{}</td><td>{}</td><td>recording {} ({})</td><td class=\"num\">{} of {}</td><td class=\"num\">{}</td>",
             esc(&e.column),
+            esc(&e.unit),
             e.first,
             esc(first),
             e.seen,
@@ -104,7 +106,7 @@ fn effects_table(out: &mut String, trend: &Trend) {
     }
     out.push_str(
         "</tbody>\n</table>\n<p class=\"note\">Slopes are least-squares fits of the effect's value (in its \
-         report's unit) over the recordings that have it.</p>\n",
+         unit) over the recordings that have it, per recording and, where t is absolute, per day.</p>\n",
     );
 }
 
@@ -123,11 +125,22 @@ fn plots(trend: &Trend) -> Result<String> {
     };
     let mut panels = Vec::new();
     for column in trend.columns.iter().filter(|c| !c.starts_with("nis_")) {
-        let points = series(column);
-        panels.push(panel(column, x_desc, &x, vec![(column.as_str(), SERIES, points)]));
+        let unit = trend.effects.iter().find(|e| &e.column == column).map_or("ratio", |e| e.unit.as_str());
+        let mut p = panel(column, x_desc, unit, &x, vec![(column.as_str(), SERIES, series(column))]);
+        // Each value's 95 % interval as a vertical bar, where the report gives one.
+        let bars: Vec<[(f64, f64); 2]> = (0..x.len())
+            .filter_map(|k| trend.interval(k, column).map(|[lo, hi]| [(x[k], lo), (x[k], hi)]))
+            .filter(|b| b.iter().all(|q| q.1.is_finite()))
+            .collect();
+        let ends: Vec<f64> = bars.iter().flatten().map(|q| q.1).chain(series(column).iter().map(|q| q.1)).collect();
+        if !bars.is_empty() {
+            p.y = Axis::linear(&ends);
+        }
+        p.lines.extend(bars.into_iter().map(|b| Line::new("", SERIES, b.to_vec())));
+        panels.push(p);
     }
     let nis = vec![("before", BEFORE, series("nis_before")), ("after", SERIES, series("nis_after"))];
-    panels.push(panel("NIS mean per channel", x_desc, &x, nis));
+    panels.push(panel("NIS mean per channel", x_desc, "NIS / channel", &x, nis));
     let rows = panels.len().div_ceil(2) as u32;
     Figure::new("indicators against the recordings' start", (2 * PANEL_W, PANEL_H * rows), panels).columns(2).svg()
 }
@@ -137,8 +150,8 @@ type Series<'a> = (&'a str, RGBColor, Vec<(f64, f64)>);
 
 /// A panel of `series` over the history's `x`, lines with a marker on
 /// each recording.
-fn panel(title: &str, x_desc: &str, x: &[f64], series: Vec<Series<'_>>) -> Panel {
-    let mut p = Panel::new(title, x_desc, "value");
+fn panel(title: &str, x_desc: &str, y_desc: &str, x: &[f64], series: Vec<Series<'_>>) -> Panel {
+    let mut p = Panel::new(title, x_desc, y_desc);
     p.x = Axis::linear(x);
     let ys: Vec<f64> = series.iter().flat_map(|s| s.2.iter().map(|q| q.1)).collect();
     p.y = Axis::linear(&ys);
@@ -184,14 +197,24 @@ mod tests {
             start_s: 0.0,
             effects: v.map(|v| ("sensor_bias_ax".to_string(), v)).into_iter().collect(),
             nis: [2.0, 1.0],
-            ratios: vec![],
+            units: vec![("sensor_bias_ax".to_string(), "m/s^2".to_string())],
+            intervals: v.map(|v| ("sensor_bias_ax".to_string(), [v - 0.01, v + 0.01])).into_iter().collect(),
+            ..Point::default()
         };
         let trend = Trend::new(vec![p("r1", None), p("r2", Some(0.05)), p("r3", Some(0.06))]);
         let html = render("a <system>", &trend, &[("bad.csv".into(), "no column ax".into())]).unwrap();
         assert!(html.contains("History — a &lt;system&gt;"));
-        assert!(html.contains("<td>sensor_bias_ax</td><td>recording 2 (r2)</td>"), "{html}");
+        assert!(html.contains("<td>sensor_bias_ax</td><td>m/s^2</td><td>recording 2 (r2)</td>"), "{html}");
         assert!(html.contains("1.0000e-2"), "the slope per recording");
         assert!(html.contains("bad.csv") && html.contains("no column ax"));
         assert_eq!(html.matches("<svg").count(), 1);
+        // The two intervals are two bars more in the series' colour (grid lines aside).
+        let blue = |t: &Trend| {
+            let page = render("s", t, &[]).unwrap();
+            page.split('<').filter(|e| e.starts_with("polyline") && e.contains("#1F64B4")).count()
+        };
+        let mut bare = trend.clone();
+        bare.recordings.iter_mut().for_each(|p| p.intervals.clear());
+        assert_eq!(blue(&trend), blue(&bare) + 2);
     }
 }

@@ -20,7 +20,7 @@
 //!     start_s: 0.0,
 //!     effects: growth.map(|g| ("harmonic_force_mode_2x".to_string(), g)).into_iter().collect(),
 //!     nis: [2.0, 1.0],
-//!     ratios: vec![],
+//!     ..Point::default()
 //! };
 //! // Out of order, `t` from 0: ordered by name, numbered from 1.
 //! let trend = Trend::new(vec![point("c", Some(0.3)), point("a", None), point("b", Some(0.2))]);
@@ -47,7 +47,7 @@ pub const ABSOLUTE_FROM_S: f64 = 1e8;
 const DAY_S: f64 = 86_400.0;
 
 /// One recording's indicators, as its loop report gives them.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, Default, PartialEq)]
 pub struct Point {
     /// The recording's name (its file name without `.csv`).
     pub name: String,
@@ -59,14 +59,20 @@ pub struct Point {
     pub nis: [f64; 2],
     /// Each `baseline_comparison` entry's column name and `ratio_to_baseline`.
     pub ratios: Vec<(String, f64)>,
+    /// Each effect's unit (its report's `unit`: SI, or `1` for a factor).
+    pub units: Vec<(String, String)>,
+    /// Each effect's 95 % interval, where its report gives one.
+    pub intervals: Vec<(String, [f64; 2])>,
 }
 
 impl Point {
     /// The indicators of `report`, the loop's report on the recording `name`.
     pub fn from_report(name: &str, report: &LoopReport) -> Self {
-        let mut effects: Vec<(String, f64)> = Vec::new();
+        let (mut effects, mut units, mut intervals) = (Vec::new(), Vec::new(), Vec::new());
         for e in &report.effects_added {
             let column = unique(effect_column(e), &effects);
+            units.push((column.clone(), e.unit.clone()));
+            intervals.extend(e.interval.map(|i| (column.clone(), i)));
             effects.push((column, e.value));
         }
         let mut ratios: Vec<(String, f64)> = Vec::new();
@@ -79,7 +85,8 @@ impl Point {
             ratios.push((column, ratio));
         }
         let start_s = report.traces.t.first().copied().unwrap_or(f64::NAN);
-        Self { name: name.into(), start_s, effects, nis: [report.before.nis_mean, report.after.nis_mean], ratios }
+        let nis = [report.before.nis_mean, report.after.nis_mean];
+        Self { name: name.into(), start_s, effects, nis, ratios, units, intervals }
     }
 }
 
@@ -150,6 +157,8 @@ pub enum Clock {
 pub struct EffectTrend {
     /// Its column ([`effect_column`]).
     pub column: String,
+    /// Its unit, as the reports give it.
+    pub unit: String,
     /// The first recording (numbered from 1, in the history's order) where it was added.
     pub first: usize,
     /// How many recordings have it.
@@ -212,6 +221,12 @@ impl Trend {
         Self { clock, recordings: points, t, columns, effects }
     }
 
+    /// The 95 % interval of the effect `column` in recording `row`, where its report gives one.
+    pub fn interval(&self, row: usize, column: &str) -> Option<[f64; 2]> {
+        let p = self.recordings.get(row)?;
+        p.intervals.iter().find(|(c, _)| c == column).map(|(_, i)| *i)
+    }
+
     /// The value of `column` in recording `row` (None where absent).
     pub fn value(&self, row: usize, column: &str) -> Option<f64> {
         let p = self.recordings.get(row)?;
@@ -258,8 +273,10 @@ fn effect_trend(column: &str, points: &[Point], clock: Clock) -> EffectTrend {
         Clock::Absolute => slope(&present.iter().map(|&(_, s, v)| (s / DAY_S, v)).collect::<Vec<_>>()),
         Clock::Index => None,
     };
+    let unit = points.iter().flat_map(|p| &p.units).find(|(c, _)| c == column).map(|(_, u)| u.clone());
     EffectTrend {
         column: column.into(),
+        unit: unit.unwrap_or_default(),
         first: present.first().map_or(0, |p| p.0),
         seen: present.len(),
         per_recording,
@@ -298,6 +315,7 @@ mod tests {
             effects: effects.iter().map(|(c, v)| (c.to_string(), *v)).collect(),
             nis: [1.5, 1.0],
             ratios: vec![("ratio_innovation_rms_ax".into(), 1.2)],
+            ..Point::default()
         }
     }
 
