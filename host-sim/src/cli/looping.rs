@@ -38,7 +38,7 @@ pub struct LoopArgs {
     /// At most this many effects.
     #[arg(long, value_name = "N", default_value_t = 4)]
     pub max_effects: usize,
-    /// Do not print each candidate as it is tried.
+    /// Do not print each candidate as it is tried (with a folder of data: no progress bar).
     #[arg(long)]
     pub quiet: bool,
 }
