@@ -254,7 +254,8 @@ fn a_folder_without_recordings_is_a_usage_error() {
     std::fs::write(&config, DECLARED).unwrap();
     let out = edgekf_loop(&config, &data, &root.join("out"), &[]);
     assert_eq!(out.status.code(), Some(2), "{}", String::from_utf8_lossy(&out.stderr));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("no *.csv recording"));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("no *.csv recording") && stderr.contains("Usage: edgekf loop oscillator"), "{stderr}");
     assert!(!root.join("out").exists(), "nothing written");
     // One file cannot carry many recordings' corrections: a usage error too.
     std::fs::write(data.join("a.csv"), recording(1).simulate().to_csv_string()).unwrap();

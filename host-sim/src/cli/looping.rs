@@ -131,8 +131,8 @@ fn history(
 /// Prints `message` as clap prints a usage error of `edgekf loop <name>` and exits with its
 /// code, 2.
 fn usage_error(registry: &[SystemEntry], name: &str, message: &str) -> ! {
-    let mut cmd = command(registry);
-    let sub = cmd.find_subcommand_mut(name).expect("the system's loop is a subcommand");
+    let sub = command(registry).find_subcommand(name).cloned().expect("the system's loop is a subcommand");
+    let mut sub = sub.bin_name(format!("edgekf loop {name}"));
     sub.error(clap::error::ErrorKind::InvalidValue, message).exit()
 }
 
