@@ -17,6 +17,8 @@
 //! * [`matrix`]: effect matrices, the loop scored on a system's own simulator with one rule;
 //! * [`linalg`]: dense host linear algebra the simulators and the engine share (matrix
 //!   exponential of large systems);
+//! * [`trend`]: a machine's history, the loop's reports on many recordings in order of their
+//!   start (`trend.csv`, `trend.html`);
 //! * [`cli`]: the `edgekf` command line, driven by the systems' registry.
 //!
 //! ```
@@ -39,3 +41,4 @@ pub mod matrix;
 pub mod report;
 pub mod residual_loop;
 pub mod systems;
+pub mod trend;

@@ -18,10 +18,13 @@ pub struct LoopArgs {
     /// The system's configuration (model, sensors, operating point, sample rate).
     #[arg(long, value_name = "TOML")]
     pub config: PathBuf,
-    /// Data file (channels named like the configured sensors; `truth_` columns optional).
-    #[arg(long, value_name = "CSV")]
+    /// Data file (channels named like the configured sensors; `truth_` columns optional), or a
+    /// folder of them: every `*.csv` in it is run, its report written to `DIR/<name>/`, and the
+    /// machine's history to `DIR/trend.csv` and `DIR/trend.html`.
+    #[arg(long, value_name = "CSV|FOLDER")]
     pub data: PathBuf,
-    /// Directory for report.json and report.html.
+    /// Directory for report.json and report.html (with a folder of data: for each recording's
+    /// report folder and the history).
     #[arg(long, value_name = "DIR")]
     pub report: PathBuf,
     /// A healthy baseline (`edgekf baseline <system>`): the loop asks what changed since.
@@ -35,7 +38,7 @@ pub struct LoopArgs {
     /// At most this many effects.
     #[arg(long, value_name = "N", default_value_t = 4)]
     pub max_effects: usize,
-    /// Do not print each candidate as it is tried.
+    /// Do not print each candidate as it is tried (with a folder of data: no progress bar).
     #[arg(long)]
     pub quiet: bool,
 }
@@ -79,6 +82,9 @@ pub fn run(registry: &[SystemEntry], m: &ArgMatches, command_line: &str) -> Resu
             with.join(", ")
         );
     }
+    if args.data.is_dir() {
+        return history(registry, name, entry, &args, sub, command_line);
+    }
     let inputs = [Some(args.data.as_path()), Some(args.config.as_path()), args.baseline.as_deref()];
     check_folder(&args.report, &REPORT_FILES, &inputs)?;
     check(&[args.corrected_config.as_deref()], &inputs)?;
@@ -98,6 +104,36 @@ pub fn run(registry: &[SystemEntry], m: &ArgMatches, command_line: &str) -> Resu
         write_corrected(&report, &args.config, &args.report, path)?;
     }
     Ok(())
+}
+
+/// `edgekf loop <system> --data FOLDER`: the machine's history ([`super::history`]). A folder
+/// without recordings, or `--corrected-config` (one file cannot carry many recordings'
+/// corrections), is a usage error (exit code 2, as clap's).
+fn history(
+    registry: &[SystemEntry],
+    name: &str,
+    entry: &super::LoopEntry,
+    args: &LoopArgs,
+    sub: &ArgMatches,
+    command_line: &str,
+) -> Result<()> {
+    if args.corrected_config.is_some() {
+        let message =
+            "--corrected-config takes one recording, not a folder: run the recording whose corrections you want alone";
+        usage_error(registry, name, message);
+    }
+    if super::history::recordings(&args.data)?.is_empty() {
+        usage_error(registry, name, &format!("--data {}: the folder holds no *.csv recording", args.data.display()));
+    }
+    super::history::run(name, entry, args, sub, command_line)
+}
+
+/// Prints `message` as clap prints a usage error of `edgekf loop <name>` and exits with its
+/// code, 2.
+fn usage_error(registry: &[SystemEntry], name: &str, message: &str) -> ! {
+    let sub = command(registry).find_subcommand(name).cloned().expect("the system's loop is a subcommand");
+    let mut sub = sub.bin_name(format!("edgekf loop {name}"));
+    sub.error(clap::error::ErrorKind::InvalidValue, message).exit()
 }
 
 /// Writes `config` with the report's corrections to `out` (whole, or not at all), and says

@@ -7,6 +7,8 @@
 //! * [`request`]: what a row's functions are asked to do (the loop's, the baseline's, the
 //!   demo's requests);
 //! * [`looping`]: `edgekf loop <system>`: the flags every loop shares, the run, the report files;
+//! * [`history`]: `edgekf loop <system> --data FOLDER`: every recording of a folder, and the
+//!   machine's history (`trend.csv`, `trend.html`);
 //! * [`baseline`]: `edgekf baseline <system>`: a healthy baseline learned from a recording;
 //! * [`demo`]: `edgekf demo`: every system's demo part in the registry's order;
 //! * [`capture`]: `edgekf capture`: a node's handed-over window as a recording.
@@ -21,6 +23,7 @@
 pub mod baseline;
 pub mod capture;
 pub mod demo;
+pub mod history;
 pub mod looping;
 pub mod registry;
 pub mod request;

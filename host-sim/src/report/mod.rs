@@ -7,7 +7,7 @@
 //! * [`text`]: the printed table and the report files;
 //! * [`summary`]: the JSON summary of `edgekf <system> estimate --json`.
 
-mod escape;
+pub(crate) mod escape;
 pub mod html;
 pub mod plot;
 pub mod summary;
