@@ -4,7 +4,7 @@
 //! declares the slip. (Bearing defects on a 12 kHz rig: `tests/bearing_defects.rs`.)
 
 use edgekf_sim::io::data::DataFile;
-use edgekf_sim::residual_loop::{LoopOptions, LoopReport};
+use edgekf_sim::residual_loop::{EffectKind, LoopOptions, LoopReport};
 use edgekf_sim::systems::rotor::loop_system::{close_loop, RotorLoopOptions};
 use edgekf_sim::systems::rotor::{RotorConfig, RotorModel, SimOptions};
 use std::f64::consts::TAU;
@@ -65,7 +65,7 @@ fn a_healthy_rig_adds_nothing() {
 fn an_undeclared_unbalance_read_at_one_housing_lists_every_place_it_could_act() {
     let model = rig();
     let mut truth_cfg = model.config().clone();
-    let mut extra = truth_cfg.unbalances[0].clone();
+    let mut extra = truth_cfg.unbalances[0];
     (extra.node, extra.magnitude) = (3, 2e-4);
     truth_cfg.unbalances.push(extra);
     let truth = RotorModel::from_config(&truth_cfg).unwrap();
@@ -75,11 +75,11 @@ fn an_undeclared_unbalance_read_at_one_housing_lists_every_place_it_could_act() 
     check_speed(&model, &r);
     assert_eq!(r.effects_added.len(), 1, "{:?}", r.effects_added);
     let force = &r.effects_added[0];
-    assert_eq!((force.kind.to_string().as_str(), force.detail.order), ("harmonic_force", Some(1.0)), "{force:?}");
+    assert_eq!((force.kind, force.detail.order), (EffectKind::HarmonicForce, Some(1.0)), "{force:?}");
     let ties: Vec<&str> = r
         .not_identifiable
         .iter()
-        .filter(|n| n.kind.to_string() == "harmonic_force" && n.reason.contains("cannot tell where it acts"))
+        .filter(|n| n.kind == EffectKind::HarmonicForce && n.reason.contains("cannot tell where it acts"))
         .map(|n| n.location.as_str())
         .collect();
     let places: Vec<&str> = std::iter::once(force.location.as_str()).chain(ties.iter().copied()).collect();
