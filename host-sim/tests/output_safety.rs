@@ -139,3 +139,21 @@ fn a_toml_error_is_one_line_with_its_line_and_column() {
     assert!(!dir.join("x.csv").exists());
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// A missing input is named once with what the system said (the reason is not repeated by the
+/// error's chain), for a recording and for a configuration.
+#[test]
+fn a_missing_input_is_named_once_with_its_reason() {
+    let dir = scratch("missing");
+    let cases: [&[&str]; 2] = [
+        &["loop", "oscillator", "--config", "oscillator_demo.toml", "--data", "absent.csv", "--report", "out"],
+        &["uuv", "simulate", "--scenario", "healthy", "--config", "absent.toml", "--out", "sim.csv"],
+    ];
+    for args in cases {
+        let o = edgekf().current_dir(&dir).args(args).output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {err}");
+        assert!(err.contains("absent.") && err.contains("cannot read"), "{args:?}: {err}");
+        assert_eq!(err.matches("No such file or directory").count(), 1, "{args:?}: {err}");
+    }
+}

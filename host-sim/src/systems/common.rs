@@ -42,12 +42,12 @@ pub enum SimError {
     #[error("{0}")]
     Config(String),
     /// A configuration file could not be read.
-    #[error("{}: cannot read: {source}", path.display())]
+    #[error("{}: cannot read: {reason}", path.display())]
     Io {
         /// The file.
         path: PathBuf,
-        /// What the operating system said.
-        source: std::io::Error,
+        /// What the operating system said (in the message, not a second link of the chain).
+        reason: std::io::Error,
     },
     /// The recording cannot serve the estimator (a missing sample where every one is needed);
     /// the caller names the file.

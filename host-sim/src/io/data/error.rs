@@ -9,20 +9,20 @@ use std::path::PathBuf;
 #[derive(Debug, thiserror::Error)]
 pub enum DataError {
     /// The file could not be opened or read.
-    #[error("{}: cannot read: {source}", path.display())]
+    #[error("{}: cannot read: {reason}", path.display())]
     Io {
         /// The file.
         path: PathBuf,
-        /// What the operating system said.
-        source: std::io::Error,
+        /// What the operating system said (in the message, not a second link of the chain).
+        reason: std::io::Error,
     },
     /// The file could not be written.
-    #[error("{}: cannot write: {source}", path.display())]
+    #[error("{}: cannot write: {reason}", path.display())]
     Write {
         /// The file.
         path: PathBuf,
-        /// What the operating system said.
-        source: std::io::Error,
+        /// What the operating system said (in the message, not a second link of the chain).
+        reason: std::io::Error,
     },
     /// The CSV itself is malformed (e.g. not UTF-8, unbalanced quotes).
     #[error("{}:{line}: malformed CSV: {message}", path.display())]

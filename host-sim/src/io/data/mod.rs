@@ -161,7 +161,7 @@ pub fn read(path: &Path, known: &[&str]) -> Result<(DataFile, DataReport), DataE
 /// # std::fs::remove_dir_all(&dir).ok();
 /// ```
 pub fn read_required(path: &Path, required: &[&str], known: &[&str]) -> Result<(DataFile, DataReport), DataError> {
-    let file = std::fs::File::open(path).map_err(|source| DataError::Io { path: path.to_owned(), source })?;
+    let file = std::fs::File::open(path).map_err(|reason| DataError::Io { path: path.to_owned(), reason })?;
     read_from_required(std::io::BufReader::new(file), path, required, known)
 }
 
@@ -179,7 +179,7 @@ pub fn read_from_required<R: Read>(
 ) -> Result<(DataFile, DataReport), DataError> {
     // Read whole, so that line numbers can be counted from the bytes (see `LineIndex`).
     let mut bytes = Vec::new();
-    reader.read_to_end(&mut bytes).map_err(|source| DataError::Io { path: path.to_owned(), source })?;
+    reader.read_to_end(&mut bytes).map_err(|reason| DataError::Io { path: path.to_owned(), reason })?;
     let lines = LineIndex::new(&bytes);
     let mut rdr = csv::ReaderBuilder::new()
         .has_headers(false)
@@ -191,7 +191,7 @@ pub fn read_from_required<R: Read>(
         let line = e.position().map_or(0, |p| lines.line_of(p.byte()));
         let message = e.to_string();
         match e.into_kind() {
-            csv::ErrorKind::Io(source) => DataError::Io { path: path.to_owned(), source },
+            csv::ErrorKind::Io(reason) => DataError::Io { path: path.to_owned(), reason },
             _ => DataError::Csv { path: path.to_owned(), line, message },
         }
     };
@@ -437,7 +437,7 @@ fn csv_text(path: &Path, names: &[&str], t: &[f64], columns: &[&[f64]], empty: b
 /// ```
 pub fn write(path: &Path, names: &[&str], t: &[f64], columns: &[&[f64]]) -> Result<(), DataError> {
     let text = to_csv_string(path, names, t, columns)?;
-    crate::io::output::write_atomic(path, text).map_err(|source| DataError::Write { path: path.to_owned(), source })
+    crate::io::output::write_atomic(path, text).map_err(|reason| DataError::Write { path: path.to_owned(), reason })
 }
 
 #[cfg(test)]

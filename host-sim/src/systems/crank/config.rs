@@ -270,7 +270,7 @@ impl CrankConfig {
 
     /// Reads, parses and validates a configuration file; messages name the file.
     pub fn load(path: &Path) -> Result<Self, CrankError> {
-        let text = std::fs::read_to_string(path).map_err(|source| CrankError::Io { path: path.into(), source })?;
+        let text = std::fs::read_to_string(path).map_err(|reason| CrankError::Io { path: path.into(), reason })?;
         Self::from_toml_str(&text).map_err(|e| CrankError::Config(format!("{}: {e}", path.display())))
     }
 

@@ -232,7 +232,7 @@ impl UuvConfig {
 
     /// Reads, parses and validates a configuration file; messages name the file.
     pub fn load(path: &Path) -> Result<Self, UuvError> {
-        let text = std::fs::read_to_string(path).map_err(|source| UuvError::Io { path: path.into(), source })?;
+        let text = std::fs::read_to_string(path).map_err(|reason| UuvError::Io { path: path.into(), reason })?;
         Self::from_toml_str(&text).map_err(|e| UuvError::Config(format!("{}: {e}", path.display())))
     }
 

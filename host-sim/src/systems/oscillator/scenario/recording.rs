@@ -115,6 +115,6 @@ impl Recording {
     /// Writes [`Recording::to_csv_string`] to `path`.
     pub fn write_csv(&self, path: &Path) -> Result<(), DataError> {
         let text = self.csv(path)?;
-        crate::io::output::write_atomic(path, text).map_err(|source| DataError::Write { path: path.to_owned(), source })
+        crate::io::output::write_atomic(path, text).map_err(|reason| DataError::Write { path: path.to_owned(), reason })
     }
 }
