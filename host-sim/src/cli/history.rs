@@ -183,7 +183,7 @@ pub fn run(system: &str, entry: &LoopEntry, args: &LoopArgs, sub: &ArgMatches, c
     let csv = args.report.join(HISTORY_FILES[0]);
     let html = args.report.join(HISTORY_FILES[1]);
     let page = crate::trend::render(system, &trend, &failed)?;
-    write_atomic(&csv, trend.to_csv()).with_context(|| format!("writing {}", csv.display()))?;
+    write_atomic(&csv, trend.to_csv()?).with_context(|| format!("writing {}", csv.display()))?;
     write_atomic(&html, page).with_context(|| format!("writing {}", html.display()))?;
     print!("{}", summary(&trend, &failed));
     println!(

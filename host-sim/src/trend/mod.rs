@@ -29,7 +29,7 @@
 //! let e = &trend.effects[0];
 //! assert_eq!((e.first, e.seen), (2, 2));
 //! assert!((e.per_recording.unwrap() - 0.1).abs() < 1e-12);
-//! assert!(trend.to_csv().starts_with("t,harmonic_force_mode_2x,nis_before,nis_after\n1,,2,1\n"));
+//! assert!(trend.to_csv().unwrap().starts_with("t,harmonic_force_mode_2x,nis_before,nis_after\n1,,2,1\n"));
 //! ```
 
 mod html;
@@ -237,27 +237,19 @@ impl Trend {
         }
     }
 
-    /// `trend.csv`: the header `t,<columns>`, then one row per recording; an absent or
-    /// non-finite value is an empty cell (a missing sample in the data contract). Numbers are
-    /// written in the shortest form that reads back to the same `f64`.
-    pub fn to_csv(&self) -> String {
-        let mut s = String::from("t");
-        for c in &self.columns {
-            s.push(',');
-            s.push_str(c);
-        }
-        s.push('\n');
-        for (row, t) in self.t.iter().enumerate() {
-            s.push_str(&format!("{t}"));
-            for c in &self.columns {
-                s.push(',');
-                if let Some(v) = self.value(row, c).filter(|v| v.is_finite()) {
-                    s.push_str(&format!("{v}"));
-                }
-            }
-            s.push('\n');
-        }
-        s
+    /// `trend.csv`: the header `t,<columns>`, then one row per recording, through the data
+    /// contract's writer; an absent or non-finite value is an empty cell (a missing sample).
+    pub fn to_csv(&self) -> Result<String, crate::io::data::DataError> {
+        let names: Vec<&str> = self.columns.iter().map(String::as_str).collect();
+        let columns: Vec<Vec<f64>> = self
+            .columns
+            .iter()
+            .map(|c| {
+                (0..self.t.len()).map(|row| self.value(row, c).filter(|v| v.is_finite()).unwrap_or(f64::NAN)).collect()
+            })
+            .collect();
+        let views: Vec<&[f64]> = columns.iter().map(Vec::as_slice).collect();
+        crate::io::data::to_csv_string_sparse(std::path::Path::new("trend.csv"), &names, &self.t, &views)
     }
 }
 
@@ -337,7 +329,7 @@ mod tests {
         assert!((bias.per_day.unwrap() - 0.1).abs() < 1e-9, "{bias:?}");
         let second = &trend.effects[1];
         assert_eq!((second.first, second.seen, second.per_recording), (3, 1, None));
-        let csv = trend.to_csv();
+        let csv = trend.to_csv().unwrap();
         let lines: Vec<&str> = csv.lines().collect();
         assert_eq!(lines[0], "t,sensor_bias_ax,harmonic_force_mode_2x,nis_before,nis_after,ratio_innovation_rms_ax");
         assert_eq!(lines[1], "1700000000,0.1,,1.5,1,1.2");
@@ -352,14 +344,14 @@ mod tests {
         assert_eq!(trend.recordings[0].name, "a");
         assert_eq!(trend.t, [1.0, 2.0]);
         assert!(trend.effects.is_empty());
-        assert_eq!(trend.to_csv().lines().next(), Some("t,nis_before,nis_after,ratio_innovation_rms_ax"));
+        assert_eq!(trend.to_csv().unwrap().lines().next(), Some("t,nis_before,nis_after,ratio_innovation_rms_ax"));
     }
 
     #[test]
     fn a_missing_nis_is_an_empty_cell() {
         let mut p = point("a", 0.0, &[]);
         p.nis[1] = f64::NAN;
-        assert_eq!(Trend::new(vec![p]).to_csv().lines().nth(1), Some("1,1.5,,1.2"));
+        assert_eq!(Trend::new(vec![p]).to_csv().unwrap().lines().nth(1), Some("1,1.5,,1.2"));
     }
 
     #[test]
