@@ -17,7 +17,7 @@
 //!   that registers them;
 //! * [`manifest`]: the firmware images as data (binary, flag, HIL tests, budgets, real-time
 //!   requirement), which `cargo xtask` reads;
-//! * [`monitor`]: the model monitor beside an estimator, and its `mismatch` frame;
+//! * [`monitor`]: the model monitor beside an estimator; [`mismatch`]: the frame it emits;
 //! * [`frame`]: report frames defined once, for the defmt emitter and the host's parser alike;
 //! * [`hil`]: the HIL images' run, shared by the QEMU entry point and the host reference runs;
 //! * [`soak`]: the numerical soak of every filter, the same code on the host and in QEMU;
@@ -36,6 +36,7 @@ pub mod frame;
 pub mod hil;
 pub mod line_feed;
 pub mod manifest;
+pub mod mismatch;
 pub mod monitor;
 pub mod node;
 pub mod pair_source;

@@ -128,7 +128,7 @@ pub trait NodeEstimator {
 
     /// The next model mismatch its monitor found and has not handed over yet (none without a
     /// monitor: see [`crate::monitor::Monitored`]). Asked after every poll until `None`.
-    fn take_mismatch(&mut self) -> Option<crate::monitor::MismatchFrame> {
+    fn take_mismatch(&mut self) -> Option<crate::mismatch::MismatchFrame> {
         None
     }
 

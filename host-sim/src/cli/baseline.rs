@@ -3,7 +3,7 @@
 //! --baseline`. The flags, the file's safety (never over an input, written only when
 //! complete) and its `source` are common; what a baseline holds is the system's.
 
-use super::registry::SystemEntry;
+use super::registry::{chosen_loop, SystemEntry};
 use super::request::{BaselineArgs, BaselineRequest};
 use crate::io::output::{check, write_atomic};
 use crate::residual_loop::baseline::BaselineSource;
@@ -33,13 +33,8 @@ pub fn command(registry: &[SystemEntry]) -> clap::Command {
 
 /// Runs `edgekf baseline <system> …`; `command_line` goes into the baseline's `[source]`.
 pub fn run(registry: &[SystemEntry], m: &ArgMatches, command_line: &str) -> Result<()> {
-    let Some((name, sub)) = m.subcommand() else { unreachable!("clap requires a subcommand") };
-    let entry = registry
-        .iter()
-        .find(|s| s.name == name)
-        .and_then(|s| s.close_loop.as_ref())
-        .and_then(|l| l.baseline)
-        .expect("clap only accepts systems with baselines");
+    let (_, chosen, sub) = chosen_loop(registry, m);
+    let entry = chosen.baseline.expect("clap only accepts systems with baselines");
     let args = BaselineArgs::from_arg_matches(sub).map_err(|e| anyhow::anyhow!("{e}"))?;
     check(&[Some(&args.out)], &[Some(&args.data), Some(&args.config)])?;
     let source = BaselineSource {

@@ -8,9 +8,9 @@
 //! those that ran, says which failed and why, and the command then exits 1. Every output is
 //! checked before any work (none is an input) and written whole.
 
-use super::looping::{fill_source, LoopArgs};
 use super::registry::LoopEntry;
 use super::request::LoopRequest;
+use super::request::{fill_source, LoopArgs};
 use crate::io::output::{check_folder, write_atomic};
 use crate::report::text::{write_report, REPORT_FILES};
 use crate::residual_loop::LoopOptions;
@@ -104,7 +104,7 @@ fn run_one(entry: &LoopEntry, args: &LoopArgs, sub: &ArgMatches, path: &Path, co
 ///
 /// ```
 /// # use edgekf_sim::cli::history::single_command;
-/// # use edgekf_sim::cli::looping::LoopArgs;
+/// # use edgekf_sim::cli::request::LoopArgs;
 /// # use std::path::{Path, PathBuf};
 /// let args = LoopArgs {
 ///     config: "c.toml".into(),

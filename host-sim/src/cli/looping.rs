@@ -2,46 +2,15 @@
 //! shares, the run through the system's [`LoopEntry`](super::LoopEntry), the printed summary and
 //! the report files, with where the report came from (`source`).
 
-use super::registry::SystemEntry;
-use super::request::LoopRequest;
+use super::registry::{chosen_loop, SystemEntry};
+use super::request::{fill_source, LoopArgs, LoopRequest};
 use crate::io::output::{check, check_folder, write_atomic};
 use crate::report::text::{summary_table, write_report, REPORT_FILES};
 use crate::residual_loop::correction::corrected_config;
 use crate::residual_loop::{Correction, LoopOptions, LoopReport};
 use anyhow::{Context, Result};
 use clap::{ArgMatches, Args, FromArgMatches};
-use std::path::{Path, PathBuf};
-
-/// The flags of every `edgekf loop <system>`.
-#[derive(Debug, Clone, Args)]
-pub struct LoopArgs {
-    /// The system's configuration (model, sensors, operating point, sample rate).
-    #[arg(long, value_name = "TOML")]
-    pub config: PathBuf,
-    /// Data file (channels named like the configured sensors; `truth_` columns optional), or a
-    /// folder of them: every `*.csv` in it is run, its report written to `DIR/<name>/`, and the
-    /// machine's history to `DIR/trend.csv` and `DIR/trend.html`.
-    #[arg(long, value_name = "CSV|FOLDER")]
-    pub data: PathBuf,
-    /// Directory for report.json and report.html (with a folder of data: for each recording's
-    /// report folder and the history).
-    #[arg(long, value_name = "DIR")]
-    pub report: PathBuf,
-    /// A healthy baseline (`edgekf baseline <system>`): the loop asks what changed since.
-    /// Refused on a system that has no baselines.
-    #[arg(long, value_name = "TOML")]
-    pub baseline: Option<PathBuf>,
-    /// Also write the configuration with every added model or calibration effect made a
-    /// declared part of it (its own keys, a comment per change); faults stay out of the model.
-    #[arg(long, value_name = "TOML")]
-    pub corrected_config: Option<PathBuf>,
-    /// At most this many effects.
-    #[arg(long, value_name = "N", default_value_t = 4)]
-    pub max_effects: usize,
-    /// Do not print each candidate as it is tried (with a folder of data: no progress bar).
-    #[arg(long)]
-    pub quiet: bool,
-}
+use std::path::Path;
 
 /// `edgekf loop` with one subcommand per system that has a loop.
 pub fn command(registry: &[SystemEntry]) -> clap::Command {
@@ -64,12 +33,7 @@ pub fn command(registry: &[SystemEntry]) -> clap::Command {
 /// Runs `edgekf loop <system> …` (`m`: the `loop` subcommand's matches); `command_line` goes
 /// into the report's `source`.
 pub fn run(registry: &[SystemEntry], m: &ArgMatches, command_line: &str) -> Result<()> {
-    let Some((name, sub)) = m.subcommand() else { unreachable!("clap requires a subcommand") };
-    let entry = registry
-        .iter()
-        .find(|s| s.name == name)
-        .and_then(|s| s.close_loop.as_ref())
-        .expect("clap only accepts registered names");
+    let (name, entry, sub) = chosen_loop(registry, m);
     let args = LoopArgs::from_arg_matches(sub).map_err(|e| anyhow::anyhow!("{e}"))?;
     if args.baseline.is_some() && entry.baseline.is_none() {
         let with: Vec<&str> = registry
@@ -154,12 +118,4 @@ fn write_corrected(report: &LoopReport, config: &Path, report_dir: &Path, out: &
         }
     }
     Ok(())
-}
-
-/// Fills the report's `source`: the files and the command line (the system's run gave the
-/// data's SHA-256, taken in the one read of the data).
-pub fn fill_source(report: &mut LoopReport, data: &Path, config: &Path, command_line: &str) {
-    report.source.data = Some(data.display().to_string());
-    report.source.config = Some(config.display().to_string());
-    report.source.command = Some(command_line.to_string());
 }

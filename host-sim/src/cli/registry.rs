@@ -52,6 +52,14 @@ pub struct DemoPart {
     pub run: fn(&super::request::DemoArgs) -> Result<()>,
 }
 
+/// The loop of the system `edgekf loop|baseline <system> …` names (`m`: the verb's matches),
+/// with its name and its own matches; clap accepts only the names the verb registered.
+pub fn chosen_loop<'a>(registry: &'a [SystemEntry], m: &'a ArgMatches) -> (&'a str, &'a LoopEntry, &'a ArgMatches) {
+    let Some((name, sub)) = m.subcommand() else { unreachable!("clap requires a subcommand") };
+    let entry = registry.iter().find(|s| s.name == name).and_then(|s| s.close_loop.as_ref());
+    (name, entry.expect("clap only accepts registered names"), sub)
+}
+
 /// A clap `Subcommand` enum as a registry's [`SystemEntry::command`]: `subcommands::<C>`.
 pub fn subcommands<C: Subcommand>() -> clap::Command {
     C::augment_subcommands(clap::Command::new("system")).subcommand_required(true).arg_required_else_help(true)

@@ -3,9 +3,40 @@
 //! so that a system and the registry depend on these types and on nothing else of `cli`.
 
 use crate::residual_loop::baseline::BaselineSource;
-use crate::residual_loop::LoopOptions;
+use crate::residual_loop::{LoopOptions, LoopReport};
 use clap::Args;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+
+/// The flags of every `edgekf loop <system>`.
+#[derive(Debug, Clone, Args)]
+pub struct LoopArgs {
+    /// The system's configuration (model, sensors, operating point, sample rate).
+    #[arg(long, value_name = "TOML")]
+    pub config: PathBuf,
+    /// Data file (channels named like the configured sensors; `truth_` columns optional), or a
+    /// folder of them: every `*.csv` in it is run, its report written to `DIR/<name>/`, and the
+    /// machine's history to `DIR/trend.csv` and `DIR/trend.html`.
+    #[arg(long, value_name = "CSV|FOLDER")]
+    pub data: PathBuf,
+    /// Directory for report.json and report.html (with a folder of data: for each recording's
+    /// report folder and the history).
+    #[arg(long, value_name = "DIR")]
+    pub report: PathBuf,
+    /// A healthy baseline (`edgekf baseline <system>`): the loop asks what changed since.
+    /// Refused on a system that has no baselines.
+    #[arg(long, value_name = "TOML")]
+    pub baseline: Option<PathBuf>,
+    /// Also write the configuration with every added model or calibration effect made a
+    /// declared part of it (its own keys, a comment per change); faults stay out of the model.
+    #[arg(long, value_name = "TOML")]
+    pub corrected_config: Option<PathBuf>,
+    /// At most this many effects.
+    #[arg(long, value_name = "N", default_value_t = 4)]
+    pub max_effects: usize,
+    /// Do not print each candidate as it is tried (with a folder of data: no progress bar).
+    #[arg(long)]
+    pub quiet: bool,
+}
 
 /// What a system's loop is asked to do.
 #[derive(Debug, Clone)]
@@ -18,6 +49,22 @@ pub struct LoopRequest {
     pub baseline: Option<PathBuf>,
     /// The engine's options from the common flags.
     pub options: LoopOptions,
+}
+
+impl LoopRequest {
+    /// Runs `close` (a system's loop on its one read of the data) with the levels of the
+    /// request's baseline if it names one, and stamps the report with the data's SHA-256.
+    pub fn close(
+        &self,
+        system: &str,
+        data_sha256: Option<String>,
+        close: impl FnOnce(&LoopOptions) -> anyhow::Result<LoopReport>,
+    ) -> anyhow::Result<LoopReport> {
+        let mut report =
+            crate::residual_loop::levels::close_with(self.baseline.as_deref(), system, &self.options, close)?;
+        report.source.data_sha256 = data_sha256;
+        Ok(report)
+    }
 }
 
 /// The flags of every `edgekf baseline <system>`.
@@ -63,4 +110,12 @@ pub struct DemoArgs {
     /// Skip the parts that close a residual loop (about half a minute).
     #[arg(long)]
     pub skip_loop: bool,
+}
+
+/// Fills the report's `source`: the files and the command line (the system's run gave the
+/// data's SHA-256, taken in the one read of the data).
+pub fn fill_source(report: &mut LoopReport, data: &Path, config: &Path, command_line: &str) {
+    report.source.data = Some(data.display().to_string());
+    report.source.config = Some(config.display().to_string());
+    report.source.command = Some(command_line.to_string());
 }

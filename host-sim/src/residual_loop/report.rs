@@ -1,11 +1,11 @@
 //! What a loop run reports: [`LoopReport`] (`report.json`'s layout, [`SCHEMA_VERSION`]) and its
 //! parts, the same for every system.
 
-use super::correction::EffectCorrection;
+use super::correction::{Correction, EffectCorrection};
 use super::filter::Run;
 use super::signature::{Channel, RunSummary, Signature};
-use super::tuning::Tuning;
 use super::vocabulary::{EffectDetail, EffectKind, EffectLabel};
+use crate::io::config_edit::{ConfigEdit, Op};
 use serde::Serialize;
 
 /// The version of `report.json`'s layout: raised when a field changes meaning or goes away
@@ -253,4 +253,33 @@ pub struct LoopReport {
     /// The series behind the plots.
     #[serde(skip)]
     pub traces: Traces,
+}
+
+/// The scale the engine kept, in `report.json`'s `tuning`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Tuning {
+    /// What the noise stands for.
+    pub what: String,
+    /// The factor on the configuration's process noise densities.
+    pub scale: f64,
+    /// What it raised the base model's log-likelihood by.
+    pub delta_log_likelihood: f64,
+    /// What it had to raise it by to be kept (the BIC of one parameter and the gain floor).
+    pub penalty: f64,
+}
+
+impl Tuning {
+    /// How the scale enters the configuration: each key multiplied by it.
+    ///
+    /// ```
+    /// use edgekf_sim::residual_loop::tuning::Tuning;
+    /// let t = Tuning { what: "motion".into(), scale: 0.1, delta_log_likelihood: 50.0, penalty: 6.0 };
+    /// let c = t.correction(&[("estimator.process.velocity".to_string(), 0.02)]);
+    /// assert_eq!(c.effect, "process_noise of motion");
+    /// assert_eq!(c.correction.edits()[0].absent, Some(0.02));
+    /// ```
+    pub fn correction(&self, keys: &[(String, f64)]) -> EffectCorrection {
+        let edits = keys.iter().map(|(k, v)| ConfigEdit::or_absent(k, Op::Scale(self.scale), *v));
+        EffectCorrection { effect: format!("process_noise of {}", self.what), correction: Correction::model(edits) }
+    }
 }

@@ -184,6 +184,22 @@ impl<S: LoopSystem> Engine<'_, S> {
     }
 }
 
+/// One verdict per effect: what was added is not also unseen, what the data cannot see is not
+/// also refused (a fit that ran to the edge of a flat likelihood says nothing about a bound),
+/// and an effect found unseen in several iterations is listed once.
+fn one_verdict_each<E, M>(st: &mut State<E, M>) {
+    st.not_identifiable.retain(|n| !st.added.iter().any(|f| n.names(&f.label)));
+    let mut once: Vec<NotIdentifiable> = Vec::new();
+    for n in std::mem::take(&mut st.not_identifiable) {
+        if !once.iter().any(|m| m.is_about(&n)) {
+            once.push(n);
+        }
+    }
+    st.not_identifiable = once;
+    let unseen = &st.not_identifiable;
+    st.refused.retain(|r| !unseen.iter().any(|n| r.is_about(n)));
+}
+
 /// Closes the loop on `sys`: runs its base model and its own first stage
 /// ([`LoopSystem::prestage`]), then adds effects while the innovations are not consistent and
 /// an effect pays for its parameters (BIC) in both halves of the run (of the stretch after its
@@ -239,19 +255,7 @@ pub fn search<S: LoopSystem>(sys: &mut S, options: &LoopOptions) -> Result<LoopR
     if options.screen_parameters {
         st.not_identifiable.extend(engine.screen(&st.effects, &st.run));
     }
-    // One verdict per effect: what was added is not also unseen, what the data cannot see is
-    // not also refused (a fit that ran to the edge of a flat likelihood says nothing about a
-    // bound), and an effect found unseen in several iterations is listed once.
-    st.not_identifiable.retain(|n| !st.added.iter().any(|f| n.names(&f.label)));
-    let mut once: Vec<NotIdentifiable> = Vec::new();
-    for n in std::mem::take(&mut st.not_identifiable) {
-        if !once.iter().any(|m| m.is_about(&n)) {
-            once.push(n);
-        }
-    }
-    st.not_identifiable = once;
-    let unseen = &st.not_identifiable;
-    st.refused.retain(|r| !unseen.iter().any(|n| r.is_about(n)));
+    one_verdict_each(&mut st);
     let named = |e: &AddedEffect| format!("{} at {}", e.kind.as_str(), e.location);
     let mut corrections: Vec<EffectCorrection> = first
         .iter()

@@ -11,7 +11,6 @@ use super::optimize::ScalarRange;
 use super::options::LoopOptions;
 use super::report::{AddedEffect, Refused, SystemSection, Traces, Trial};
 use super::signature::RunSummary;
-use super::tuning::TunableNoise;
 use super::vocabulary::{Applied, EffectKind, EffectLabel};
 use anyhow::Result;
 use std::fmt::Debug;
@@ -168,4 +167,15 @@ pub trait LoopSystem: Sync {
     }
     /// Scales that noise by `scale` (1: the configuration's) in every later run.
     fn set_noise_scale(&mut self, _scale: f64) {}
+}
+
+/// The noise a system lets the engine scale: what it covers and the configuration's keys.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TunableNoise {
+    /// What the noise stands for, in a few words ("the velocity and rate").
+    pub what: String,
+    /// The configuration keys the scale multiplies (each a process noise density), each with
+    /// the value in effect (what the key is taken to hold where the configuration leaves it
+    /// out).
+    pub keys: Vec<(String, f64)>,
 }

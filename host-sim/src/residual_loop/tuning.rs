@@ -10,54 +10,14 @@
 //! configuration's keys. It is a tuning, not an effect: a healthy record may need it too. It
 //! only lowers the noise (see `SPAN`).
 
-use super::correction::{Correction, EffectCorrection};
+use super::correction::EffectCorrection;
 use super::filter::Run;
 use super::optimize::maximise;
 use super::options::LoopOptions;
+pub use super::report::Tuning;
 use super::system::LoopSystem;
-use crate::io::config_edit::{ConfigEdit, Op};
+pub use super::system::TunableNoise;
 use anyhow::Result;
-use serde::Serialize;
-
-/// The noise a system lets the engine scale: what it covers and the configuration's keys.
-#[derive(Debug, Clone, PartialEq)]
-pub struct TunableNoise {
-    /// What the noise stands for, in a few words ("the velocity and rate").
-    pub what: String,
-    /// The configuration keys the scale multiplies (each a process noise density), each with
-    /// the value in effect (what the key is taken to hold where the configuration leaves it
-    /// out).
-    pub keys: Vec<(String, f64)>,
-}
-
-/// The scale the engine kept, in `report.json`'s `tuning`.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct Tuning {
-    /// What the noise stands for.
-    pub what: String,
-    /// The factor on the configuration's process noise densities.
-    pub scale: f64,
-    /// What it raised the base model's log-likelihood by.
-    pub delta_log_likelihood: f64,
-    /// What it had to raise it by to be kept (the BIC of one parameter and the gain floor).
-    pub penalty: f64,
-}
-
-impl Tuning {
-    /// How the scale enters the configuration: each key multiplied by it.
-    ///
-    /// ```
-    /// use edgekf_sim::residual_loop::tuning::Tuning;
-    /// let t = Tuning { what: "motion".into(), scale: 0.1, delta_log_likelihood: 50.0, penalty: 6.0 };
-    /// let c = t.correction(&[("estimator.process.velocity".to_string(), 0.02)]);
-    /// assert_eq!(c.effect, "process_noise of motion");
-    /// assert_eq!(c.correction.edits()[0].absent, Some(0.02));
-    /// ```
-    pub fn correction(&self, keys: &[(String, f64)]) -> EffectCorrection {
-        let edits = keys.iter().map(|(k, v)| ConfigEdit::or_absent(k, Op::Scale(self.scale), *v));
-        EffectCorrection { effect: format!("process_noise of {}", self.what), correction: Correction::model(edits) }
-    }
-}
 
 /// The smallest the scale may go, a factor on the configuration's. It never goes above 1:
 /// more noise than declared is what an effect the model lacks looks like, and naming that

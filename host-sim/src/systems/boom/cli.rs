@@ -269,11 +269,7 @@ pub fn close_loop(
     m: &clap::ArgMatches,
 ) -> anyhow::Result<crate::residual_loop::LoopReport> {
     let (config, file, ar, incl_noise) = loop_inputs(&request.config, &request.data, m)?;
-    let close = |o: &_| super::loop_system::close_loop(&config, &file, ar, incl_noise, o);
-    let mut report =
-        crate::residual_loop::levels::close_with(request.baseline.as_deref(), "boom", &request.options, close)?;
-    report.source.data_sha256 = file.sha256.clone();
-    Ok(report)
+    request.close("boom", file.sha256.clone(), |o| super::loop_system::close_loop(&config, &file, ar, incl_noise, o))
 }
 
 /// `edgekf baseline boom --config C --data healthy.csv --static static.csv --out B`: what the

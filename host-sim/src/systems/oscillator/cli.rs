@@ -246,11 +246,7 @@ pub fn close_loop(
 ) -> anyhow::Result<crate::residual_loop::LoopReport> {
     let s = Scenario::load(&request.config)?;
     let file = crate::io::recording::read_data(&request.data, &KNOWN_CHANNELS, s.sensor.odr_hz, &s.timeline)?;
-    let close = |o: &_| super::loop_system::close_loop(&s, &file, o);
-    let mut report =
-        crate::residual_loop::levels::close_with(request.baseline.as_deref(), "oscillator", &request.options, close)?;
-    report.source.data_sha256 = file.sha256.clone();
-    Ok(report)
+    request.close("oscillator", file.sha256.clone(), |o| super::loop_system::close_loop(&s, &file, o))
 }
 
 /// `edgekf baseline oscillator`: what the scenario's model leaves unexplained on a healthy

@@ -222,11 +222,7 @@ fn summarise(prose: Prose, table: &EstimateTable, data: &DataFile) -> serde_json
 /// `edgekf loop uuv`: the vehicle's configuration and data, the loop closed on them.
 pub fn close_loop(request: &crate::cli::request::LoopRequest, _: &clap::ArgMatches) -> anyhow::Result<LoopReport> {
     let (config, file) = loop_inputs(&request.config, &request.data)?;
-    let close = |o: &_| super::loop_system::close_loop(&config, &file, o);
-    let mut report =
-        crate::residual_loop::levels::close_with(request.baseline.as_deref(), "uuv", &request.options, close)?;
-    report.source.data_sha256 = file.sha256.clone();
-    Ok(report)
+    request.close("uuv", file.sha256.clone(), |o| super::loop_system::close_loop(&config, &file, o))
 }
 
 /// `edgekf baseline uuv`: what the configured vehicle leaves unexplained on a healthy
