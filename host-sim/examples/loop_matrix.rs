@@ -3,7 +3,7 @@
 //! `--readme README.md` the table replaces the one between the README's markers
 //! `<!-- loop-matrix SYSTEM -->` and `<!-- /loop-matrix SYSTEM -->`.
 //!
-//! `cargo run --release -p edgekf-sim --example loop_matrix -- [boom] [oscillator] [uuv] [--readme README.md]`
+//! `cargo run --release -p edgekf-sim --example loop_matrix -- [boom] [oscillator] [rotor] [uuv] [--readme README.md]`
 //! (`cargo xtask loop-matrix` runs it). `--case TEXT` runs only the cases whose name holds
 //! `TEXT` (to look at one row again; not with `--readme`, whose tables are whole).
 
@@ -11,13 +11,14 @@ use anyhow::{bail, Context, Result};
 use edgekf_sim::matrix::{table, Case, Outcome};
 use edgekf_sim::systems::boom::{matrix as boom, BoomConfig};
 use edgekf_sim::systems::oscillator::{matrix as oscillator, scenario::Scenario};
+use edgekf_sim::systems::rotor::matrix as rotor;
 use edgekf_sim::systems::uuv::{matrix as uuv, UuvConfig};
 use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 /// The systems with a matrix.
-const SYSTEMS: [&str; 3] = ["boom", "oscillator", "uuv"];
+const SYSTEMS: [&str; 4] = ["boom", "oscillator", "rotor", "uuv"];
 
 fn main() -> Result<()> {
     let mut args = std::env::args().skip(1);
@@ -42,6 +43,7 @@ fn main() -> Result<()> {
             "boom" => boom_table(only)?,
             "uuv" => uuv_table(only)?,
             "oscillator" => oscillator_table(only)?,
+            "rotor" => rotor_table(only)?,
             _ => unreachable!("checked above"),
         };
         print!("{text}");
@@ -75,6 +77,18 @@ fn oscillator_table(only: &str) -> Result<String> {
         &cases,
         |s| oscillator::clean_error(&declared, s),
         |c, clean| oscillator::run_case(c, &declared, clean),
+    )
+}
+
+/// The rotor's matrix (3 s runs of the paper rotor).
+fn rotor_table(only: &str) -> Result<String> {
+    let declared = rotor::declared()?;
+    let cases = matching(rotor::cases(&declared)?, only)?;
+    parallel_table(
+        "rotor",
+        &cases,
+        |s| rotor::clean_error(&declared, s),
+        |c, clean| rotor::run_case(c, &declared, clean),
     )
 }
 

@@ -1,12 +1,13 @@
 //! Fixed slices of the systems' effect matrices (`edgekf_sim::matrix`), run as CI runs them:
 //! every sixth of the boom's cases (clean runs, a stiffness, a section, a lag, the sideways
-//! mode), every third of the vehicle's (clean flights, the mass, a DVL offset) and every
-//! other of the oscillator's come out as the README's tables (written by `cargo xtask
+//! mode), every third of the vehicle's (clean flights, the mass, a DVL offset), every other
+//! of the oscillator's and every eighth of the rotor's (a clean run, a disk's mass, a bearing
+//! below its limit, a gain) come out as the README's tables (written by `cargo xtask
 //! loop-matrix`) say they do: the same effects added, the same verdict. A change of the
 //! loop's behaviour on these cases fails here until the tables are written again.
 
 use edgekf_sim::matrix::{readme_rows, row, Case, Outcome};
-use edgekf_sim::systems::{boom, oscillator, uuv};
+use edgekf_sim::systems::{boom, oscillator, rotor, uuv};
 
 /// Checks every `step`-th of `system`'s `cases` against the README's rows.
 fn check_slice<T>(system: &str, cases: &[Case<T>], step: usize, outcome: impl Fn(&Case<T>) -> Outcome) {
@@ -50,5 +51,15 @@ fn a_slice_of_the_oscillator_matrix_comes_out_as_the_readme_says() {
     check_slice("oscillator", &cases, 2, |c| {
         let clean = oscillator::matrix::clean_error(&declared, c.seed).unwrap();
         oscillator::matrix::run_case(c, &declared, clean).unwrap()
+    });
+}
+
+#[test]
+fn a_slice_of_the_rotor_matrix_comes_out_as_the_readme_says() {
+    let declared = rotor::matrix::declared().unwrap();
+    let cases = rotor::matrix::cases(&declared).unwrap();
+    check_slice("rotor", &cases, 8, |c| {
+        let clean = rotor::matrix::clean_error(&declared, c.seed).unwrap();
+        rotor::matrix::run_case(c, &declared, clean).unwrap()
     });
 }

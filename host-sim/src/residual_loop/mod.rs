@@ -42,6 +42,7 @@ pub mod optimize;
 pub mod options;
 pub mod recording;
 pub mod report;
+pub mod score;
 pub mod search;
 pub mod signature;
 pub mod system;

@@ -72,11 +72,36 @@ impl<S: LoopSystem> Engine<'_, S> {
     /// One iteration: each tier of candidates fitted until one pays, the best kept. `Err` with
     /// the reason the search stops when none does.
     fn iterate(&mut self, st: &mut State<S::Effect, S::Model>, iteration: usize) -> Result<(), String> {
+        let tiers = self.sys.candidates(&st.summary, &st.run, &st.model, &st.effects);
+        self.iterate_over(st, iteration, tiers)
+    }
+
+    /// Once the innovations look consistent: the declared settings the score test finds worth
+    /// fitting ([`score`](super::score)), fitted as one tier. `Err` when none is or none pays.
+    fn iterate_declared(&mut self, st: &mut State<S::Effect, S::Model>, iteration: usize) -> Result<(), String> {
+        self.nis_scale = if st.summary.nis_mean.is_finite() { st.summary.nis_mean.max(1.0) } else { 1.0 };
+        let tier = self.declared_worth_fitting(&st.effects, &st.run);
+        if tier.is_empty() {
+            return Err(String::new());
+        }
+        self.progress(|| {
+            format!("iteration {iteration}: the innovations pass; {} declared setting(s) worth fitting", tier.len())
+        });
+        self.iterate_over(st, iteration, vec![tier])
+    }
+
+    /// [`Self::iterate`] over the given tiers of candidates.
+    fn iterate_over(
+        &mut self,
+        st: &mut State<S::Effect, S::Model>,
+        iteration: usize,
+        tiers: Vec<Vec<S::Effect>>,
+    ) -> Result<(), String> {
         let sys = self.sys;
         self.nis_scale = if st.summary.nis_mean.is_finite() { st.summary.nis_mean.max(1.0) } else { 1.0 };
         let mut chosen = None;
         let mut evaluated = Vec::new();
-        for (tier_index, tier) in sys.candidates(&st.summary, &st.run, &st.model, &st.effects).into_iter().enumerate() {
+        for (tier_index, tier) in tiers.into_iter().enumerate() {
             let mut fresh: Vec<S::Effect> = Vec::new();
             for e in tier {
                 if st.effects.iter().any(|x| x.effect == e) || fresh.contains(&e) {
@@ -165,6 +190,51 @@ impl<S: LoopSystem> Engine<'_, S> {
         }
     }
 
+    /// What the report lists as added, in order (the first stage's, then the search's, each
+    /// with its interval in the final model at the final model's NIS), and each one's
+    /// correction of the configuration.
+    fn findings(
+        &mut self,
+        st: &State<S::Effect, S::Model>,
+        first: Vec<(S::Effect, AddedEffect)>,
+    ) -> (Vec<AddedEffect>, Vec<EffectCorrection>) {
+        let named = |e: &AddedEffect| format!("{} at {}", e.kind.as_str(), e.location);
+        let mut corrections: Vec<EffectCorrection> = first
+            .iter()
+            .map(|(e, a)| EffectCorrection {
+                effect: named(a),
+                correction: self.sys.correction(&Applied::new(*e, 0.0), a.value),
+            })
+            .collect();
+        let mut effects_added: Vec<AddedEffect> = first
+            .into_iter()
+            .map(|(_, a)| a)
+            .chain(st.added.iter().map(|f| AddedEffect {
+                kind: f.label.kind,
+                location: f.label.location.clone(),
+                value: self.sys.value(&st.model, &st.run, &f.applied),
+                unit: f.label.unit.clone(),
+                detail: f.label.detail.clone(),
+                explains: f.explains.clone(),
+                delta_log_likelihood: f.delta,
+                bic_penalty: f.penalty,
+                interval: None,
+            }))
+            .collect();
+        // Each added effect's interval in the final model, at the final model's NIS.
+        self.nis_scale = if st.summary.nis_mean.is_finite() { st.summary.nis_mean.max(1.0) } else { 1.0 };
+        let intervals: Vec<Option<[f64; 2]>> =
+            (0..st.effects.len()).map(|i| self.interval(&st.effects, i, &st.model, &st.run)).collect();
+        for (e, interval) in effects_added[corrections.len()..].iter_mut().zip(intervals) {
+            e.interval = interval;
+        }
+        for (f, e) in st.added.iter().zip(&effects_added[corrections.len()..]) {
+            corrections
+                .push(EffectCorrection { effect: named(e), correction: self.sys.correction(&f.applied, e.value) });
+        }
+        (effects_added, corrections)
+    }
+
     /// Puts `win` into the model.
     fn keep(&self, st: &mut State<S::Effect, S::Model>, iteration: usize, win: Fitted<S::Effect, S::Model>) {
         st.trials.push(self.trial(iteration, &win, true));
@@ -239,9 +309,20 @@ pub fn search<S: LoopSystem>(sys: &mut S, options: &LoopOptions) -> Result<LoopR
         excludes,
     };
     let mut iteration = 0;
+    let mut scored = !options.screen_parameters;
     let stopped = loop {
         if st.summary.consistent {
-            break "the innovations are white, unbiased and NIS-consistent".to_string();
+            let consistent = "the innovations are white, unbiased and NIS-consistent".to_string();
+            if scored || st.effects.len() >= options.max_effects {
+                break consistent;
+            }
+            scored = true;
+            iteration += 1;
+            match engine.iterate_declared(&mut st, iteration) {
+                Ok(()) => continue,
+                Err(why) if why.is_empty() => break consistent,
+                Err(why) => break format!("{consistent}; {why}"),
+            }
         }
         if st.effects.len() >= options.max_effects {
             break format!("reached the limit of {} effects", options.max_effects);
@@ -256,39 +337,7 @@ pub fn search<S: LoopSystem>(sys: &mut S, options: &LoopOptions) -> Result<LoopR
         st.not_identifiable.extend(engine.screen(&st.effects, &st.run));
     }
     one_verdict_each(&mut st);
-    let named = |e: &AddedEffect| format!("{} at {}", e.kind.as_str(), e.location);
-    let mut corrections: Vec<EffectCorrection> = first
-        .iter()
-        .map(|(e, a)| EffectCorrection {
-            effect: named(a),
-            correction: sys.correction(&Applied::new(*e, 0.0), a.value),
-        })
-        .collect();
-    let mut effects_added: Vec<AddedEffect> = first
-        .into_iter()
-        .map(|(_, a)| a)
-        .chain(st.added.iter().map(|f| AddedEffect {
-            kind: f.label.kind,
-            location: f.label.location.clone(),
-            value: sys.value(&st.model, &st.run, &f.applied),
-            unit: f.label.unit.clone(),
-            detail: f.label.detail.clone(),
-            explains: f.explains.clone(),
-            delta_log_likelihood: f.delta,
-            bic_penalty: f.penalty,
-            interval: None,
-        }))
-        .collect();
-    // Each added effect's interval in the final model, at the final model's NIS.
-    engine.nis_scale = if st.summary.nis_mean.is_finite() { st.summary.nis_mean.max(1.0) } else { 1.0 };
-    let intervals: Vec<Option<[f64; 2]>> =
-        (0..st.effects.len()).map(|i| engine.interval(&st.effects, i, &st.model, &st.run)).collect();
-    for (e, interval) in effects_added[corrections.len()..].iter_mut().zip(intervals) {
-        e.interval = interval;
-    }
-    for (f, e) in st.added.iter().zip(&effects_added[corrections.len()..]) {
-        corrections.push(EffectCorrection { effect: named(e), correction: sys.correction(&f.applied, e.value) });
-    }
+    let (effects_added, mut corrections) = engine.findings(&st, first);
     let unexplained = if st.summary.consistent {
         Vec::new()
     } else {

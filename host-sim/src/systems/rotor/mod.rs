@@ -57,6 +57,7 @@ pub mod demo;
 pub mod element;
 pub mod estimate;
 pub mod loop_system;
+pub mod matrix;
 pub mod modal;
 pub mod response;
 pub mod sensor;

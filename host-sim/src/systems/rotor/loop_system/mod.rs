@@ -384,8 +384,19 @@ pub fn close_loop(
     options: &LoopOptions,
     rotor: &RotorLoopOptions,
 ) -> Result<LoopReport> {
+    search(&mut system_for(model, data, options, rotor)?, options)
+}
+
+/// The system [`close_loop`] searches: `model` on `data` at its running speed (what an effect
+/// matrix asks its detection limits of).
+pub fn system_for<'a>(
+    model: &'a RotorModel,
+    data: &'a DataFile,
+    options: &LoopOptions,
+    rotor: &RotorLoopOptions,
+) -> Result<RotorSystem<'a>> {
     let speed = running_speed(model, data, options, rotor)?;
-    search(&mut RotorSystem::at_speed(model, data, options, rotor, speed)?, options)
+    RotorSystem::at_speed(model, data, options, rotor, speed)
 }
 
 /// As [`close_loop`], asking what changed since `baseline`: its parts (offsets, noise levels,
