@@ -81,9 +81,7 @@ impl LoopSystem for Oscillator {
     type Effect = Effect;
     type Model = usize;
 
-    fn name(&self) -> &str {
-        "oscillator"
-    }
+    const NAME: &'static str = "oscillator";
 
     fn run(&self, effects: &[Applied<Effect>]) -> anyhow::Result<(usize, Run)> {
         let factor = effects.iter().find(|e| e.effect == Effect::Stiffness).map_or(1.0, |e| e.theta.exp());

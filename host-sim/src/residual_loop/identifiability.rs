@@ -39,15 +39,16 @@ impl<S: LoopSystem> Engine<'_, S> {
 
     /// Rivals of `winner` among `results`: same family, another location, a log-likelihood
     /// within the [`tie_margin`](Self::tie_margin) or a response the system's signatures
-    /// cannot tell from the winner's ([`LoopSystem::signature_ties`]), each with its own fitted
+    /// cannot tell from the winner's ([`Rivals::tied`](super::system::Rivals::tied)), each with its own fitted
     /// value.
     pub(super) fn rivals(
         &self,
+        effects: &[Applied<S::Effect>],
         winner: &Fitted<S::Effect, S::Model>,
         results: &[Fitted<S::Effect, S::Model>],
     ) -> Vec<NotIdentifiable> {
         let margin = self.tie_margin();
-        let ties = self.sys.signature_ties(&winner.applied.effect);
+        let ties = self.sys.rivals(&winner.applied.effect, effects).tied;
         let signature_tie = |f: &Fitted<S::Effect, S::Model>| ties.contains(&f.applied.effect);
         results
             .iter()
@@ -122,7 +123,8 @@ impl<S: LoopSystem> Engine<'_, S> {
             if worst <= penalty {
                 let rivals: Vec<String> = self
                     .sys
-                    .rivals_of(e, effects)
+                    .rivals(e, effects)
+                    .carried
                     .iter()
                     .map(|r| {
                         let l = self.sys.label(r);

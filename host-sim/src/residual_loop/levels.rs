@@ -80,7 +80,7 @@ impl LevelBaseline {
         let gain_floor = leftover_gain(&report, n_meas, &say);
         let noise_scale = report.tuning.map(|t| t.scale);
         Ok(Self {
-            system: sys.name().to_string(),
+            system: S::NAME.to_string(),
             condition,
             gain_floor,
             nis_mean: summary.nis_mean,

@@ -120,7 +120,7 @@ pub struct NotIdentifiable {
     /// Why, in words.
     pub reason: String,
     /// What the model already carries that gives the same innovations (`kind at location`),
-    /// where the system names it ([`LoopSystem::rivals_of`](super::LoopSystem::rivals_of)).
+    /// where the system names it ([`Rivals::carried`](super::system::Rivals::carried)).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub rivals: Vec<String>,
 }

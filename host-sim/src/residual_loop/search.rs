@@ -131,7 +131,7 @@ impl<S: LoopSystem> Engine<'_, S> {
                 .map(|(i, _)| i);
             if let Some(i) = best {
                 let winner = results.swap_remove(self.choose(&results, i));
-                st.not_identifiable.extend(self.rivals(&winner, &results));
+                st.not_identifiable.extend(self.rivals(&st.effects, &winner, &results));
                 chosen = Some(winner);
             }
             evaluated.extend(results);
@@ -352,7 +352,7 @@ pub fn search<S: LoopSystem>(sys: &mut S, options: &LoopOptions) -> Result<LoopR
     });
     Ok(LoopReport {
         schema_version: SCHEMA_VERSION,
-        system: sys.name().to_string(),
+        system: S::NAME.to_string(),
         source: Source { version: env!("CARGO_PKG_VERSION").into(), ..Source::default() },
         effects_added,
         corrections,

@@ -95,7 +95,7 @@ pub trait LoopSystem: Sync {
     /// What a run was made with (the system reads effect values from it).
     type Model: Send;
     /// The system's name in the report.
-    fn name(&self) -> &str;
+    const NAME: &'static str;
     /// Runs the filter with `effects` over the whole recording; an effect with an
     /// [`onset_s`](Applied::onset_s) acts from that time on and is absent before it.
     fn run(&self, effects: &[Applied<Self::Effect>]) -> Result<(Self::Model, Run)>;
@@ -147,18 +147,10 @@ pub trait LoopSystem: Sync {
     fn prestage(&mut self, _run: &Run, _options: &LoopOptions) -> Result<PreStage<Self::Effect>> {
         Ok(PreStage::default())
     }
-    /// What the model (with `effects`) already carries that would take `effect` up whole where
-    /// the data cannot see it (a current for a speed sensor's offset at one heading): named as
-    /// its rivals in `not_identifiable` (none by default).
-    fn rivals_of(&self, _effect: &Self::Effect, _effects: &[Applied<Self::Effect>]) -> Vec<Self::Effect> {
-        Vec::new()
-    }
-    /// Candidates of the last proposal whose responses at the sensors the system's own
-    /// signature analysis finds the same as `winner`'s up to the effect's own states (a 1×
-    /// force at any node of a shaft read at one housing): the sensors cannot tell them apart,
-    /// whatever gap their fits show, so each is listed as the winner's rival (none by default).
-    fn signature_ties(&self, _winner: &Self::Effect) -> Vec<Self::Effect> {
-        Vec::new()
+    /// Who else could explain what `effect` explains, as the system knows it (none by default;
+    /// see [`Rivals`]), with `effects` in the model.
+    fn rivals(&self, _effect: &Self::Effect, _effects: &[Applied<Self::Effect>]) -> Rivals<Self::Effect> {
+        Rivals::default()
     }
     /// The process noise the engine may set from the data before the search (none by default;
     /// see [`tuning`](super::tuning)).
@@ -178,4 +170,24 @@ pub struct TunableNoise {
     /// the value in effect (what the key is taken to hold where the configuration leaves it
     /// out).
     pub keys: Vec<(String, f64)>,
+}
+
+/// The rivals of an effect that the system knows of beyond what the fits show.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Rivals<E> {
+    /// What the model already carries that takes the effect up whole where the data cannot see
+    /// it (a current for a speed sensor's offset at one heading): named as its rivals when the
+    /// effect goes to `not_identifiable`.
+    pub carried: Vec<E>,
+    /// Candidates of the last proposal whose responses at the sensors the system's own
+    /// signature analysis finds the same as the effect's up to its own states (a 1× force at
+    /// any node of a shaft read at one housing): listed as rivals of the effect when it wins,
+    /// whatever gap their fits show.
+    pub tied: Vec<E>,
+}
+
+impl<E> Default for Rivals<E> {
+    fn default() -> Self {
+        Self { carried: Vec::new(), tied: Vec::new() }
+    }
 }

@@ -221,9 +221,7 @@ impl LoopSystem for BoomSystem<'_> {
     type Effect = Effect;
     type Model = ();
 
-    fn name(&self) -> &str {
-        "boom"
-    }
+    const NAME: &'static str = "boom";
 
     fn run(&self, effects: &[Applied<Effect>]) -> Result<((), Run)> {
         let settings = self.settings_with(effects);

@@ -214,9 +214,7 @@ impl LoopSystem for OscillatorSystem<'_> {
     /// Each effect with the index of its first state among the run's tracked states.
     type Model = Vec<(Effect, usize)>;
 
-    fn name(&self) -> &str {
-        "oscillator"
-    }
+    const NAME: &'static str = "oscillator";
 
     /// One model per stretch between onsets: before an effect's onset it is decoupled.
     fn run(&self, effects: &[Applied<Effect>]) -> Result<(Vec<(Effect, usize)>, Run)> {

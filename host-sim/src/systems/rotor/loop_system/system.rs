@@ -8,7 +8,7 @@ use crate::io::config_edit::{ConfigEdit, Op};
 use crate::residual_loop::filter::Run;
 use crate::residual_loop::onset::settled_mean;
 use crate::residual_loop::{
-    Applied, Correction, EffectDetail, EffectLabel, Fitting, LoopOptions, LoopSystem, PreStage, RunSummary,
+    Applied, Correction, EffectDetail, EffectLabel, Fitting, LoopOptions, LoopSystem, PreStage, Rivals, RunSummary,
     SystemSection, Traces,
 };
 use anyhow::Result;
@@ -17,9 +17,7 @@ impl LoopSystem for RotorSystem<'_> {
     type Effect = Effect;
     type Model = AugmentedModel;
 
-    fn name(&self) -> &str {
-        "rotor"
-    }
+    const NAME: &'static str = "rotor";
 
     /// Composes the augmented model (the healthy parts, then the effects; re-reducing the
     /// rotor when a component parameter is changed) and runs the filter over the data.
@@ -43,13 +41,16 @@ impl LoopSystem for RotorSystem<'_> {
         self.propose(s, run, model)
     }
 
-    fn signature_ties(&self, winner: &Effect) -> Vec<Effect> {
-        match *winner {
+    /// A force at an order ties with the other nodes the last proposal found explaining its
+    /// lines as well (see `places`).
+    fn rivals(&self, effect: &Effect, _effects: &[Applied<Effect>]) -> Rivals<Effect> {
+        let tied = match *effect {
             Effect::HarmonicForce { node, order } => {
                 self.steady_rivals(node, order).into_iter().map(|node| Effect::HarmonicForce { node, order }).collect()
             }
             _ => Vec::new(),
-        }
+        };
+        Rivals { carried: Vec::new(), tied }
     }
 
     fn label(&self, e: &Effect) -> EffectLabel {

@@ -27,7 +27,7 @@ use crate::residual_loop::{
     search, Applied, Channel, EffectDetail, EffectKind, EffectLabel, Fitting, LoopOptions, LoopReport, LoopSystem,
     RunSummary, SystemSection, Traces,
 };
-use crate::residual_loop::{Correction, Recording};
+use crate::residual_loop::{Correction, Recording, Rivals};
 use anyhow::Result;
 use edgekf::systems::uuv::{EstimatorSettings, Sample, Vehicle};
 use effect::{Effect, Parameter, Sensor, Thruster, CHANNELS};
@@ -132,9 +132,7 @@ impl LoopSystem for UuvSystem<'_> {
     /// Each effect with the index of its first state among the run's tracked states.
     type Model = Vec<(Effect, usize)>;
 
-    fn name(&self) -> &str {
-        "uuv"
-    }
+    const NAME: &'static str = "uuv";
 
     fn run(&self, effects: &[Applied<Effect>]) -> Result<(Self::Model, Run)> {
         let t = &self.data.t;
@@ -268,13 +266,11 @@ impl LoopSystem for UuvSystem<'_> {
 
     /// A DVL's horizontal offset in the body frame is a current that turns with the vehicle:
     /// while the heading holds, the current the model estimates takes it up whole.
-    fn rivals_of(&self, e: &Effect, effects: &[Applied<Effect>]) -> Vec<Effect> {
+    fn rivals(&self, e: &Effect, effects: &[Applied<Effect>]) -> Rivals<Effect> {
         let horizontal = matches!(e, Effect::DvlOffset(0 | 1) | Effect::Bias(Sensor::Dvl(0 | 1)));
-        if horizontal && self.in_model(Effect::Current, effects) {
-            vec![Effect::Current]
-        } else {
-            Vec::new()
-        }
+        let carried =
+            if horizontal && self.in_model(Effect::Current, effects) { vec![Effect::Current] } else { Vec::new() };
+        Rivals { carried, tied: Vec::new() }
     }
 
     /// A health factor or an offset once settled after its onset, a current's speed, or the
