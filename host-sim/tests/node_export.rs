@@ -64,7 +64,7 @@ fn a_changed_configuration_changes_its_constants_and_no_others() {
     let dir = scratch("changed");
     let boom = read(&Path::new(ROOT).join(SYSTEMS[0].1)).replace("mass = 300.0", "mass = 390.0");
     let uuv = read(&Path::new(ROOT).join(SYSTEMS[1].1)).replace("x_uu = -1.62", "x_uu = -2.106");
-    for ((system, config, committed), text) in SYSTEMS.into_iter().zip([boom, uuv]) {
+    for ((system, _, committed), text) in SYSTEMS.into_iter().zip([boom, uuv]) {
         let path = dir.join(format!("{system}.toml"));
         std::fs::write(&path, text).unwrap();
         let new = export(&dir, system, &path, &format!("{system}.rs"));

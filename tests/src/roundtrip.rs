@@ -153,13 +153,13 @@ impl std::fmt::Display for Figures {
 }
 
 /// Runs `edgekf` with `args` (the CLI's own dispatcher, in this process).
-fn edgekf(args: &[&str]) -> Result<()> {
+pub(crate) fn edgekf(args: &[&str]) -> Result<()> {
     let line = std::iter::once("edgekf").chain(args.iter().copied());
     edgekf_sim::cli::run_with(edgekf_sim::systems::REGISTRY, line).with_context(|| format!("edgekf {}", args.join(" ")))
 }
 
 /// The path as an argument.
-fn arg(p: &Path) -> &str {
+pub(crate) fn arg(p: &Path) -> &str {
     p.to_str().unwrap_or_default()
 }
 
@@ -207,7 +207,7 @@ fn displacement_error(run: &RunReport, scenario: &Scenario) -> Result<f64> {
 }
 
 /// The effects a loop report (`dir/report.json`) added, as `kind at location = value unit`.
-fn effects_added(dir: &Path) -> Result<Vec<String>> {
+pub(crate) fn effects_added(dir: &Path) -> Result<Vec<String>> {
     let path = dir.join("report.json");
     let text = std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
     let json: serde_json::Value = serde_json::from_str(&text)?;
