@@ -13,7 +13,7 @@
 
 use crate::qemu;
 use crate::report::frame;
-use crate::roundtrip::{arg, edgekf, effects_added, ERROR_RATIO_LIMIT};
+use crate::roundtrip::{arg, edgekf, ERROR_RATIO_LIMIT};
 use anyhow::{anyhow, bail, Context, Result};
 use edgekf_firmware::monitor::MismatchFrame;
 use edgekf_firmware::systems::boom::{BoomFrame, SAMPLE_RATE_HZ};
@@ -149,8 +149,16 @@ impl std::fmt::Display for BoomFigures {
             self.corrected_mass
         )?;
         let [b, c, t] = &self.fresh;
-        writeln!(f, "fresh recording, tip-vibration RMS error after {SETTLE_S} s (mismatch frames gyro/inclinometer): shipped node {:.3} mm ({}/{}), corrected {:.3} mm ({}/{}), true-config {:.3} mm ({}/{}); corrected/true = {:.3}",
-            b.error_m * 1e3, b.on(0), b.on(1), c.error_m * 1e3, c.on(0), c.on(1), t.error_m * 1e3, t.on(0), t.on(1), c.error_m / t.error_m)?;
+        let run = |r: &NodeRun| format!("{:.3} mm ({}/{})", r.error_m * 1e3, r.on(0), r.on(1));
+        writeln!(
+            f,
+            "fresh recording, tip-vibration RMS error after {SETTLE_S} s (mismatch frames gyro/inclinometer): \
+             shipped node {}, corrected {}, true-config {}; corrected/true = {:.3}",
+            run(b),
+            run(c),
+            run(t),
+            c.error_m / t.error_m
+        )?;
         writeln!(
             f,
             "the loop with the corrected configuration adds: on the first recording {:?}, on the fresh one {:?}",
@@ -191,8 +199,8 @@ fn node(elf: &Path, csv: &Path) -> Result<NodeRun> {
     Ok(NodeRun { error_m: (sum / n as f64).sqrt(), mismatches })
 }
 
-/// `edgekf loop boom` with `config` on `data` and `statics`, its report in `dir/name/`; the
-/// effects.
+/// `edgekf loop boom` with `config` on `data` (the run and its static record), its report in
+/// `dir/name/`; the effects.
 fn close_loop(
     dir: &Path,
     name: &str,
@@ -200,15 +208,8 @@ fn close_loop(
     data: (&Path, &Path),
     corrected: Option<&Path>,
 ) -> Result<Vec<String>> {
-    let report = dir.join(name);
-    std::fs::create_dir_all(&report)?;
-    let mut args = vec!["loop", "boom", "--quiet", "--config", arg(config), "--data", arg(data.0)];
-    args.extend(["--static", arg(data.1), "--report", arg(&report)]);
-    if let Some(c) = corrected {
-        args.extend(["--corrected-config", arg(c)]);
-    }
-    edgekf(&args)?;
-    effects_added(&report)
+    let args = ["boom", "--config", arg(config), "--data", arg(data.0), "--static", arg(data.1)];
+    crate::roundtrip::close_loop(dir, name, &args, corrected)
 }
 
 /// The round trip of `setup` from the `shipped` image; `build` cross-builds the boom's image
@@ -218,10 +219,7 @@ fn close_loop(
 pub fn boom(setup: &BoomSetup, shipped: &Path, build: &dyn Fn(&Path) -> Result<PathBuf>) -> Result<BoomFigures> {
     let started = Instant::now();
     let dir = &setup.dir;
-    if dir.exists() {
-        std::fs::remove_dir_all(dir).with_context(|| format!("emptying {}", dir.display()))?;
-    }
-    std::fs::create_dir_all(dir)?;
+    crate::roundtrip::empty(dir)?;
     let file = |name: &str| dir.join(name);
     let text = std::fs::read_to_string(crate::cross::workspace_root().join("host-sim/configs/boom_ladder30.toml"))?;
     let declared = file("shipped.toml");

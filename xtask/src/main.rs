@@ -185,35 +185,33 @@ fn loop_matrix(systems: &[String]) -> Result<()> {
 /// `cargo xtask roundtrip <system>`: the oscillator's and the boom's (see
 /// `edgekf_tests::roundtrip` and `edgekf_tests::roundtrip_boom`).
 fn roundtrip(system: Option<&str>) -> Result<()> {
+    use edgekf_tests::{roundtrip, roundtrip_boom};
     let target = std::env::var_os("CARGO_TARGET_DIR")
         .map(std::path::PathBuf::from)
         .unwrap_or_else(|| firmware::workspace_root().join("target"))
         .join("roundtrip");
+    // The image `bin` built as shipped, and a build of it with the model file `var` names.
+    let rebuilds = |bin: &str, var: &'static str, dir: &std::path::Path| {
+        let image = IMAGES.iter().find(|i| i.bin == bin).with_context(|| format!("{bin} is not in the table"))?;
+        let shipped = firmware::build(image)?;
+        step(&format!("the round trip of {bin} in QEMU, files in {}", dir.display()));
+        let build = move |model: &std::path::Path| {
+            firmware::build_env(image, firmware::Proof::NoPanic, &[(var, model.as_os_str())])
+        };
+        Ok::<_, anyhow::Error>((shipped, build))
+    };
     match system {
         Some("oscillator") => {
-            let image = images::default_image();
-            let shipped = firmware::build(image)?;
-            let setup = edgekf_tests::roundtrip::Setup::oscillator(target.join("oscillator"));
-            step(&format!("the oscillator's round trip in QEMU, files in {}", setup.dir.display()));
-            let build = |model: &std::path::Path| {
-                firmware::build_env(image, firmware::Proof::NoPanic, &[("EDGEKF_OSCILLATOR_MODEL", model.as_os_str())])
-            };
-            let figures = edgekf_tests::roundtrip::oscillator(&setup, &shipped, &build)?;
+            let setup = roundtrip::Setup::oscillator(target.join("oscillator"));
+            let (shipped, build) = rebuilds(images::default_image().bin, "EDGEKF_OSCILLATOR_MODEL", &setup.dir)?;
+            let figures = roundtrip::oscillator(&setup, &shipped, &build)?;
             println!("{figures}");
             figures.check(setup.offset_m_s2)
         }
         Some("boom") => {
-            let image = IMAGES
-                .iter()
-                .find(|i| i.bin == <edgekf_firmware::systems::boom::BoomImage as edgekf_firmware::hil::HilImage>::NAME)
-                .context("the boom's image is not in the table")?;
-            let shipped = firmware::build(image)?;
-            let setup = edgekf_tests::roundtrip_boom::BoomSetup::new(target.join("boom"));
-            step(&format!("the boom's round trip in QEMU, files in {}", setup.dir.display()));
-            let build = |model: &std::path::Path| {
-                firmware::build_env(image, firmware::Proof::NoPanic, &[("EDGEKF_BOOM_MODEL", model.as_os_str())])
-            };
-            let figures = edgekf_tests::roundtrip_boom::boom(&setup, &shipped, &build)?;
+            let setup = roundtrip_boom::BoomSetup::new(target.join("boom"));
+            let (shipped, build) = rebuilds("edgekf-boom-qemu", "EDGEKF_BOOM_MODEL", &setup.dir)?;
+            let figures = roundtrip_boom::boom(&setup, &shipped, &build)?;
             println!("{figures}");
             figures.check()
         }

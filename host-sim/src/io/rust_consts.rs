@@ -28,7 +28,8 @@ impl ConstFile {
     /// let mut f = ConstFile::new(&["Generated."]);
     /// f.item("Lag and noise.", "PAIR", "(f64, f64)", &(0.3, 5e-4)).unwrap();
     /// assert!(f.item("Broken.", "BAD", "f64", &f64::NAN).is_err());
-    /// assert_eq!(f.finish(), "// Generated.\n/// Lag and noise.\npub const PAIR: (f64, f64) = (\n    0.3,\n    0.0005,\n);\n");
+    /// let text = "// Generated.\n/// Lag and noise.\npub const PAIR: (f64, f64) = (\n    0.3,\n    0.0005,\n);\n";
+    /// assert_eq!(f.finish(), text);
     /// ```
     pub fn item(&mut self, doc: &str, name: &str, ty: &str, value: &impl Debug) -> Result<&mut Self> {
         let literal = format!("{value:#?}");

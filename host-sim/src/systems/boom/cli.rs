@@ -48,18 +48,7 @@ pub enum BoomCommand {
     /// EDGEKF_BOOM_MODEL names (how a corrected configuration reaches the chip: rebuild and
     /// flash). The gyro's AR(2), noise and bias are `[gyro]`'s where declared, else the
     /// simulator's (the node has no static record).
-    Export(ExportArgs),
-}
-
-/// Arguments of `edgekf boom export`.
-#[derive(Debug, Args)]
-pub struct ExportArgs {
-    /// Configuration (default: host-sim/configs/boom_ladder30.toml).
-    #[arg(long, value_name = "TOML")]
-    pub config: Option<PathBuf>,
-    /// Rust file to write.
-    #[arg(long, value_name = "RS")]
-    pub out: PathBuf,
+    Export(crate::cli::request::ExportArgs),
 }
 
 /// Arguments of `edgekf boom estimate`.

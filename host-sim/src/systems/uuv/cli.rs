@@ -43,18 +43,7 @@ pub enum UuvCommand {
     /// firmware/src/systems/uuv/generated/uuv.rs, or the file the environment variable
     /// EDGEKF_UUV_MODEL names (how a corrected configuration reaches the chip: rebuild and
     /// flash).
-    Export(ExportArgs),
-}
-
-/// Arguments of `edgekf uuv export`.
-#[derive(Debug, Args)]
-pub struct ExportArgs {
-    /// Configuration (default: host-sim/configs/uuv_remus100.toml's values).
-    #[arg(long, value_name = "TOML")]
-    pub config: Option<PathBuf>,
-    /// Rust file to write.
-    #[arg(long, value_name = "RS")]
-    pub out: PathBuf,
+    Export(crate::cli::request::ExportArgs),
 }
 
 /// Arguments of `edgekf uuv simulate`.
