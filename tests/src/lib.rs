@@ -11,7 +11,7 @@
 //! * [`checks`] holds the scenarios and acceptance measures the host and HIL tests share;
 //! * [`cross`] is the firmware's cross-build recipe (xtask's and the round trip's);
 //! * [`roundtrip`] runs the oscillator's round trip: the alarm on the node, the captured window,
-//!   the loop's corrected configuration, the rebuilt node.
+//!   the loop's corrected configuration, the rebuilt node; [`roundtrip_boom`] the boom's.
 #![deny(missing_docs)]
 
 pub mod checks;
@@ -24,6 +24,7 @@ pub mod qemu;
 pub mod report;
 pub mod rotor;
 pub mod roundtrip;
+pub mod roundtrip_boom;
 pub mod soak;
 
 /// Compares two runs block by block and returns a readable description of the first

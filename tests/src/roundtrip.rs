@@ -153,13 +153,13 @@ impl std::fmt::Display for Figures {
 }
 
 /// Runs `edgekf` with `args` (the CLI's own dispatcher, in this process).
-fn edgekf(args: &[&str]) -> Result<()> {
+pub(crate) fn edgekf(args: &[&str]) -> Result<()> {
     let line = std::iter::once("edgekf").chain(args.iter().copied());
     edgekf_sim::cli::run_with(edgekf_sim::systems::REGISTRY, line).with_context(|| format!("edgekf {}", args.join(" ")))
 }
 
 /// The path as an argument.
-fn arg(p: &Path) -> &str {
+pub(crate) fn arg(p: &Path) -> &str {
     p.to_str().unwrap_or_default()
 }
 
@@ -226,17 +226,28 @@ fn effects_added(dir: &Path) -> Result<Vec<String>> {
         .collect())
 }
 
-/// `edgekf loop oscillator` with `config` on `data`, its report in `dir/name/`; the effects.
-fn close_loop(dir: &Path, name: &str, config: &Path, data: &Path, corrected: Option<&Path>) -> Result<Vec<String>> {
+/// `edgekf loop` with `args` (the system, its configuration and data), `--quiet`, its report
+/// in `dir/name/` and the corrected configuration written to `corrected` if given; the effects
+/// it added.
+pub(crate) fn close_loop(dir: &Path, name: &str, args: &[&str], corrected: Option<&Path>) -> Result<Vec<String>> {
     let report = dir.join(name);
     std::fs::create_dir_all(&report)?;
-    let mut args =
-        vec!["loop", "oscillator", "--quiet", "--config", arg(config), "--data", arg(data), "--report", arg(&report)];
+    let mut all = vec!["loop"];
+    all.extend_from_slice(args);
+    all.extend(["--quiet", "--report", arg(&report)]);
     if let Some(c) = corrected {
-        args.extend(["--corrected-config", arg(c)]);
+        all.extend(["--corrected-config", arg(c)]);
     }
-    edgekf(&args)?;
+    edgekf(&all)?;
     effects_added(&report)
+}
+
+/// `dir`, emptied (made if missing).
+pub(crate) fn empty(dir: &Path) -> Result<()> {
+    if dir.exists() {
+        std::fs::remove_dir_all(dir).with_context(|| format!("emptying {}", dir.display()))?;
+    }
+    Ok(std::fs::create_dir_all(dir)?)
 }
 
 /// The round trip of [`Setup`] from the `shipped` image (the committed model's, copied first);
@@ -247,10 +258,7 @@ fn close_loop(dir: &Path, name: &str, config: &Path, data: &Path, corrected: Opt
 pub fn oscillator(setup: &Setup, shipped: &Path, build: &dyn Fn(&Path) -> Result<PathBuf>) -> Result<Figures> {
     let started = Instant::now();
     let dir = &setup.dir;
-    if dir.exists() {
-        std::fs::remove_dir_all(dir).with_context(|| format!("emptying {}", dir.display()))?;
-    }
-    std::fs::create_dir_all(dir)?;
+    empty(dir)?;
     let file = |name: &str| dir.join(name);
     let write = |name: &str, text: String| std::fs::write(file(name), text).map(|_| file(name));
     let run = (setup.duration_s, setup.seed);
@@ -281,7 +289,8 @@ pub fn oscillator(setup: &Setup, shipped: &Path, build: &dyn Fn(&Path) -> Result
     let data = edgekf_sim::io::data::read(&window, &["ax"]).map_err(|e| anyhow!("{}: {e}", window.display()))?.0;
     let window_s = (data.t[0], data.t[data.t.len() - 1]);
     let fixed = file("fixed.toml");
-    let effects = close_loop(dir, "report", &declared, &window, Some(&fixed))?;
+    let effects =
+        close_loop(dir, "report", &["oscillator", "--config", arg(&declared), "--data", arg(&window)], Some(&fixed))?;
     let corrected_offset = Scenario::load(&fixed)?.filter.accel_offset_m_s2;
     let corrected_rs = file("corrected_harmonic.rs");
     edgekf(&["oscillator", "export", "--config", arg(&fixed), "--out", arg(&corrected_rs)])?;
@@ -294,8 +303,10 @@ pub fn oscillator(setup: &Setup, shipped: &Path, build: &dyn Fn(&Path) -> Result
         let report = RunReport::parse(node(elf, &fresh_csv)?.iter().map(String::as_str))?;
         *slot = (displacement_error(&report, &fresh_scenario)?, report.mismatches.len());
     }
-    let on_window = close_loop(dir, "rerun_window", &fixed, &window, None)?;
-    let on_fresh = close_loop(dir, "rerun_fresh", &fixed, &fresh_csv, None)?;
+    let on_window =
+        close_loop(dir, "rerun_window", &["oscillator", "--config", arg(&fixed), "--data", arg(&window)], None)?;
+    let on_fresh =
+        close_loop(dir, "rerun_fresh", &["oscillator", "--config", arg(&fixed), "--data", arg(&fresh_csv)], None)?;
     let seconds = started.elapsed().as_secs_f64();
     let (onset_s, rerun_adds) = (setup.onset_s, (on_window, on_fresh));
     Ok(Figures { onset_s, alarm_s, mismatch, window_s, effects, corrected_offset, fresh, rerun_adds, seconds })

@@ -32,7 +32,7 @@ fn run_host(text: &str) -> (Vec<BoomFrame>, BoomEnd, FileEnd) {
 fn the_nodes_boom_and_sensors_are_the_configurations() {
     use edgekf_sim::systems::boom::estimate::{model_settings, INCLINOMETER_NOISE};
     let c = BoomConfig::default();
-    assert_eq!(node::LADDER30, c.constants().unwrap());
+    assert_eq!(node::BOOM, c.constants().unwrap());
     assert_eq!(node::SAMPLE_RATE_HZ as f64, c.gyro.sample_rate);
     assert_eq!(node::model_settings(), model_settings(&c, node::GYRO, INCLINOMETER_NOISE).unwrap());
     let g = edgekf_sim::systems::boom::sensors::GyroModel::of(&c);

@@ -35,6 +35,21 @@ fn run_host(text: &str) -> (Vec<UuvFrame>, UuvEnd, FileEnd) {
     (per_sample, end, file_end(&out).unwrap())
 }
 
+/// The node's vehicle and estimator are the shipped configuration's, as the host's estimator
+/// builds them (the committed `generated/uuv.rs`, `edgekf uuv export`'s), and the ones the
+/// image ran before they were exported: REMUS 100 and the default settings.
+#[test]
+fn the_nodes_vehicle_and_estimator_are_the_configurations() {
+    use edgekf::systems::uuv::{EstimatorSettings, Vehicle};
+    use edgekf_firmware::systems::uuv as node;
+    assert_eq!((node::VEHICLE, node::ESTIMATOR), (Vehicle::default(), EstimatorSettings::new(node::LAYOUT, 50.0)));
+    let text = include_str!("../../host-sim/configs/uuv_remus100.toml");
+    let c = UuvConfig::from_toml_str(text).unwrap();
+    assert_eq!(f64::from(node::SAMPLE_RATE_HZ), c.sensors.rate);
+    assert_eq!(node::VEHICLE, c.vehicle);
+    assert_eq!(node::ESTIMATOR, c.estimator.settings(c.sensors.rate));
+}
+
 /// Seconds from `at` to the first frame at or after it whose main-thruster status is
 /// `declared` (or healthy when not).
 fn latency(rec: &UuvRecording, frames: &[UuvFrame], at: f64, declared: bool) -> f64 {

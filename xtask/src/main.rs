@@ -27,6 +27,9 @@
 //!   mid-run → the node's `mismatch` → its window → `edgekf capture` → `edgekf loop
 //!   --corrected-config` → `edgekf oscillator export` → the rebuilt node on a fresh recording;
 //!   prints the figures and checks them (files in `target/roundtrip/oscillator/`).
+//! * `cargo xtask roundtrip boom` — the boom's: a heavier platform → the node's `mismatch` →
+//!   `edgekf loop boom --corrected-config` on the uploaded recording → `edgekf boom export` →
+//!   the rebuilt node on a fresh recording (files in `target/roundtrip/boom/`).
 //! * `cargo xtask provision` — install what a fresh Debian machine lacks (as root), or say what.
 //!
 //! Every build proves its image panic-free at link time (feature `no-panic-proof`); a failed
@@ -97,7 +100,7 @@ fn run() -> Result<()> {
         }
         _ => {
             eprintln!(
-                "usage: cargo xtask <test [--long] | fw [{0}] | panics [{0}] | run [--data FILE.csv] | bench [--check] | soak | fuzz [--seconds N] [TARGET…] | loop-matrix [SYSTEM…] | roundtrip oscillator | provision>",
+                "usage: cargo xtask <test [--long] | fw [{0}] | panics [{0}] | run [--data FILE.csv] | bench [--check] | soak | fuzz [--seconds N] [TARGET…] | loop-matrix [SYSTEM…] | roundtrip oscillator|boom | provision>",
                 images::flags()
             );
             std::process::exit(2);
@@ -122,7 +125,7 @@ fn test(long: bool) -> Result<()> {
     let mut hil = cargo_here();
     hil.args(["test", "-p", "edgekf-tests", "--features", "hil"]);
     let mut tests: Vec<&str> = Vec::new();
-    let mut oscillator = None;
+    let (mut oscillator, mut boom) = (None, None);
     for image in IMAGES.iter().filter(|i| i.role != Role::Bench) {
         step(&format!("firmware: cross-build {} and prove it panic-free", image.what));
         let elf = firmware::build(image)?;
@@ -132,6 +135,9 @@ fn test(long: bool) -> Result<()> {
         }
         if let Role::Hil { env, tests: these } = image.role {
             hil.env(env, &elf);
+            if env == "EDGEKF_BOOM_ELF" {
+                boom = Some(elf.clone());
+            }
             for t in these {
                 if !tests.contains(t) {
                     tests.push(t);
@@ -152,10 +158,15 @@ fn test(long: bool) -> Result<()> {
 
     // Last: it rebuilds the oscillator's image with other constants (the ELF the HIL tests
     // read is then the corrected model's until the next build).
-    step("the oscillator's round trip in QEMU (tests/roundtrip.rs)");
+    // With --long, the boom's too (it rebuilds the boom's image the same way).
+    step("the round trips in QEMU (tests/roundtrip.rs: the oscillator's; the boom's with --long)");
     let mut rt = cargo_here();
     rt.args(["test", "-p", "edgekf-tests", "--features", "hil", "--test", "roundtrip"]);
-    rt.args(["--", "--nocapture"]).env("EDGEKF_FW_ELF", oscillator.context("no oscillator image was built")?);
+    rt.args(["--", "--nocapture", "--test-threads", "1"]);
+    rt.env("EDGEKF_FW_ELF", oscillator.context("no oscillator image was built")?);
+    if long {
+        rt.env("EDGEKF_LONG", "1").env("EDGEKF_BOOM_ELF", boom.context("no boom image was built")?);
+    }
     status(rt, "the round trip")?;
     step("all tests passed");
     Ok(())
@@ -171,25 +182,41 @@ fn loop_matrix(systems: &[String]) -> Result<()> {
     status(run, "the effect matrices")
 }
 
-/// `cargo xtask roundtrip <system>`: the oscillator's only, so far (see
-/// `edgekf_tests::roundtrip`).
+/// `cargo xtask roundtrip <system>`: the oscillator's and the boom's (see
+/// `edgekf_tests::roundtrip` and `edgekf_tests::roundtrip_boom`).
 fn roundtrip(system: Option<&str>) -> Result<()> {
-    if system != Some("oscillator") {
-        bail!("roundtrip: give the system; the round trip exists for: oscillator");
-    }
-    let image = images::default_image();
-    let shipped = firmware::build(image)?;
+    use edgekf_tests::{roundtrip, roundtrip_boom};
     let target = std::env::var_os("CARGO_TARGET_DIR")
         .map(std::path::PathBuf::from)
-        .unwrap_or_else(|| firmware::workspace_root().join("target"));
-    let setup = edgekf_tests::roundtrip::Setup::oscillator(target.join("roundtrip").join("oscillator"));
-    step(&format!("the oscillator's round trip in QEMU, files in {}", setup.dir.display()));
-    let build = |model: &std::path::Path| {
-        firmware::build_env(image, firmware::Proof::NoPanic, &[("EDGEKF_OSCILLATOR_MODEL", model.as_os_str())])
+        .unwrap_or_else(|| firmware::workspace_root().join("target"))
+        .join("roundtrip");
+    // The image `bin` built as shipped, and a build of it with the model file `var` names.
+    let rebuilds = |bin: &str, var: &'static str, dir: &std::path::Path| {
+        let image = IMAGES.iter().find(|i| i.bin == bin).with_context(|| format!("{bin} is not in the table"))?;
+        let shipped = firmware::build(image)?;
+        step(&format!("the round trip of {bin} in QEMU, files in {}", dir.display()));
+        let build = move |model: &std::path::Path| {
+            firmware::build_env(image, firmware::Proof::NoPanic, &[(var, model.as_os_str())])
+        };
+        Ok::<_, anyhow::Error>((shipped, build))
     };
-    let figures = edgekf_tests::roundtrip::oscillator(&setup, &shipped, &build)?;
-    println!("{figures}");
-    figures.check(setup.offset_m_s2)
+    match system {
+        Some("oscillator") => {
+            let setup = roundtrip::Setup::oscillator(target.join("oscillator"));
+            let (shipped, build) = rebuilds(images::default_image().bin, "EDGEKF_OSCILLATOR_MODEL", &setup.dir)?;
+            let figures = roundtrip::oscillator(&setup, &shipped, &build)?;
+            println!("{figures}");
+            figures.check(setup.offset_m_s2)
+        }
+        Some("boom") => {
+            let setup = roundtrip_boom::BoomSetup::new(target.join("boom"));
+            let (shipped, build) = rebuilds("edgekf-boom-qemu", "EDGEKF_BOOM_MODEL", &setup.dir)?;
+            let figures = roundtrip_boom::boom(&setup, &shipped, &build)?;
+            println!("{figures}");
+            figures.check()
+        }
+        _ => bail!("roundtrip: give the system; the round trip exists for: oscillator, boom"),
+    }
 }
 
 /// The long QEMU soak: the soak image on every filter's `qemu_long_steps`, with the

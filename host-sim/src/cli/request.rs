@@ -1,5 +1,6 @@
 //! What the command line asks of a system: the requests its registry row's functions take
-//! (`edgekf loop`, `edgekf baseline`, `edgekf demo`), apart from the commands that build them,
+//! (`edgekf loop`, `edgekf baseline`, `edgekf demo`) and the arguments systems' commands share
+//! (`export`), apart from the commands that build them,
 //! so that a system and the registry depend on these types and on nothing else of `cli`.
 
 use crate::residual_loop::baseline::BaselineSource;
@@ -118,4 +119,16 @@ pub fn fill_source(report: &mut LoopReport, data: &Path, config: &Path, command_
     report.source.data = Some(data.display().to_string());
     report.source.config = Some(config.display().to_string());
     report.source.command = Some(command_line.to_string());
+}
+
+/// Arguments of `edgekf boom export` and `edgekf uuv export`: a node's constants from a
+/// configuration, as Rust source its image compiles in.
+#[derive(Debug, Clone, Args)]
+pub struct ExportArgs {
+    /// Configuration (default: the system's shipped one, in host-sim/configs/).
+    #[arg(long, value_name = "TOML")]
+    pub config: Option<PathBuf>,
+    /// Rust file to write.
+    #[arg(long, value_name = "RS")]
+    pub out: PathBuf,
 }

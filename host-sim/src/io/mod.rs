@@ -5,4 +5,5 @@ pub mod config_edit;
 pub mod data;
 pub mod output;
 pub mod recording;
+pub mod rust_consts;
 pub mod timeline;

@@ -1,8 +1,10 @@
 //! Boom tip vibration on the node: both of the shared estimators in `f32` side by side, the
 //! model-based filter ([`edgekf::systems::boom::ModelEstimator`]) and the paper's method
-//! ([`edgekf::systems::boom::PaperEstimator`]), on the boom of
-//! `host-sim/configs/boom_ladder30.toml` ([`LADDER30`], restated here; a cross-crate test
-//! checks it against the file) with its declared sensors.
+//! ([`edgekf::systems::boom::PaperEstimator`]), on the boom and sensors of a configuration,
+//! exported on the host (`edgekf boom export`) into `generated/boom.rs` (the shipped
+//! `host-sim/configs/boom_ladder30.toml`'s; a cross-crate test checks it against the file). An
+//! image built with `EDGEKF_BOOM_MODEL=path/to/boom.rs` compiles that file in instead (see
+//! `build.rs`): how a corrected configuration (the loop's tip mass) reaches the chip.
 //!
 //! Input: `gyro_rate`, `incl_angle`, `boom_length`, `luff_rate_cmd` ([`CHANNELS`]) at
 //! [`SAMPLE_RATE_HZ`]. Output: a [`BoomFrame`] per sample and a [`BoomEnd`] at the end of the
@@ -19,17 +21,13 @@ use edgekf::residual::MonitorSettings;
 use crate::node::{Innovation, NodeEstimator, Poll};
 use crate::source::ChannelSource;
 use edgekf::systems::boom::{
-    Ar2, BoomConstants, BoomSection, ModelError, ModelEstimate, ModelEstimator, ModelSettings, PaperEstimator,
-    PaperSettings, MAX_SECTIONS,
+    ModelError, ModelEstimate, ModelEstimator, ModelSettings, PaperEstimator, PaperSettings,
 };
 
 #[cfg(all(target_os = "none", feature = "qemu"))]
 pub mod bench;
 pub mod images;
 pub mod soak;
-
-/// Sample rate, Hz (`[gyro] sample_rate`).
-pub const SAMPLE_RATE_HZ: u32 = 100;
 
 /// The model monitor's settings: the shipped false-alarm rate (one per 100 h) at
 /// [`SAMPLE_RATE_HZ`], tests from 2 s after start-up (the filter starts from the boom at rest
@@ -45,40 +43,26 @@ pub fn monitor_settings() -> MonitorSettings {
 /// The input channels, in the data file's names.
 pub const CHANNELS: [&str; 4] = ["gyro_rate", "incl_angle", "boom_length", "luff_rate_cmd"];
 
-const fn section(length: f64, ei: f64, mass_per_length: f64) -> BoomSection {
-    BoomSection { length, ei, mass_per_length }
+#[allow(missing_docs, clippy::excessive_precision, clippy::unreadable_literal)]
+mod constants {
+    use edgekf::systems::boom::{Ar2, BoomConstants, BoomSection};
+    include!(concat!(env!("OUT_DIR"), "/boom.rs"));
 }
 
-/// The ladder of `boom_ladder30.toml`: four steel box sections of 9.6 m, a 300 kg platform.
-pub const LADDER30: BoomConstants = {
-    let unused = section(1.0, 1.0, 1.0);
-    let mut sections = [unused; MAX_SECTIONS];
-    sections[0] = section(9.6, 1.628e8, 150.0);
-    sections[1] = section(9.6, 1.0e8, 110.0);
-    sections[2] = section(9.6, 5.8e7, 80.0);
-    sections[3] = section(9.6, 3.0e7, 55.0);
-    BoomConstants { sections, count: 4, tip_mass: 300.0, tip_inertia: 75.0, gravity: 9.81 }
-};
+/// The node's boom and sensors, compiled in from `edgekf boom export`'s file (see the module
+/// doc): the sample rate (`[gyro] sample_rate`), the boom ([`BOOM`]: sections, platform,
+/// gravity), `[damping] zeta`, `[drive]` (lag, acceleration limit), the gyro's noise model
+/// ([`GYRO`]: the declared one, or the simulator's), `[gyro] scale` and `[inclinometer]` (lag,
+/// offset, noise).
+pub use constants::{BOOM, DRIVE, GYRO, GYRO_SCALE, INCLINOMETER, SAMPLE_RATE_HZ, ZETA};
 
-/// The declared gyro's noise and bias: the paper's AR(2), 3e-4 rad/s of driving noise, 2e-3
-/// rad/s of bias (the simulator's defaults).
-pub const GYRO: Ar2 = Ar2 { a: [-0.6538, 0.06745], sigma: 3e-4, mean: 2e-3 };
-
-/// `[damping] zeta`.
-pub const ZETA: [f64; 2] = [0.015, 0.020];
-/// `[drive]`: lag (s) and acceleration limit (rad/s²).
-pub const DRIVE: (f64, f64) = (0.15, 0.3);
-/// `[inclinometer]`: lag (s), offset (rad), and the simulator's default noise (rad).
-pub const INCLINOMETER: (f64, f64, f64) = (0.30, 0.0, 5e-4);
-/// `[gyro] scale`.
-pub const GYRO_SCALE: f64 = 1.0;
 /// The length the filter is built at before the first row says otherwise, m.
 const START_LENGTH: f64 = 30.0;
 
 /// The model-based filter's settings.
 pub fn model_settings() -> ModelSettings {
     let dt = 1.0 / f64::from(SAMPLE_RATE_HZ);
-    ModelSettings::new(dt, LADDER30, ZETA, DRIVE, GYRO_SCALE, GYRO, INCLINOMETER)
+    ModelSettings::new(dt, BOOM, ZETA, DRIVE, GYRO_SCALE, GYRO, INCLINOMETER)
 }
 
 /// The paper's method's settings.

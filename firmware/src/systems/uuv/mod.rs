@@ -1,7 +1,10 @@
 //! Underwater vehicle thruster health on the node: the shared joint UKF of the vehicle's state
 //! and its thrusters' health factors ([`edgekf::systems::uuv::UuvEstimator`], 20 states: both
 //! health factors, the six IMU biases and the current) with its CUSUM per thruster, in `f32`,
-//! on the defaults of `host-sim/configs/uuv_remus100.toml` (REMUS 100, 50 Hz).
+//! on a configuration's vehicle and estimator, exported on the host (`edgekf uuv export`) into
+//! `generated/uuv.rs` (the shipped `host-sim/configs/uuv_remus100.toml`'s: REMUS 100, 50 Hz; a
+//! cross-crate test checks it against the file). An image built with
+//! `EDGEKF_UUV_MODEL=path/to/uuv.rs` compiles that file in instead (see `build.rs`).
 //!
 //! Input: the vehicle data file's 15 channels ([`CHANNELS`]); the DVL's cells are empty between
 //! its readings and are read as missing, not as bad lines. Output: a [`UuvFrame`] per sample,
@@ -14,7 +17,7 @@ use crate::line_feed::{ByteSource, ChannelReader};
 use crate::node::{Innovation, NodeEstimator, Poll};
 use crate::source::ChannelSource;
 use edgekf::systems::uuv::{
-    Command, Estimate, EstimatorError, EstimatorSettings, Layout, Sample, Status, UuvEstimator, Vehicle,
+    Command, Estimate, EstimatorError, Layout, Sample, Status, UuvEstimator,
 };
 
 #[cfg(all(target_os = "none", feature = "qemu"))]
@@ -22,11 +25,22 @@ pub mod bench;
 pub mod images;
 pub mod soak;
 
-/// Sample rate, Hz (`sensors.rate`).
-pub const SAMPLE_RATE_HZ: u32 = 50;
+#[allow(missing_docs, clippy::excessive_precision, clippy::unreadable_literal)]
+mod constants {
+    use edgekf::systems::uuv::{
+        Actuators, DetectorSettings, EstimatorSettings, Hydro, InitialSpread, Layout, MeasurementNoise, ProcessNoise,
+        Vehicle,
+    };
+    include!(concat!(env!("OUT_DIR"), "/uuv.rs"));
+}
 
-/// The filter's states: both health factors, the biases and the current.
-pub const LAYOUT: Layout = Layout { main: true, vertical: true, biases: true, current: true };
+/// The node's vehicle and estimator, compiled in from `edgekf uuv export`'s file (see the
+/// module doc): the sample rate (`[sensors] rate`), the vehicle (`[vehicle]`) and the
+/// estimator's settings (`[estimator]`).
+pub use constants::{ESTIMATOR, SAMPLE_RATE_HZ, VEHICLE};
+
+/// The filter's states (the shipped file's: both health factors, the biases and the current).
+pub const LAYOUT: Layout = ESTIMATOR.layout;
 
 /// Its size.
 pub const STATES: usize = LAYOUT.len();
@@ -76,9 +90,9 @@ pub fn sample(row: Option<[f32; 15]>) -> Sample<f32> {
     }
 }
 
-/// The built-in estimator: REMUS 100 and the default settings at [`SAMPLE_RATE_HZ`].
+/// The built-in estimator: [`VEHICLE`] and [`ESTIMATOR`].
 pub fn estimator() -> Result<UuvEstimator<f32, STATES>, EstimatorError> {
-    UuvEstimator::new(&Vehicle::default(), &EstimatorSettings::new(LAYOUT, f64::from(SAMPLE_RATE_HZ)))
+    UuvEstimator::new(&VEHICLE, &ESTIMATOR)
 }
 
 /// The node: the estimator, the samples stepped, and the last estimate until it is reported.

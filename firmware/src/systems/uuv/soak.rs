@@ -11,7 +11,7 @@ use crate::hil::HilImage;
 use super::{estimator, LAYOUT, SAMPLE_RATE_HZ, STATES};
 use crate::soak::engine::{Blocks, Drift, Noise, SoakFrame, SoakRow};
 use edgekf::systems::uuv::{
-    wrap, Command, Drive, MeasurementNoise, ProcessNoise, ReducedDynamics, Sample, Status, Vehicle, VELOCITY,
+    wrap, Command, Drive, ReducedDynamics, Sample, Status, VELOCITY,
 };
 use nalgebra::SVector;
 
@@ -43,7 +43,7 @@ const DVL_EVERY: u32 = 10;
 /// The soak (see the module docs); `n` samples.
 #[inline(never)]
 pub fn uuv(n: u32) -> SoakFrame {
-    let vehicle = Vehicle::default();
+    let vehicle = super::VEHICLE;
     let (Ok(mut est), Some(dynamics)) = (estimator(), ReducedDynamics::<f32>::new(&vehicle)) else {
         return crate::soak::engine::not_started(n);
     };
@@ -63,13 +63,13 @@ pub fn uuv(n: u32) -> SoakFrame {
     }
     put(&mut x, current, 0.1);
     put(&mut x, current + 1, -0.05);
-    let process = ProcessNoise::default();
+    let process = super::ESTIMATOR.process;
     let per_step = |density: f64| (density * libm::sqrt(dt)) as f32;
     // Per step: depth, the three attitudes, the three velocities, the three rates.
     let (d, a, v, r) =
         (per_step(process.depth), per_step(process.attitude), per_step(process.velocity), per_step(process.rate));
     let sd: [f32; 10] = [d, a, a, a, v, v, v, r, r, r];
-    let sensors = MeasurementNoise::default();
+    let sensors = super::ESTIMATOR.noise;
     let (acc_sd, gyro_sd) = (sensors.acc as f32, sensors.gyro as f32);
     let (depth_sd, heading_sd, dvl_sd) = (sensors.depth as f32, sensors.heading as f32, sensors.dvl as f32);
     let a = &vehicle.actuators;

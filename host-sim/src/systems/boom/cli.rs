@@ -5,6 +5,7 @@
 //!                      --out data.csv [--static static.csv]
 //! edgekf boom estimate [--config C] --data data.csv --static static.csv [--method model|paper] --out est.csv
 //!                      [--plot vibration.svg] [--json]
+//! edgekf boom export [--config C] --out boom.rs
 //! ```
 
 use super::config::BoomConfig;
@@ -39,6 +40,15 @@ pub enum BoomCommand {
     /// equilibrium), tip_deflection (m, with the model's sag; empty for the paper's method,
     /// which has no sag). With truth_tip_vibration in the data, prints the peak errors.
     Estimate(EstimateArgs),
+    /// Write the node's boom and sensors (sections, platform, damping, drive, the gyro's noise
+    /// model, the inclinometer) as Rust constants.
+    ///
+    /// The boom image compiles such a file in with `include!`: the committed
+    /// firmware/src/systems/boom/generated/boom.rs, or the file the environment variable
+    /// EDGEKF_BOOM_MODEL names (how a corrected configuration reaches the chip: rebuild and
+    /// flash). The gyro's AR(2), noise and bias are `[gyro]`'s where declared, else the
+    /// simulator's (the node has no static record).
+    Export(crate::cli::request::ExportArgs),
 }
 
 /// Arguments of `edgekf boom estimate`.
@@ -98,6 +108,14 @@ pub fn run(command: BoomCommand) -> anyhow::Result<()> {
     match command {
         BoomCommand::Simulate(args) => simulate_command(args),
         BoomCommand::Estimate(args) => estimate_command(args),
+        BoomCommand::Export(args) => {
+            check(&[Some(args.out.as_path())], &[args.config.as_deref()])?;
+            let config = load(args.config.as_deref())?;
+            let text = super::export::node_constants(&config)?;
+            write_atomic(&args.out, text).with_context(|| format!("cannot write {}", args.out.display()))?;
+            println!("wrote {}: the node's boom ({} kg platform) and sensors", args.out.display(), config.tip.mass);
+            Ok(())
+        }
     }
 }
 

@@ -14,7 +14,8 @@
 //! * [`peaks`]: the peak error of the paper's Table 1;
 //! * [`ablation`]: the paper's method with each step replaced by what it stands for;
 //! * [`matrix`]: the loop's effect matrix on the simulator's runs;
-//! * [`cli`]: `edgekf boom simulate | estimate`.
+//! * [`export`](mod@export): the node's constants from a configuration;
+//! * [`cli`]: `edgekf boom simulate | estimate | export`.
 
 pub mod ablation;
 pub mod band;
@@ -22,6 +23,7 @@ pub mod beam;
 pub mod cli;
 pub mod config;
 pub mod estimate;
+pub mod export;
 pub mod loop_system;
 pub mod matrix;
 pub mod modal;

@@ -4,6 +4,7 @@
 //! edgekf uuv simulate [--config C] --scenario paper|vertical|healthy [--duration 300] [--seed 1]
 //!                     [--rate 50] --out data.csv
 //! edgekf uuv estimate [--config C] --data data.csv --out est.csv [--plot health.svg] [--json]
+//! edgekf uuv export [--config C] --out uuv.rs
 //! ```
 
 use super::config::UuvConfig;
@@ -35,6 +36,14 @@ pub enum UuvCommand {
     /// failed), x, y, z, phi, theta, psi, u, v, w, p, q, r, then the nuisance states. A
     /// thruster without a health state has empty k and status columns.
     Estimate(EstimateArgs),
+    /// Write the node's vehicle and estimator (`[vehicle]`, `[estimator]`, `[sensors] rate`)
+    /// as Rust constants.
+    ///
+    /// The vehicle image compiles such a file in with `include!`: the committed
+    /// firmware/src/systems/uuv/generated/uuv.rs, or the file the environment variable
+    /// EDGEKF_UUV_MODEL names (how a corrected configuration reaches the chip: rebuild and
+    /// flash).
+    Export(crate::cli::request::ExportArgs),
 }
 
 /// Arguments of `edgekf uuv simulate`.
@@ -87,6 +96,13 @@ pub fn run(command: UuvCommand) -> anyhow::Result<()> {
     match command {
         UuvCommand::Simulate(a) => simulate_command(a),
         UuvCommand::Estimate(a) => estimate_command(a),
+        UuvCommand::Export(a) => {
+            check(&[Some(&a.out)], &[a.config.as_deref()])?;
+            let text = super::export::node_constants(&load(a.config.as_deref())?)?;
+            write_atomic(&a.out, text).with_context(|| format!("cannot write {}", a.out.display()))?;
+            println!("wrote {}: the node's vehicle and estimator", a.out.display());
+            Ok(())
+        }
     }
 }
 

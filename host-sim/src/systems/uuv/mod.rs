@@ -11,13 +11,15 @@
 //! * [`loop_system`]: the vehicle as a system of the residual loop (`edgekf loop uuv`);
 //! * [`matrix`]: its effect matrix (`cargo xtask loop-matrix uuv`);
 //! * [`plot`]: the health factors against truth (`edgekf uuv estimate --plot`);
-//! * [`cli`]: `edgekf uuv simulate | estimate`, `edgekf loop uuv`.
+//! * [`export`](mod@export): the node's constants from a configuration;
+//! * [`cli`]: `edgekf uuv simulate | estimate | export`, `edgekf loop uuv`.
 
 pub mod autopilot;
 pub mod cli;
 pub mod config;
 mod error;
 pub mod estimate;
+pub mod export;
 pub mod loop_system;
 pub mod matrix;
 pub mod plot;
