@@ -10,7 +10,8 @@
 //! * [`history`]: `edgekf loop <system> --data FOLDER`: every recording of a folder, and the
 //!   machine's history (`trend.csv`, `trend.html`);
 //! * [`baseline`]: `edgekf baseline <system>`: a healthy baseline learned from a recording;
-//! * [`demo`]: `edgekf demo`: every system's demo part in the registry's order;
+//! * [`demo`]: `edgekf demo`: every system's demo part in the registry's order; [`demo_loop`],
+//!   a part that closes a system's loop on files it can be rerun from;
 //! * [`capture`]: `edgekf capture`: a node's handed-over window as a recording.
 //!
 //! ```
@@ -23,6 +24,7 @@
 pub mod baseline;
 pub mod capture;
 pub mod demo;
+pub mod demo_loop;
 pub mod history;
 pub mod looping;
 pub mod registry;

@@ -21,6 +21,7 @@ pub mod band;
 pub mod beam;
 pub mod cli;
 pub mod config;
+pub mod demo;
 pub mod estimate;
 pub mod loop_system;
 pub mod matrix;
