@@ -7,13 +7,16 @@
 use edgekf_sim::{cli, systems};
 use std::collections::{BTreeMap, BTreeSet};
 
-/// The section's text, from its heading to the next `## ` heading.
+/// The section's text, from its heading to the next `## ` heading, without the `cargo …`
+/// code spans (their flags are cargo's).
 fn cli_section() -> String {
     let readme = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../README.md")).unwrap();
     let start = readme.find("## The `edgekf` command line").expect("the README has its CLI section");
     let rest = &readme[start..];
     let end = rest[3..].find("\n## ").map_or(rest.len(), |i| i + 3);
-    rest[..end].to_string()
+    let parts: Vec<&str> = rest[..end].split('`').collect();
+    let kept = parts.iter().enumerate().filter(|(i, p)| i % 2 == 0 || !p.starts_with("cargo "));
+    kept.map(|(_, p)| *p).collect::<Vec<_>>().join("`")
 }
 
 /// `--flag` words in `text` (letters, digits and dashes after the two dashes).
@@ -117,4 +120,52 @@ fn the_checker_sees_a_missing_and_an_extra_flag() {
     assert!(real.contains("data") && !uuv.contains("data"), "--data is missing from the made-up line");
     assert!(uuv.contains("bogus") && !real.contains("bogus"));
     assert_eq!(flags("a --x-y, not a-b--c, (`--json`)"), BTreeSet::from(["x-y".to_string(), "json".to_string()]));
+}
+
+/// No command's text is a flag struct's doc that `augment_args` left behind (`edgekf loop
+/// --help` once described its subcommands as "the flags of every `edgekf loop <system>`" and
+/// "`edgekf loop boom`'s own flag").
+#[test]
+fn no_command_describes_itself_as_its_flags() {
+    fn walk(cmd: &clap::Command, path: &str, wrong: &mut Vec<String>) {
+        for text in [cmd.get_about(), cmd.get_long_about()].into_iter().flatten() {
+            let text = text.to_string();
+            if text.contains("own flag") || text.starts_with("The flags of") {
+                wrong.push(format!("`edgekf{path}`: {text}"));
+            }
+        }
+        for sub in cmd.get_subcommands() {
+            walk(sub, &format!("{path} {}", sub.get_name()), wrong);
+        }
+    }
+    let mut wrong = Vec::new();
+    walk(&cli::command(systems::REGISTRY), "", &mut wrong);
+    assert!(wrong.is_empty(), "{}", wrong.join("\n"));
+}
+
+/// A flag value outside the range its flag allows is a usage error, as a malformed one is:
+/// clap's message naming the flag and exit code 2, before any file is read or written.
+#[test]
+fn flag_values_out_of_range_are_usage_errors() {
+    let out_csv = std::env::temp_dir().join(format!("edgekf-usage-{}.csv", std::process::id()));
+    let out = out_csv.to_str().unwrap();
+    let rotor = concat!(env!("CARGO_MANIFEST_DIR"), "/configs/rotor_paper.toml");
+    let cases: [&[&str]; 8] = [
+        &["loop", "rotor", "--config", rotor, "--data", "absent.csv", "--report", "r", "--estimate-speed", "10"],
+        &["rotor", "simulate", "--config", rotor, "--duration", "-1", "--out", out],
+        &["rotor", "campbell", "--config", rotor, "--steps", "1"],
+        &["rotor", "tune", "--config", rotor, "--budget", "4"],
+        &["boom", "simulate", "--scenario", "luffing", "--duration", "0", "--out", out],
+        &["boom", "simulate", "--scenario", "luffing", "--duration", "7200", "--out", out],
+        &["uuv", "simulate", "--scenario", "healthy", "--duration", "0", "--out", out],
+        &["crank", "simulate", "--clearance", "A=1e-4", "--duration", "-1", "--out", out],
+    ];
+    for args in cases {
+        let run = std::process::Command::new(env!("CARGO_BIN_EXE_edgekf")).args(args).output().unwrap();
+        let stderr = String::from_utf8_lossy(&run.stderr);
+        assert_eq!(run.status.code(), Some(2), "{args:?}: {stderr}");
+        let flag = args.iter().rev().find(|a| a.starts_with("--") && **a != "--out").unwrap();
+        assert!(stderr.contains("invalid value") && stderr.contains(flag), "{args:?}: {stderr}");
+        assert!(!out_csv.exists(), "{args:?} wrote its output");
+    }
 }

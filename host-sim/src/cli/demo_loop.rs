@@ -6,7 +6,7 @@
 use super::request::{DemoArgs, LoopRequest};
 use crate::io::output::{check_folder, write_atomic};
 use crate::report::text::{show_value, write_report, REPORT_FILES};
-use crate::residual_loop::{LoopOptions, LoopReport};
+use crate::residual_loop::{LoopOptions, LoopReport, RunSummary};
 use anyhow::{Context, Result};
 use clap::Args;
 use std::path::{Path, PathBuf};
@@ -92,6 +92,28 @@ fn close_in(dir: &Path, inputs: &LoopInputs, keep: bool) -> Result<LoopReport> {
 /// An error figure of a part's result: its label, unit, and value before and after the loop.
 pub type ErrorFigure<'a> = (&'a str, &'a str, f64, f64);
 
+/// The error a part shows: its label, unit, and where a run's summary has it (`None` where the
+/// recording has no truth).
+pub struct ErrorOf {
+    /// Its label (`tip peak error`).
+    pub label: &'static str,
+    /// Its unit after the number (`" %"`, or empty).
+    pub unit: &'static str,
+    /// Its value in a run's summary.
+    pub of: fn(&RunSummary) -> Option<f64>,
+}
+
+/// Prints the part's result line (its `error` before and after) and, with `--out`, where its
+/// files are and the command that reruns the report.
+pub fn say(args: &DemoArgs, report: &LoopReport, error: &ErrorOf) {
+    let figure = (error.of)(&report.before).zip((error.of)(&report.after)).map(|(b, a)| (error.label, error.unit, b, a));
+    println!("  {}", result_line(report, figure));
+    if let Some(out) = &args.out {
+        println!("wrote the data, the declared model and the report in {}", out.join(&report.system).display());
+        println!("rerun: {}", report.source.command.as_deref().unwrap_or_default());
+    }
+}
+
 /// The part's one-line result: each effect the loop added with its value, and `error` before
 /// and after the loop where the recording has the truth.
 pub fn result_line(report: &LoopReport, error: Option<ErrorFigure<'_>>) -> String {
@@ -105,12 +127,4 @@ pub fn result_line(report: &LoopReport, error: Option<ErrorFigure<'_>>) -> Strin
         .map(|(label, unit, before, after)| format!("; {label} {before:.3}{unit} → {after:.3}{unit}"))
         .unwrap_or_default();
     format!("loop adds: {added}{error}")
-}
-
-/// What a part prints after its result when it wrote its files.
-pub fn say_written(args: &DemoArgs, report: &LoopReport) {
-    if let Some(out) = &args.out {
-        println!("wrote the data, the declared model and the report in {}", out.join(&report.system).display());
-        println!("rerun: {}", report.source.command.as_deref().unwrap_or_default());
-    }
 }

@@ -12,7 +12,8 @@
 //! * [`baseline`]: `edgekf baseline <system>`: a healthy baseline learned from a recording;
 //! * [`demo`]: `edgekf demo`: every system's demo part in the registry's order; [`demo_loop`],
 //!   a part that closes a system's loop on files it can be rerun from;
-//! * [`capture`]: `edgekf capture`: a node's handed-over window as a recording.
+//! * [`capture`]: `edgekf capture`: a node's handed-over window as a recording;
+//! * [`values`]: flag values checked as clap parses them (out of range: a usage error).
 //!
 //! ```
 //! use edgekf_sim::{cli, systems};
@@ -29,6 +30,7 @@ pub mod history;
 pub mod looping;
 pub mod registry;
 pub mod request;
+pub mod values;
 
 pub use registry::{DemoPart, LoopEntry, SystemEntry};
 

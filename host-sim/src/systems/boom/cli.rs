@@ -78,8 +78,8 @@ pub struct SimulateArgs {
     /// The run.
     #[arg(long, value_enum)]
     pub scenario: Scenario,
-    /// Length, s.
-    #[arg(long, value_name = "S", default_value_t = 120.0)]
+    /// Length, s (up to an hour).
+    #[arg(long, value_name = "S", default_value_t = 120.0, value_parser = crate::cli::values::up_to_an_hour)]
     pub duration: f64,
     /// Seed of the sensors' noise.
     #[arg(long, value_name = "N", default_value_t = 1)]

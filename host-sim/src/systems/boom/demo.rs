@@ -4,7 +4,7 @@
 //! bring the tip's peak error back down.
 
 use super::{simulate, BoomConfig, Scenario, SimOptions};
-use crate::cli::demo_loop::{check, close, result_line, say_written, LoopInputs};
+use crate::cli::demo_loop::{check, close, say, ErrorOf, LoopInputs};
 use crate::cli::request::DemoArgs;
 use anyhow::{Context, Result};
 
@@ -51,9 +51,7 @@ pub fn demo(args: &DemoArgs) -> Result<()> {
         extra: vec![("--static", "static.csv", statics)],
     };
     let report = close(args, &inputs)?;
-    let peak = |s: &crate::residual_loop::RunSummary| s.metrics.get("peak_error_pct").copied();
-    let error = peak(&report.before).zip(peak(&report.after)).map(|(b, a)| ("tip peak error", " %", b, a));
-    println!("  {}", result_line(&report, error));
-    say_written(args, &report);
+    let peak = ErrorOf { label: "tip peak error", unit: " %", of: |s| s.metrics.get("peak_error_pct").copied() };
+    say(args, &report, &peak);
     Ok(())
 }

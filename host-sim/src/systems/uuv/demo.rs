@@ -4,7 +4,7 @@
 //! the loop names it, so the part shows both the finding and the health error it removes.
 
 use super::{simulate, Scenario, SimOptions, UuvConfig};
-use crate::cli::demo_loop::{check, close, result_line, say_written, LoopInputs};
+use crate::cli::demo_loop::{check, close, say, ErrorOf, LoopInputs};
 use crate::cli::request::DemoArgs;
 use anyhow::Result;
 
@@ -52,9 +52,6 @@ pub fn demo(args: &DemoArgs) -> Result<()> {
         extra: Vec::new(),
     };
     let report = close(args, &inputs)?;
-    let k_v = |s: &crate::residual_loop::RunSummary| s.error_rms.get("k_v").copied();
-    let error = k_v(&report.before).zip(k_v(&report.after)).map(|(b, a)| ("k_v RMS error", "", b, a));
-    println!("  {}", result_line(&report, error));
-    say_written(args, &report);
+    say(args, &report, &ErrorOf { label: "k_v RMS error", unit: "", of: |s| s.error_rms.get("k_v").copied() });
     Ok(())
 }
