@@ -13,9 +13,10 @@ use edgekf_sim::{cli, systems};
 use std::path::PathBuf;
 
 fn main() -> Result<()> {
-    let out = std::env::args_os().nth(1).map(PathBuf::from).unwrap_or_else(|| {
-        PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../docs/trend_history.svg"))
-    });
+    let out = std::env::args_os()
+        .nth(1)
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../docs/trend_history.svg")));
     let root = std::env::temp_dir().join(format!("edgekf-trend-figure-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&root);
     let (data, config) = write_history(&root, RECORDINGS)?;

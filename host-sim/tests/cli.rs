@@ -3,6 +3,9 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+#[path = "common/svg_check.rs"]
+mod svg_check;
+
 const DEMO_CONFIG: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/configs/oscillator_demo.toml");
 
 fn edgekf(args: &[&str]) -> Output {
@@ -117,6 +120,11 @@ fn demo_prints_the_summary_and_writes_files() {
         let data = std::fs::read(source["data"].as_str().unwrap()).unwrap();
         assert_eq!(source["data_sha256"].as_str(), Some(sha256(&data).as_str()), "{part}");
     }
+    // Their pages' figures: no empty axes, every series inside its axes, no label on another.
+    for part in ["loop", "boom", "uuv"] {
+        let defects = svg_check::svg_defects(&std::fs::read_to_string(dir.join(part).join("report.html")).unwrap());
+        assert!(defects.is_empty(), "{part}: {}", defects.join("\n"));
+    }
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("boom/report.json")).unwrap()).unwrap();
     let args: Vec<&str> = report["source"]["command"].as_str().unwrap().split_whitespace().skip(1).collect();
@@ -134,7 +142,8 @@ fn part_line(stdout: &str, head: &str) -> String {
 fn numbers_after(text: &str, label: &str) -> Vec<f64> {
     let at = text.find(label).unwrap_or_else(|| panic!("no `{label}` in\n{text}"));
     let rest = text[at + label.len()..].lines().next().unwrap_or_default();
-    rest.split([' ', ';', ',']).map_while(|w| if w == "→" || w == "%" { Some(None) } else { w.parse().ok().map(Some) })
+    rest.split([' ', ';', ','])
+        .map_while(|w| if w == "→" || w == "%" { Some(None) } else { w.parse().ok().map(Some) })
         .flatten()
         .collect()
 }

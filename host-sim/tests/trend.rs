@@ -13,6 +13,9 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::time::Instant;
 
+#[path = "common/svg_check.rs"]
+mod svg_check;
+
 /// A fresh folder under the test's scratch space.
 fn scratch(name: &str) -> PathBuf {
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
@@ -101,6 +104,12 @@ fn the_history_names_where_the_offset_appears_and_how_fast_the_harmonic_grows() 
     assert!(html.contains(&row), "{row}");
     for k in [1, OFFSET_FROM, RECORDINGS] {
         assert!(report.join(format!("day{k:02}")).join("report.json").is_file(), "day{k:02}");
+    }
+    // The history's figure and an oscillator report's: no empty axes, every series inside its
+    // axes, no label on another.
+    for page in [report.join("trend.html"), report.join(format!("day{OFFSET_FROM}/report.html"))] {
+        let defects = svg_check::svg_defects(&std::fs::read_to_string(&page).unwrap());
+        assert!(defects.is_empty(), "{}: {}", page.display(), defects.join("\n"));
     }
 }
 

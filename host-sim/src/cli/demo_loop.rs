@@ -106,7 +106,8 @@ pub struct ErrorOf {
 /// Prints the part's result line (its `error` before and after) and, with `--out`, where its
 /// files are and the command that reruns the report.
 pub fn say(args: &DemoArgs, report: &LoopReport, error: &ErrorOf) {
-    let figure = (error.of)(&report.before).zip((error.of)(&report.after)).map(|(b, a)| (error.label, error.unit, b, a));
+    let figure =
+        (error.of)(&report.before).zip((error.of)(&report.after)).map(|(b, a)| (error.label, error.unit, b, a));
     println!("  {}", result_line(report, figure));
     if let Some(out) = &args.out {
         println!("wrote the data, the declared model and the report in {}", out.join(&report.system).display());

@@ -40,7 +40,8 @@ pub fn demo(args: &DemoArgs) -> Result<()> {
     check(args, "boom", &["static.csv"])?;
     println!("boom — {}", describe());
     let config = config();
-    let rec = simulate(&config, &SimOptions { scenario: Scenario::Luffing, duration: DURATION, seed: SEED }, &mut |_| {})?;
+    let rec =
+        simulate(&config, &SimOptions { scenario: Scenario::Luffing, duration: DURATION, seed: SEED }, &mut |_| {})?;
     let statics = super::cli::static_csv(&config, SEED, std::path::Path::new("static.csv"))?;
     let inputs = LoopInputs {
         system: "boom",
