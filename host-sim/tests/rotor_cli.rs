@@ -117,8 +117,9 @@ fn bad_input_gives_one_line_and_exit_1() {
     assert_eq!(err.trim_end().lines().count(), 1, "{err}");
 
     let out = edgekf(&["rotor", "simulate", "--config", PAPER, "--duration", "-1", "--out", "/tmp/never.csv"]);
-    assert_eq!(out.status.code(), Some(1), "{}", text(&out.stderr));
-    assert!(text(&out.stderr).contains("duration = -1 s must be positive"));
+    // A negative length is a usage error (exit 2), named by clap with its flag.
+    assert_eq!(out.status.code(), Some(2), "{}", text(&out.stderr));
+    assert!(text(&out.stderr).contains("'--duration <S>': -1 s is not a positive length"), "{}", text(&out.stderr));
     assert!(!Path::new("/tmp/never.csv").exists());
 }
 

@@ -8,22 +8,13 @@
 //! the offset's first and give the growth within 10 %.
 
 use edgekf_sim::systems::oscillator::scenario::Scenario;
-use edgekf_sim::systems::oscillator::sim::ExtraHarmonic;
+use edgekf_sim::trend::synthetic::{recording, DECLARED, HARMONIC, OFFSET, OFFSET_FROM, RECORDINGS};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::time::Instant;
 
-/// Recordings in the synthetic history.
-const RECORDINGS: usize = 30;
-/// The recording (numbered from 1) where the offset appears.
-const OFFSET_FROM: usize = 20;
-/// The accelerometer offset from then on, m/s².
-const OFFSET: f64 = 0.05;
-/// The second harmonic's amplitude on recording 1, N, and its growth per recording.
-const HARMONIC: (f64, f64) = (0.2, 0.02);
-
-/// The declared scenario (the demo's mode, drive and sensor, 4 s): the loop's model.
-const DECLARED: &str = "duration_s = 4.0\n";
+#[path = "common/svg_check.rs"]
+mod svg_check;
 
 /// A fresh folder under the test's scratch space.
 fn scratch(name: &str) -> PathBuf {
@@ -33,33 +24,9 @@ fn scratch(name: &str) -> PathBuf {
     dir
 }
 
-/// Recording `k` (from 1) of the history: its own noise seed, load and phase; the harmonic at
-/// its size for `k`; the offset from [`OFFSET_FROM`] on.
-fn recording(k: usize) -> Scenario {
-    let mut s = Scenario { duration_s: 4.0, seed: 1000 + k as u64, ..Scenario::default() };
-    // The running conditions: the load between 4 and 6 N, its phase anywhere (golden-ratio
-    // steps spread them without a trend of their own).
-    let u = (k as f64 * 0.618_034).fract();
-    s.force.amplitude_n = 4.0 + 2.0 * u;
-    s.force.phase_deg = 360.0 * (k as f64 * 0.381_966).fract();
-    let amplitude = HARMONIC.0 + HARMONIC.1 * (k - 1) as f64;
-    s.force.extra.push(ExtraHarmonic::new(2.0, amplitude, 45.0));
-    if k >= OFFSET_FROM {
-        s.sensor.bias_m_s2[0] = OFFSET;
-    }
-    s
-}
-
-/// Writes recordings `1..=n` into `dir` as `day01.csv`, … and the declared scenario beside it.
+/// The synthetic history's recordings `1..=n` in `root` (`trend::synthetic`).
 fn write_history(root: &Path, n: usize) -> (PathBuf, PathBuf) {
-    let data = root.join("data");
-    std::fs::create_dir_all(&data).unwrap();
-    for k in 1..=n {
-        std::fs::write(data.join(format!("day{k:02}.csv")), recording(k).simulate().to_csv_string()).unwrap();
-    }
-    let config = root.join("declared.toml");
-    std::fs::write(&config, DECLARED).unwrap();
-    (data, config)
+    edgekf_sim::trend::synthetic::write_history(root, n).unwrap()
 }
 
 /// `edgekf loop oscillator --config config --data data --report report` with `extra` flags.
@@ -137,6 +104,12 @@ fn the_history_names_where_the_offset_appears_and_how_fast_the_harmonic_grows() 
     assert!(html.contains(&row), "{row}");
     for k in [1, OFFSET_FROM, RECORDINGS] {
         assert!(report.join(format!("day{k:02}")).join("report.json").is_file(), "day{k:02}");
+    }
+    // The history's figure and an oscillator report's: no empty axes, every series inside its
+    // axes, no label on another.
+    for page in [report.join("trend.html"), report.join(format!("day{OFFSET_FROM}/report.html"))] {
+        let defects = svg_check::svg_defects(&std::fs::read_to_string(&page).unwrap());
+        assert!(defects.is_empty(), "{}: {}", page.display(), defects.join("\n"));
     }
 }
 

@@ -23,9 +23,11 @@ pub fn command(registry: &[SystemEntry]) -> clap::Command {
         .arg_required_else_help(true);
     for s in registry {
         if let Some(b) = s.close_loop.as_ref().and_then(|l| l.baseline) {
-            // The about last: `augment_args` puts the flag struct's own doc there.
+            // The about last, the long about cleared: `augment_args` puts the flag structs' own
+            // docs there, which `edgekf baseline --help` would print as the subcommand's text.
             let about = format!("{}: what a healthy {} shows that its model lacks, in a baseline file", s.name, s.name);
-            cmd = cmd.subcommand((b.args)(BaselineArgs::augment_args(clap::Command::new(s.name))).about(about));
+            let sub = (b.args)(BaselineArgs::augment_args(clap::Command::new(s.name)));
+            cmd = cmd.subcommand(sub.about(about).long_about(None));
         }
     }
     cmd

@@ -23,8 +23,10 @@ pub fn command(registry: &[SystemEntry]) -> clap::Command {
         .arg_required_else_help(true);
     for s in registry {
         if let Some(l) = &s.close_loop {
-            // The about last: `augment_args` puts the flag structs' own doc there.
-            cmd = cmd.subcommand((l.args)(LoopArgs::augment_args(clap::Command::new(s.name))).about(l.about));
+            // The about last, the long about cleared: `augment_args` puts the flag structs' own
+            // docs there, which `edgekf loop --help` would print as the subcommand's text.
+            let sub = (l.args)(LoopArgs::augment_args(clap::Command::new(s.name)));
+            cmd = cmd.subcommand(sub.about(l.about).long_about(None));
         }
     }
     cmd

@@ -10,8 +10,10 @@
 //! * [`history`]: `edgekf loop <system> --data FOLDER`: every recording of a folder, and the
 //!   machine's history (`trend.csv`, `trend.html`);
 //! * [`baseline`]: `edgekf baseline <system>`: a healthy baseline learned from a recording;
-//! * [`demo`]: `edgekf demo`: every system's demo part in the registry's order;
-//! * [`capture`]: `edgekf capture`: a node's handed-over window as a recording.
+//! * [`demo`]: `edgekf demo`: every system's demo part in the registry's order; [`demo_loop`],
+//!   a part that closes a system's loop on files it can be rerun from;
+//! * [`capture`]: `edgekf capture`: a node's handed-over window as a recording;
+//! * [`values`]: flag values checked as clap parses them (out of range: a usage error).
 //!
 //! ```
 //! use edgekf_sim::{cli, systems};
@@ -23,10 +25,12 @@
 pub mod baseline;
 pub mod capture;
 pub mod demo;
+pub mod demo_loop;
 pub mod history;
 pub mod looping;
 pub mod registry;
 pub mod request;
+pub mod values;
 
 pub use registry::{DemoPart, LoopEntry, SystemEntry};
 

@@ -108,7 +108,8 @@ pub struct DemoArgs {
     /// Use this oscillator scenario instead of the built-in demo.
     #[arg(long, value_name = "TOML")]
     pub config: Option<PathBuf>,
-    /// Skip the parts that close a residual loop (about half a minute).
+    /// Skip the parts that close a residual loop (the rotor's, the boom's and the vehicle's: most of
+    /// the demo's time).
     #[arg(long)]
     pub skip_loop: bool,
 }

@@ -86,7 +86,7 @@ pub const REGISTRY: &[SystemEntry] = &[
                 learn: boom::cli::baseline,
             }),
         }),
-        demo: None,
+        demo: Some(DemoPart { closes_loop: true, run: boom::demo::demo }),
     },
     SystemEntry {
         name: "uuv",
@@ -103,7 +103,7 @@ pub const REGISTRY: &[SystemEntry] = &[
             run: uuv::cli::close_loop,
             baseline: Some(BaselineEntry { args: |c| c, learn: uuv::cli::baseline }),
         }),
-        demo: None,
+        demo: Some(DemoPart { closes_loop: true, run: uuv::demo::demo }),
     },
     #[cfg(feature = "sdof")]
     SystemEntry {

@@ -81,7 +81,7 @@ fn effects_table(out: &mut String, trend: &Trend) {
     }
     let per_day = trend.clock == Clock::Absolute;
     out.push_str(
-        "<table>\n<thead><tr><th>effect</th><th>first seen</th><th>in recordings</th><th>slope per recording</th>",
+        "<table>\n<thead><tr><th>effect</th><th>unit</th><th>first seen</th><th>in recordings</th><th>slope per recording</th>",
     );
     if per_day {
         out.push_str("<th>slope per day</th>");

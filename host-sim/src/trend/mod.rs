@@ -33,6 +33,7 @@
 //! ```
 
 mod html;
+pub mod synthetic;
 
 pub use html::render;
 

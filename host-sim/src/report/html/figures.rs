@@ -41,10 +41,15 @@ pub(super) fn plots(out: &mut String, r: &LoopReport) -> Result<()> {
         "<p class=\"note\"><span class=\"before\">Orange: before</span> (the base model); \
          <span class=\"after\">blue: after</span> (the final model).</p>\n",
     );
+    let (spectra, without) = spectrum_plot(r)?;
+    let mut spectra_caption = "Welch spectra of the normalised innovations (the DC bin left out: a bias shows in the time plot and the tables), log frequency up to the Nyquist frequency; the grey line is the level of white noise of unit variance. Dots mark the lines the loop detected, labelled by where they sit.".to_string();
+    if !without.is_empty() {
+        spectra_caption.push_str(&format!(" No spectrum for {}: too few regular readings.", without.join(", ")));
+    }
     let figures = [
-        (innovation_plot(r)?, "Normalised innovations e/√S per channel against time (min/max per pixel column), before and after on the same scale. A consistent model gives white noise of unit variance, nearly all within ±3."),
-        (spectrum_plot(r)?, "Welch spectra of the normalised innovations (the DC bin left out: a bias shows in the time plot and the tables), log frequency up to the Nyquist frequency; the grey line is the level of white noise of unit variance. Dots mark the lines the loop detected, labelled by where they sit."),
-        (nis_plot(r)?, "NIS per sample divided by the number of channels, moving average over 100 samples (log scale). A consistent model stays near 1."),
+        (innovation_plot(r)?, "Normalised innovations e/√S per channel against time (min/max per pixel column), before and after on the same scale. A consistent model gives white noise of unit variance, nearly all within ±3.".to_string()),
+        (spectra, spectra_caption),
+        (nis_plot(r)?, "NIS per sample divided by the number of channels, moving average over 100 samples (log scale). A consistent model stays near 1.".to_string()),
     ];
     for (svg, caption) in &figures {
         figure(out, svg, caption);
@@ -107,11 +112,22 @@ fn innovation_plot(r: &LoopReport) -> Result<String> {
             p.y = Axis::Linear(-lim, lim);
             p.lines.push(Line::horizontal("±3", REFERENCE, p.x, 3.0));
             p.lines.push(Line::horizontal("", REFERENCE, p.x, -3.0));
-            p.lines.push(Line::new(label, colour, min_max(&tr.t, z, PANEL_W as usize)));
+            p.lines.push(Line::new(label, colour, min_max_sparse(&tr.t, z, PANEL_W as usize)));
             panels.push(p);
         }
     }
     grid(panels, 2, "Normalised innovations before and after")
+}
+
+/// [`min_max`] of a channel, its empty cells between readings left out where it has a reading
+/// on fewer than half of the rows (a slower sensor, a DVL): drawn as they fall, its readings
+/// would be dots and dashes that no eye finds, and its axes look empty.
+fn min_max_sparse(t: &[f64], z: &[f64], columns: usize) -> Vec<(f64, f64)> {
+    let readings: Vec<(f64, f64)> = t.iter().copied().zip(z.iter().copied()).filter(|p| p.1.is_finite()).collect();
+    if 2 * readings.len() >= z.len() {
+        return min_max(t, z, columns);
+    }
+    min_max_points(&readings, columns)
 }
 
 /// Spectrum `psd` with bin width `bw` as (Hz, dB), the DC bin left out.
@@ -141,8 +157,9 @@ fn peak_marks(sig: Option<&ChannelSignature>, spectrum: &[(f64, f64)], bw: f64) 
 
 /// Spectra of the normalised innovations, before and after overlaid, one panel per channel,
 /// log frequency up to the Nyquist frequency, the detected lines marked.
-fn spectrum_plot(r: &LoopReport) -> Result<String> {
+fn spectrum_plot(r: &LoopReport) -> Result<(String, Vec<String>)> {
     let mut panels = Vec::new();
+    let mut without = Vec::new();
     for (i, name) in r.traces.channels.iter().map(|c| &c.name).enumerate() {
         let mut p = Panel::new(&format!("{name}: spectrum of e/√S"), "frequency (Hz)", "PSD (dB re 1/Hz)");
         let mut all = Vec::new();
@@ -158,6 +175,12 @@ fn spectrum_plot(r: &LoopReport) -> Result<String> {
             all.extend(spec.iter().copied());
             p.lines.push(Line::new(label, colour, spec));
         }
+        // A channel without a spectrum (too few regular readings for Welch's segments) gets no
+        // empty axes: the caption names it instead.
+        if !all.iter().any(|q| q.0 > 0.0 && q.1.is_finite()) {
+            without.push(name.clone());
+            continue;
+        }
         p.x = Axis::log_frequency(&all);
         p.y = Axis::linear(&all.iter().map(|v| v.1).chain(white).collect::<Vec<_>>()).headroom(0.15);
         if let Some(level) = white {
@@ -165,7 +188,7 @@ fn spectrum_plot(r: &LoopReport) -> Result<String> {
         }
         panels.push(p);
     }
-    grid(panels, 2, "Spectra of the normalised innovations before and after")
+    Ok((grid(panels, 2, "Spectra of the normalised innovations before and after")?, without))
 }
 
 /// Trailing moving average over `window` samples of the finite values of `v`, divided by

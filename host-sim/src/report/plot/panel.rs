@@ -194,11 +194,21 @@ impl Panel {
         let placed = m.placed(self.x, self.y);
         let dy = if m.labels_above { -18 } else { 5 };
         let style = (FONT, 12).into_font().color(&m.marker.colour);
-        let area = chart.plotting_area();
+        // Labels already drawn, as pixel boxes: a label that would cover one is left out (its
+        // marker stays), so close lines of one class make one readable label, not a pile.
+        let mut drawn: Vec<[i32; 4]> = Vec::new();
         for p in &placed {
-            draw_marker(area, p.at, p.marker)?;
+            draw_marker(chart.plotting_area(), p.at, p.marker)?;
             if let Some(label) = p.label {
-                area.draw(&(EmptyElement::at(p.at) + Text::new(label.to_string(), (5, dy), style.clone())))?;
+                let (x, y) = chart.backend_coord(&p.at);
+                // About 7 px a character and 14 px high at 12 px (the checker's estimate too).
+                let b = [x + 5, y + dy, x + 5 + 7 * label.chars().count() as i32, y + dy + 14];
+                if drawn.iter().any(|d| b[0] < d[2] && d[0] < b[2] && b[1] < d[3] && d[1] < b[3]) {
+                    continue;
+                }
+                drawn.push(b);
+                let text = Text::new(label.to_string(), (5, dy), style.clone());
+                chart.plotting_area().draw(&(EmptyElement::at(p.at) + text))?;
             }
         }
         Ok(!placed.is_empty())

@@ -88,8 +88,8 @@ pub struct SimulateArgs {
     /// The run.
     #[arg(long, value_enum)]
     pub scenario: Scenario,
-    /// Length, s.
-    #[arg(long, value_name = "S", default_value_t = 120.0)]
+    /// Length, s (up to an hour).
+    #[arg(long, value_name = "S", default_value_t = 120.0, value_parser = crate::cli::values::up_to_an_hour)]
     pub duration: f64,
     /// Seed of the sensors' noise.
     #[arg(long, value_name = "N", default_value_t = 1)]
@@ -136,12 +136,7 @@ fn simulate_command(args: SimulateArgs) -> anyhow::Result<()> {
     let rec = simulate(&config, &options, &mut |t| eprintln!("simulated {t:.0} s of {:.0} s", args.duration))?;
     let text = rec.to_csv(&args.out)?;
     let statics = match &args.static_out {
-        Some(path) => {
-            let (t, gyro) = static_record(&config, STATIC_S, args.seed)?;
-            let mut incl = static_inclinometer(&config, STATIC_S, args.seed)?;
-            incl.resize(t.len(), f64::NAN);
-            Some((path, crate::io::data::to_csv_string(path, &["gyro_rate", "incl_angle"], &t, &[&gyro, &incl])?))
-        }
+        Some(path) => Some((path, static_csv(&config, args.seed, path)?)),
         None => None,
     };
     write_atomic(&args.out, text).with_context(|| format!("cannot write {}", args.out.display()))?;
@@ -160,6 +155,15 @@ fn simulate_command(args: SimulateArgs) -> anyhow::Result<()> {
         println!("{}: {STATIC_S:.0} s of the gyro and the inclinometer at rest", path.display());
     }
     Ok(())
+}
+
+/// The static record's CSV text (`t`, `gyro_rate`, `incl_angle`): 60 s of the sensors with
+/// the boom at rest, `path` for the error messages.
+pub fn static_csv(config: &BoomConfig, seed: u64, path: &std::path::Path) -> anyhow::Result<String> {
+    let (t, gyro) = static_record(config, STATIC_S, seed)?;
+    let mut incl = static_inclinometer(config, STATIC_S, seed)?;
+    incl.resize(t.len(), f64::NAN);
+    Ok(crate::io::data::to_csv_string(path, &["gyro_rate", "incl_angle"], &t, &[&gyro, &incl])?)
 }
 
 fn estimate_command(args: EstimateArgs) -> anyhow::Result<()> {

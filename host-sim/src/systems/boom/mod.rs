@@ -22,6 +22,7 @@ pub mod band;
 pub mod beam;
 pub mod cli;
 pub mod config;
+pub mod demo;
 pub mod estimate;
 pub mod export;
 pub mod loop_system;

@@ -56,7 +56,7 @@ pub struct SimulateArgs {
     #[arg(long, value_enum)]
     pub scenario: Scenario,
     /// Length, s.
-    #[arg(long, value_name = "S", default_value_t = 300.0)]
+    #[arg(long, value_name = "S", default_value_t = 300.0, value_parser = crate::cli::values::positive_seconds)]
     pub duration: f64,
     /// Seed of the current and of the sensors' noise and biases.
     #[arg(long, value_name = "N", default_value_t = 1)]

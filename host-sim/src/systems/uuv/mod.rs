@@ -17,6 +17,7 @@
 pub mod autopilot;
 pub mod cli;
 pub mod config;
+pub mod demo;
 mod error;
 pub mod estimate;
 pub mod export;

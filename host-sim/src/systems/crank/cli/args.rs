@@ -131,7 +131,7 @@ pub struct SimulateArgs {
     #[arg(long = "clearance", value_name = "JOINT=M", value_parser = parse_clearance)]
     pub clearances: Vec<(Joint, f64)>,
     /// Simulated time, s.
-    #[arg(long, value_name = "S", allow_hyphen_values = true)]
+    #[arg(long, value_name = "S", allow_hyphen_values = true, value_parser = crate::cli::values::positive_seconds)]
     pub duration: f64,
     /// Data file to write.
     #[arg(long, value_name = "CSV")]

@@ -46,7 +46,7 @@ pub enum CrankCommand {
     Estimate(EstimateArgs),
     /// Learn the fast estimator's model (joint discriminant and per-joint clearance regression)
     /// from simulated runs, and write it as TOML (`--model` of `estimate --method fast`; the
-    /// built-in model is host-sim/src/crank/estimate/fast_model.toml, written by this command
+    /// built-in model is host-sim/src/systems/crank/estimate/fast_model.toml, written by this command
     /// with its defaults).
     Train(TrainArgs),
     /// Write the fast estimator's model as Rust constants for the firmware

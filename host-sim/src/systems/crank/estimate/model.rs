@@ -9,7 +9,7 @@
 //!   ([`super::release`]: the first contact after release, `c ∝ t₁²`). Learned by [`super::train`]
 //!   (`edgekf crank train --out model.toml`); the built-in model ([`FastModel::builtin`]) is
 //!   `fast_model.toml` next to this file, written by that command with its defaults
-//!   (`edgekf crank train --out host-sim/src/crank/estimate/fast_model.toml`: 264 runs of 10 s,
+//!   (`edgekf crank train --out host-sim/src/systems/crank/estimate/fast_model.toml`: 264 runs of 10 s,
 //!   about 3 minutes on two cores in release).
 
 use super::release::{ReleaseFeatures, ReleaseStage};
@@ -161,7 +161,7 @@ impl ModelEstimate {
     }
 }
 
-/// The built-in model, written by `edgekf crank train --out host-sim/src/crank/estimate/fast_model.toml`.
+/// The built-in model, written by `edgekf crank train --out host-sim/src/systems/crank/estimate/fast_model.toml`.
 pub const BUILTIN_MODEL: &str = include_str!("fast_model.toml");
 
 impl FastModel {

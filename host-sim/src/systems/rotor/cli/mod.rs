@@ -45,8 +45,8 @@ pub enum RotorCommand {
         /// Highest speed, rad/s (the range starts at 0).
         #[arg(long, value_name = "RAD_S", default_value_t = 1000.0)]
         max_speed: f64,
-        /// Number of speeds from 0 to max_speed.
-        #[arg(long, value_name = "N", default_value_t = 11)]
+        /// Number of speeds from 0 to max_speed (at least 2).
+        #[arg(long, value_name = "N", default_value_t = 11, value_parser = crate::cli::values::at_least::<2>)]
         steps: usize,
         /// Number of modes per speed.
         #[arg(long, value_name = "N", default_value_t = 6)]
@@ -75,7 +75,7 @@ pub enum RotorCommand {
         #[arg(long, value_name = "TOML")]
         config: PathBuf,
         /// Length of the run, s.
-        #[arg(long, value_name = "S", allow_negative_numbers = true)]
+        #[arg(long, value_name = "S", allow_negative_numbers = true, value_parser = crate::cli::values::positive_seconds)]
         duration: f64,
         /// Data file to write.
         #[arg(long, value_name = "CSV")]
@@ -145,10 +145,11 @@ pub enum RotorCommand {
         #[arg(long, value_name = "N", default_value_t = 1)]
         seed: u64,
         /// Length of the training record, s.
-        #[arg(long, value_name = "S", default_value_t = 2.0)]
+        #[arg(long, value_name = "S", default_value_t = 2.0, value_parser = crate::cli::values::positive_seconds)]
         duration: f64,
-        /// Objective evaluations allowed (DE: a population of 12 over budget/12 generations).
-        #[arg(long, value_name = "N", default_value_t = 108)]
+        /// Objective evaluations allowed (at least 16; DE: a population of 12 over budget/12
+        /// generations).
+        #[arg(long, value_name = "N", default_value_t = 108, value_parser = crate::cli::values::at_least::<16>)]
         budget: usize,
         /// Modes kept in the reduced model.
         #[arg(long, value_name = "N", default_value_t = 8)]
