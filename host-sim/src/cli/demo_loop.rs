@@ -73,7 +73,7 @@ fn close_in(dir: &Path, inputs: &LoopInputs, keep: bool) -> Result<LoopReport> {
         words.extend([flag.to_string(), path.display().to_string()]);
     }
     words.extend(["--report".to_string(), dir.display().to_string()]);
-    let command = (inputs.args)(super::looping::LoopArgs::augment_args(clap::Command::new(inputs.system)));
+    let command = (inputs.args)(super::request::LoopArgs::augment_args(clap::Command::new(inputs.system)));
     let matches = command.try_get_matches_from(&words[2..]).context("the demo's own loop command")?;
     let request = LoopRequest {
         config: config.clone(),
@@ -82,7 +82,7 @@ fn close_in(dir: &Path, inputs: &LoopInputs, keep: bool) -> Result<LoopReport> {
         options: LoopOptions { progress: true, ..LoopOptions::default() },
     };
     let mut report = (inputs.run)(&request, &matches)?;
-    super::looping::fill_source(&mut report, &data, &config, &words.join(" "));
+    super::request::fill_source(&mut report, &data, &config, &words.join(" "));
     if keep {
         write_report(&report, dir)?;
     }
