@@ -152,13 +152,13 @@ pub trait LoopSystem: Sync {
     fn rivals(&self, _effect: &Self::Effect, _effects: &[Applied<Self::Effect>]) -> Rivals<Self::Effect> {
         Rivals::default()
     }
-    /// The process noise the engine may set from the data before the search (none by default;
-    /// see [`tuning`](super::tuning)).
-    fn tunable_noise(&self) -> Option<TunableNoise> {
+    /// Scales the process noise the engine may set from the data before the search by `scale`
+    /// (1: the configuration's) in every later run, and says what that noise covers; `None`,
+    /// with nothing scaled, for a system without one (the default; see
+    /// [`tuning`](super::tuning)).
+    fn scale_noise(&mut self, _scale: f64) -> Option<TunableNoise> {
         None
     }
-    /// Scales that noise by `scale` (1: the configuration's) in every later run.
-    fn set_noise_scale(&mut self, _scale: f64) {}
 }
 
 /// The noise a system lets the engine scale: what it covers and the configuration's keys.

@@ -5,7 +5,7 @@
 //! also shrinks the predicted spread and raises the likelihood whatever the data say: a damping
 //! factor's likelihood then rises to the edge of its range on healthy and changed runs alike.
 //! So a system may offer one scale on the noise its model's dynamics carry
-//! ([`LoopSystem::tunable_noise`]); the engine fits it by maximum likelihood on the base model,
+//! ([`LoopSystem::scale_noise`]); the engine fits it by maximum likelihood on the base model,
 //! keeps it only if it pays for its parameter like an effect does, and writes it into the
 //! configuration's keys. It is a tuning, not an effect: a healthy record may need it too. It
 //! only lowers the noise (see `SPAN`).
@@ -44,7 +44,7 @@ pub struct Tuned<M> {
 /// [`LoopOptions::noise_scale`]), leaves it set on `sys` if it pays (else set back to 1) and
 /// returns it with its correction and the base run it gives.
 pub fn tune<S: LoopSystem>(sys: &mut S, base: &Run, options: &LoopOptions) -> Result<Option<Tuned<S::Model>>> {
-    let Some(noise) = sys.tunable_noise() else { return Ok(None) };
+    let Some(noise) = sys.scale_noise(1.0) else { return Ok(None) };
     if options.progress {
         eprintln!("loop: fitting the process noise of {} to the data", noise.what);
     }
@@ -53,23 +53,23 @@ pub fn tune<S: LoopSystem>(sys: &mut S, base: &Run, options: &LoopOptions) -> Re
     let penalty = 0.5 * n.ln() + options.gain_floor * n;
     if let Some(scale) = options.noise_scale {
         // A healthy baseline's level, not refitted on a record that may carry the change.
-        sys.set_noise_scale(scale);
+        sys.scale_noise(scale);
         let (model, run) = sys.run(&[])?;
         let tuning = Tuning { what: noise.what, scale, delta_log_likelihood: run.log_likelihood() - base_ll, penalty };
         let correction = tuning.correction(&noise.keys);
         return Ok(Some(Tuned { tuning, correction, model, run }));
     }
     let mut eval = |x: f64| {
-        sys.set_noise_scale(x.exp());
+        sys.scale_noise(x.exp());
         sys.run(&[]).ok().map(|(_, r)| r.log_likelihood())
     };
     let best = maximise(&mut eval, -SPAN.ln(), 0.0, GRID, TOLERANCE);
     let kept = best.filter(|m| m.value - base_ll > penalty);
     let Some(m) = kept else {
-        sys.set_noise_scale(1.0);
+        sys.scale_noise(1.0);
         return Ok(None);
     };
-    sys.set_noise_scale(m.x.exp());
+    sys.scale_noise(m.x.exp());
     let (model, run) = sys.run(&[])?;
     let tuning = Tuning { what: noise.what, scale: m.x.exp(), delta_log_likelihood: m.value - base_ll, penalty };
     let correction = tuning.correction(&noise.keys);

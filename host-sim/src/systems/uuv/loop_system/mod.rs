@@ -322,15 +322,12 @@ impl LoopSystem for UuvSystem<'_> {
     /// The velocity and rate noise stand for what the reduced dynamics leave out (the hull's
     /// higher-order terms, the current's pull): how much that is depends on the vehicle and
     /// the sea, so the data set it.
-    fn tunable_noise(&self) -> Option<TunableNoise> {
+    fn scale_noise(&mut self, scale: f64) -> Option<TunableNoise> {
         let (velocity, rate) = self.motion_noise;
+        self.settings.process.velocity = velocity * scale;
+        self.settings.process.rate = rate * scale;
         let keys = vec![("estimator.process.velocity".into(), velocity), ("estimator.process.rate".into(), rate)];
         Some(TunableNoise { what: "the vehicle's velocity and rate".into(), keys })
-    }
-
-    fn set_noise_scale(&mut self, scale: f64) {
-        self.settings.process.velocity = self.motion_noise.0 * scale;
-        self.settings.process.rate = self.motion_noise.1 * scale;
     }
 
     /// What the configuration declared: the base model's states beside the vehicle's.
