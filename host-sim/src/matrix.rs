@@ -10,6 +10,7 @@
 
 use crate::io::data::DataFile;
 use crate::residual_loop::limits::detection_limit;
+use crate::residual_loop::Described;
 use crate::residual_loop::{EffectKind, LoopOptions, LoopReport, LoopSystem};
 
 /// `data` without its `truth_` columns: what a real recording has, and what the loop is given.

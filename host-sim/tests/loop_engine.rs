@@ -140,22 +140,8 @@ impl LoopSystem for Oscillator {
         vec![named]
     }
 
-    fn label(&self, e: &Effect) -> EffectLabel {
-        let (kind, parameter, unit) = match e {
-            Effect::Bias => (EffectKind::SensorBias, None, "m"),
-            Effect::Stiffness => (EffectKind::Parameter, Some("stiffness".to_string()), "1"),
-            Effect::Mount => (EffectKind::Parameter, Some("mount".to_string()), "1"),
-        };
-        let detail = EffectDetail { parameter, ..EffectDetail::default() };
-        EffectLabel { kind, location: "q".into(), detail, unit: unit.into() }
-    }
-
-    fn fitting(&self, e: &Effect) -> Fitting {
-        let factor = ScalarRange::factor(0.5, 2.0, 1e-5);
-        match e {
-            Effect::Bias => Fitting::states(1),
-            Effect::Stiffness | Effect::Mount => Fitting::scalar(1, factor, 6),
-        }
+    fn describe(&self, e: &Effect) -> (EffectLabel, Fitting) {
+        (self.label(e), self.fitting(e))
     }
 
     fn declared(&self) -> Vec<Effect> {
@@ -180,6 +166,28 @@ impl LoopSystem for Oscillator {
     fn traces(&self) -> Traces {
         let truth = vec![Some(self.truth.clone())];
         Traces { t: self.t.clone(), channels: vec![probe()], rows: vec![probe()], truth, ..Traces::default() }
+    }
+}
+
+impl Oscillator {
+    /// How the report names `e`.
+    pub fn label(&self, e: &Effect) -> EffectLabel {
+        let (kind, parameter, unit) = match e {
+            Effect::Bias => (EffectKind::SensorBias, None, "m"),
+            Effect::Stiffness => (EffectKind::Parameter, Some("stiffness".to_string()), "1"),
+            Effect::Mount => (EffectKind::Parameter, Some("mount".to_string()), "1"),
+        };
+        let detail = EffectDetail { parameter, ..EffectDetail::default() };
+        EffectLabel { kind, location: "q".into(), detail, unit: unit.into() }
+    }
+
+    /// How the engine fits `e`.
+    pub fn fitting(&self, e: &Effect) -> Fitting {
+        let factor = ScalarRange::factor(0.5, 2.0, 1e-5);
+        match e {
+            Effect::Bias => Fitting::states(1),
+            Effect::Stiffness | Effect::Mount => Fitting::scalar(1, factor, 6),
+        }
     }
 }
 

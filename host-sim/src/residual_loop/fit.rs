@@ -8,6 +8,7 @@ use super::optimize::maximise;
 use super::options::LoopOptions;
 use super::report::{NotIdentifiable, Refused, Trial};
 use super::signature::Signature;
+use super::system::Described;
 use super::system::LoopSystem;
 use super::vocabulary::{Applied, EffectLabel};
 use anyhow::{anyhow, Result};

@@ -6,6 +6,7 @@ use super::filter::Run;
 use super::fit::{Engine, Fitted};
 use super::optimize::ScalarRange;
 use super::report::NotIdentifiable;
+use super::system::Described;
 use super::system::LoopSystem;
 use super::vocabulary::{Applied, EffectKind, EffectLabel};
 use rayon::prelude::*;

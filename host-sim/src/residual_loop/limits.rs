@@ -5,6 +5,7 @@
 //! how hard it is, not only how large.
 
 use super::fit::Engine;
+use super::system::Described;
 use super::vocabulary::Applied;
 use super::{LoopOptions, LoopSystem};
 use anyhow::Result;

@@ -59,5 +59,5 @@ pub use report::{
 };
 pub use search::search;
 pub use signature::{Channel, ChannelSignature, PeakSignature, RunSummary, Signature, SignatureOptions};
-pub use system::{Fitting, LoopSystem, PreStage, Rivals};
+pub use system::{Described, Fitting, LoopSystem, PreStage, Rivals};
 pub use vocabulary::{Applied, EffectDetail, EffectKind, EffectLabel};

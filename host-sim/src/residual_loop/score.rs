@@ -10,6 +10,7 @@
 
 use super::filter::Run;
 use super::fit::Engine;
+use super::system::Described;
 use super::vocabulary::Applied;
 use super::LoopSystem;
 use rayon::prelude::*;

@@ -14,6 +14,7 @@ use super::fit::{Engine, Fitted, Round};
 use super::options::LoopOptions;
 use super::report::{AddedEffect, LoopReport, NotIdentifiable, Refused, Source, Traces, Trial, SCHEMA_VERSION};
 use super::signature::{unexplained, RunSummary, Signature};
+use super::system::Described;
 use super::system::{LoopSystem, PreStage};
 use super::tuning::tune;
 use super::vocabulary::{Applied, EffectKind, EffectLabel};

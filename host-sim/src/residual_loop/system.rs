@@ -121,10 +121,9 @@ pub trait LoopSystem: Sync {
         model: &Self::Model,
         effects: &[Applied<Self::Effect>],
     ) -> Vec<Vec<Self::Effect>>;
-    /// How `effect` reads in the report.
-    fn label(&self, effect: &Self::Effect) -> EffectLabel;
-    /// How the engine fits `effect`.
-    fn fitting(&self, effect: &Self::Effect) -> Fitting;
+    /// How `effect` reads in the report, and how the engine fits it (the engine reads the two
+    /// halves through [`Described`]).
+    fn describe(&self, effect: &Self::Effect) -> (EffectLabel, Fitting);
     /// The size the report gives `effect` in the model of `run` (a state's size over the
     /// settled part of the effect's stretch: [`settled_mean`](super::onset::settled_mean)).
     fn value(&self, model: &Self::Model, run: &Run, effect: &Applied<Self::Effect>) -> f64;
@@ -191,3 +190,17 @@ impl<E> Default for Rivals<E> {
         Self { carried: Vec::new(), tied: Vec::new() }
     }
 }
+
+/// The halves of [`LoopSystem::describe`] by name, for the engine's code.
+pub trait Described: LoopSystem {
+    /// How `effect` reads in the report.
+    fn label(&self, effect: &Self::Effect) -> EffectLabel {
+        self.describe(effect).0
+    }
+    /// How the engine fits `effect`.
+    fn fitting(&self, effect: &Self::Effect) -> Fitting {
+        self.describe(effect).1
+    }
+}
+
+impl<S: LoopSystem> Described for S {}

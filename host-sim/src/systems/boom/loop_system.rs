@@ -332,35 +332,8 @@ impl LoopSystem for BoomSystem<'_> {
         vec![named, catch_all]
     }
 
-    fn label(&self, e: &Effect) -> EffectLabel {
-        let parameter = |p: &str| EffectDetail { parameter: Some(p.into()), ..EffectDetail::default() };
-        let (kind, location, unit, detail) = match e {
-            Effect::InclinometerLag => (EffectKind::SensorLag, MEASURED[1].into(), "s", EffectDetail::default()),
-            Effect::InclinometerOffset => (EffectKind::SensorBias, MEASURED[1].into(), "rad", EffectDetail::default()),
-            Effect::GyroScale => (EffectKind::SensorScale, MEASURED[0].into(), "1", EffectDetail::default()),
-            // Its value is the drift (rad/s per s), beside the bias the filter tracks.
-            Effect::GyroDrift => (EffectKind::SensorBias, MEASURED[0].into(), "rad/s/s", EffectDetail::default()),
-            Effect::Stiffness => (EffectKind::Parameter, "boom".into(), "1", parameter("ei")),
-            Effect::SectionStiffness(i) => (EffectKind::Parameter, format!("section {}", i + 1), "1", parameter("ei")),
-            Effect::PlatformMass => (EffectKind::Parameter, "tip".into(), "1", parameter("mass")),
-            Effect::ExtraMode { .. } => (
-                EffectKind::ExtraMode,
-                MEASURED[0].into(),
-                "Hz",
-                EffectDetail { damping: Some(EXTRA_ZETA), ..EffectDetail::default() },
-            ),
-        };
-        EffectLabel { kind, location, detail, unit: unit.into() }
-    }
-
-    /// One parameter for a setting; an extra mode's frequency and its two states' start.
-    fn fitting(&self, e: &Effect) -> Fitting {
-        let parameters = match e {
-            Effect::ExtraMode { .. } => 3,
-            _ => 1,
-        };
-        let (range, grid) = self.scalar(e);
-        Fitting::scalar(parameters, range, grid)
+    fn describe(&self, e: &Effect) -> (EffectLabel, Fitting) {
+        (self.label(e), self.fitting(e))
     }
 
     /// The configuration's component parameters (the boom's EI, each section's, the
@@ -439,6 +412,40 @@ impl LoopSystem for BoomSystem<'_> {
             ),
         ));
         section
+    }
+}
+
+impl BoomSystem<'_> {
+    /// How the report names `e`.
+    pub fn label(&self, e: &Effect) -> EffectLabel {
+        let parameter = |p: &str| EffectDetail { parameter: Some(p.into()), ..EffectDetail::default() };
+        let (kind, location, unit, detail) = match e {
+            Effect::InclinometerLag => (EffectKind::SensorLag, MEASURED[1].into(), "s", EffectDetail::default()),
+            Effect::InclinometerOffset => (EffectKind::SensorBias, MEASURED[1].into(), "rad", EffectDetail::default()),
+            Effect::GyroScale => (EffectKind::SensorScale, MEASURED[0].into(), "1", EffectDetail::default()),
+            // Its value is the drift (rad/s per s), beside the bias the filter tracks.
+            Effect::GyroDrift => (EffectKind::SensorBias, MEASURED[0].into(), "rad/s/s", EffectDetail::default()),
+            Effect::Stiffness => (EffectKind::Parameter, "boom".into(), "1", parameter("ei")),
+            Effect::SectionStiffness(i) => (EffectKind::Parameter, format!("section {}", i + 1), "1", parameter("ei")),
+            Effect::PlatformMass => (EffectKind::Parameter, "tip".into(), "1", parameter("mass")),
+            Effect::ExtraMode { .. } => (
+                EffectKind::ExtraMode,
+                MEASURED[0].into(),
+                "Hz",
+                EffectDetail { damping: Some(EXTRA_ZETA), ..EffectDetail::default() },
+            ),
+        };
+        EffectLabel { kind, location, detail, unit: unit.into() }
+    }
+
+    /// One parameter for a setting; an extra mode's frequency and its two states' start.
+    pub fn fitting(&self, e: &Effect) -> Fitting {
+        let parameters = match e {
+            Effect::ExtraMode { .. } => 3,
+            _ => 1,
+        };
+        let (range, grid) = self.scalar(e);
+        Fitting::scalar(parameters, range, grid)
     }
 }
 

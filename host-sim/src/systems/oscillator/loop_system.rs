@@ -277,46 +277,8 @@ impl LoopSystem for OscillatorSystem<'_> {
         vec![named]
     }
 
-    fn label(&self, e: &Effect) -> EffectLabel {
-        let (kind, location, unit, detail) = match *e {
-            Effect::SensorBias => (EffectKind::SensorBias, CHANNEL, "m/s^2", EffectDetail::default()),
-            Effect::SensorScale => (EffectKind::SensorScale, CHANNEL, "1", EffectDetail::default()),
-            Effect::HarmonicForce { order } => (
-                EffectKind::HarmonicForce,
-                "mode",
-                "N",
-                EffectDetail { order: Some(order as f64), ..EffectDetail::default() },
-            ),
-            Effect::Frequency => (
-                EffectKind::Parameter,
-                "mode",
-                "1",
-                EffectDetail { parameter: Some("frequency".into()), ..EffectDetail::default() },
-            ),
-            Effect::Damping => (
-                EffectKind::Parameter,
-                "mode",
-                "1",
-                EffectDetail { parameter: Some("damping".into()), ..EffectDetail::default() },
-            ),
-        };
-        EffectLabel { kind, location: location.into(), detail, unit: unit.into() }
-    }
-
-    /// Every effect may begin mid-run: a knock that shifts the sensor's offset or gain, a rub
-    /// that adds a harmonic, a crack or a loosening that changes the mode.
-    fn fitting(&self, e: &Effect) -> Fitting {
-        let parameters = match e {
-            Effect::HarmonicForce { .. } => 2,
-            _ => 1,
-        };
-        let scalar = match e {
-            Effect::SensorScale => Some((ScalarRange::factor(0.5, 2.0, 1e-5), 4)),
-            Effect::Frequency => Some((ScalarRange::factor(0.8, 1.25, 1e-5), 6)),
-            Effect::Damping => Some((ScalarRange::factor(0.25, 4.0, 1e-5), 4)),
-            Effect::SensorBias | Effect::HarmonicForce { .. } => None,
-        };
-        Fitting { parameters, scalar, limit: None, may_start_mid_run: true }
+    fn describe(&self, e: &Effect) -> (EffectLabel, Fitting) {
+        (self.label(e), self.fitting(e))
     }
 
     /// The mode's frequency and damping (the scenario's component parameters) and the
@@ -364,6 +326,51 @@ impl LoopSystem for OscillatorSystem<'_> {
 
     fn traces(&self) -> Traces {
         self.recording().traces()
+    }
+}
+
+impl OscillatorSystem<'_> {
+    /// How the report names `e`.
+    pub fn label(&self, e: &Effect) -> EffectLabel {
+        let (kind, location, unit, detail) = match *e {
+            Effect::SensorBias => (EffectKind::SensorBias, CHANNEL, "m/s^2", EffectDetail::default()),
+            Effect::SensorScale => (EffectKind::SensorScale, CHANNEL, "1", EffectDetail::default()),
+            Effect::HarmonicForce { order } => (
+                EffectKind::HarmonicForce,
+                "mode",
+                "N",
+                EffectDetail { order: Some(order as f64), ..EffectDetail::default() },
+            ),
+            Effect::Frequency => (
+                EffectKind::Parameter,
+                "mode",
+                "1",
+                EffectDetail { parameter: Some("frequency".into()), ..EffectDetail::default() },
+            ),
+            Effect::Damping => (
+                EffectKind::Parameter,
+                "mode",
+                "1",
+                EffectDetail { parameter: Some("damping".into()), ..EffectDetail::default() },
+            ),
+        };
+        EffectLabel { kind, location: location.into(), detail, unit: unit.into() }
+    }
+
+    /// Every effect may begin mid-run: a knock that shifts the sensor's offset or gain, a rub
+    /// that adds a harmonic, a crack or a loosening that changes the mode.
+    pub fn fitting(&self, e: &Effect) -> Fitting {
+        let parameters = match e {
+            Effect::HarmonicForce { .. } => 2,
+            _ => 1,
+        };
+        let scalar = match e {
+            Effect::SensorScale => Some((ScalarRange::factor(0.5, 2.0, 1e-5), 4)),
+            Effect::Frequency => Some((ScalarRange::factor(0.8, 1.25, 1e-5), 6)),
+            Effect::Damping => Some((ScalarRange::factor(0.25, 4.0, 1e-5), 4)),
+            Effect::SensorBias | Effect::HarmonicForce { .. } => None,
+        };
+        Fitting { parameters, scalar, limit: None, may_start_mid_run: true }
     }
 }
 

@@ -53,46 +53,8 @@ impl LoopSystem for RotorSystem<'_> {
         Rivals { carried: Vec::new(), tied }
     }
 
-    fn label(&self, e: &Effect) -> EffectLabel {
-        let detail = EffectDetail {
-            order: e.order(),
-            parameter: match e {
-                Effect::Parameter(p) => Some(p.name().to_string()),
-                _ => None,
-            },
-            line: match e {
-                Effect::BearingDefect { line, .. } => Some(line.name().to_string()),
-                _ => None,
-            },
-            ..EffectDetail::default()
-        };
-        EffectLabel {
-            kind: e.kind(),
-            location: e.location(&self.red.channels, self.cfg),
-            detail,
-            unit: match e {
-                // A bias is in its channel's unit.
-                Effect::SensorBias { channel } => {
-                    self.channel_info.get(*channel).map_or_else(|| e.unit().to_string(), |c| c.unit.clone())
-                }
-                _ => e.unit().to_string(),
-            },
-        }
-    }
-
-    /// Parameters and point masses get a finer grid: a stiffness factor's log-likelihood has
-    /// side lobes where a natural frequency crosses a line. A force (harmonic or unknown) may
-    /// not exceed `[bounds] force`, by default the rotor's weight: a larger one is the force
-    /// standing in for something else.
-    fn fitting(&self, e: &Effect) -> Fitting {
-        let grid = if e.changes_structure() { 7 } else { 4 };
-        Fitting {
-            parameters: e.parameters(self.channels()),
-            scalar: e.scalar(self.red.sample_rate, &self.cfg.bounds, self.cfg.mass()).map(|r| (r, grid)),
-            limit: matches!(e, Effect::HarmonicForce { .. } | Effect::UnknownInput { .. })
-                .then(|| self.cfg.bounds.force_n(self.cfg.weight())),
-            may_start_mid_run: false,
-        }
+    fn describe(&self, e: &Effect) -> (EffectLabel, Fitting) {
+        (self.label(e), self.fitting(e))
     }
 
     /// The fitted scalar (a factor as `exp θ`), or the effect states' size once settled.
@@ -183,5 +145,50 @@ impl LoopSystem for RotorSystem<'_> {
             }
         }
         section
+    }
+}
+
+impl RotorSystem<'_> {
+    /// How the report names `e`.
+    pub fn label(&self, e: &Effect) -> EffectLabel {
+        let detail = EffectDetail {
+            order: e.order(),
+            parameter: match e {
+                Effect::Parameter(p) => Some(p.name().to_string()),
+                _ => None,
+            },
+            line: match e {
+                Effect::BearingDefect { line, .. } => Some(line.name().to_string()),
+                _ => None,
+            },
+            ..EffectDetail::default()
+        };
+        EffectLabel {
+            kind: e.kind(),
+            location: e.location(&self.red.channels, self.cfg),
+            detail,
+            unit: match e {
+                // A bias is in its channel's unit.
+                Effect::SensorBias { channel } => {
+                    self.channel_info.get(*channel).map_or_else(|| e.unit().to_string(), |c| c.unit.clone())
+                }
+                _ => e.unit().to_string(),
+            },
+        }
+    }
+
+    /// Parameters and point masses get a finer grid: a stiffness factor's log-likelihood has
+    /// side lobes where a natural frequency crosses a line. A force (harmonic or unknown) may
+    /// not exceed `[bounds] force`, by default the rotor's weight: a larger one is the force
+    /// standing in for something else.
+    pub fn fitting(&self, e: &Effect) -> Fitting {
+        let grid = if e.changes_structure() { 7 } else { 4 };
+        Fitting {
+            parameters: e.parameters(self.channels()),
+            scalar: e.scalar(self.red.sample_rate, &self.cfg.bounds, self.cfg.mass()).map(|r| (r, grid)),
+            limit: matches!(e, Effect::HarmonicForce { .. } | Effect::UnknownInput { .. })
+                .then(|| self.cfg.bounds.force_n(self.cfg.weight())),
+            may_start_mid_run: false,
+        }
     }
 }

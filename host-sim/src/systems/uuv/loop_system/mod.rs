@@ -213,47 +213,8 @@ impl LoopSystem for UuvSystem<'_> {
         vec![named, catch_all]
     }
 
-    fn label(&self, e: &Effect) -> EffectLabel {
-        let (kind, location, unit, detail) = match *e {
-            Effect::Health(t) => {
-                (EffectKind::ActuatorHealth, format!("thruster {}", t.name()), "1", EffectDetail::default())
-            }
-            Effect::Bias(s) => {
-                (EffectKind::SensorBias, CHANNELS[s.channel()].to_string(), s.unit(), EffectDetail::default())
-            }
-            Effect::DvlOffset(a) => {
-                let s = Sensor::Dvl(a);
-                (EffectKind::SensorBias, CHANNELS[s.channel()].to_string(), s.unit(), EffectDetail::default())
-            }
-            Effect::Current => (EffectKind::UnknownInput, "current".to_string(), "m/s", EffectDetail::default()),
-            Effect::Parameter(p) => (
-                EffectKind::Parameter,
-                "vehicle".to_string(),
-                "1",
-                EffectDetail { parameter: Some(p.name().into()), ..EffectDetail::default() },
-            ),
-        };
-        EffectLabel { kind, location, detail, unit: unit.into() }
-    }
-
-    /// A thruster's health changes mid-run (a fouled propeller, a failing motor); the rest are
-    /// properties of the vehicle and its sensors.
-    fn fitting(&self, e: &Effect) -> Fitting {
-        let scalar = match e {
-            Effect::Parameter(Parameter::Mass) => Some((ScalarRange::factor(0.8, 1.25, 1e-3), 4)),
-            Effect::Parameter(Parameter::SurgeDrag) => Some((ScalarRange::factor(0.7, 1.43, 1e-3), 4)),
-            Effect::DvlOffset(_) => {
-                let sd = UNDECLARED_BIAS_SD[2];
-                Some((ScalarRange { low: -2.0 * sd, high: 2.0 * sd, neutral: 0.0, log: false, tolerance: 1e-4 }, 4))
-            }
-            _ => None,
-        };
-        Fitting {
-            parameters: e.states().len().max(1),
-            scalar,
-            limit: None,
-            may_start_mid_run: matches!(e, Effect::Health(_)),
-        }
+    fn describe(&self, e: &Effect) -> (EffectLabel, Fitting) {
+        (self.label(e), self.fitting(e))
     }
 
     /// The vehicle's mass and surge drag, the configuration's component parameters, and a fixed
@@ -346,6 +307,52 @@ impl LoopSystem for UuvSystem<'_> {
         section.fields.insert("declared".into(), serde_json::json!(declared));
         section.lines.push(("declared".into(), text));
         section
+    }
+}
+
+impl UuvSystem<'_> {
+    /// How the report names `e`.
+    pub fn label(&self, e: &Effect) -> EffectLabel {
+        let (kind, location, unit, detail) = match *e {
+            Effect::Health(t) => {
+                (EffectKind::ActuatorHealth, format!("thruster {}", t.name()), "1", EffectDetail::default())
+            }
+            Effect::Bias(s) => {
+                (EffectKind::SensorBias, CHANNELS[s.channel()].to_string(), s.unit(), EffectDetail::default())
+            }
+            Effect::DvlOffset(a) => {
+                let s = Sensor::Dvl(a);
+                (EffectKind::SensorBias, CHANNELS[s.channel()].to_string(), s.unit(), EffectDetail::default())
+            }
+            Effect::Current => (EffectKind::UnknownInput, "current".to_string(), "m/s", EffectDetail::default()),
+            Effect::Parameter(p) => (
+                EffectKind::Parameter,
+                "vehicle".to_string(),
+                "1",
+                EffectDetail { parameter: Some(p.name().into()), ..EffectDetail::default() },
+            ),
+        };
+        EffectLabel { kind, location, detail, unit: unit.into() }
+    }
+
+    /// A thruster's health changes mid-run (a fouled propeller, a failing motor); the rest are
+    /// properties of the vehicle and its sensors.
+    pub fn fitting(&self, e: &Effect) -> Fitting {
+        let scalar = match e {
+            Effect::Parameter(Parameter::Mass) => Some((ScalarRange::factor(0.8, 1.25, 1e-3), 4)),
+            Effect::Parameter(Parameter::SurgeDrag) => Some((ScalarRange::factor(0.7, 1.43, 1e-3), 4)),
+            Effect::DvlOffset(_) => {
+                let sd = UNDECLARED_BIAS_SD[2];
+                Some((ScalarRange { low: -2.0 * sd, high: 2.0 * sd, neutral: 0.0, log: false, tolerance: 1e-4 }, 4))
+            }
+            _ => None,
+        };
+        Fitting {
+            parameters: e.states().len().max(1),
+            scalar,
+            limit: None,
+            may_start_mid_run: matches!(e, Effect::Health(_)),
+        }
     }
 }
 
