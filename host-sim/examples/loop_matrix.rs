@@ -39,13 +39,7 @@ fn main() -> Result<()> {
     }
     let only = only.as_deref().unwrap_or("");
     for system in systems {
-        let text = match system.as_str() {
-            "boom" => boom_table(only)?,
-            "uuv" => uuv_table(only)?,
-            "oscillator" => oscillator_table(only)?,
-            "rotor" => rotor_table(only)?,
-            _ => unreachable!("checked above"),
-        };
+        let text = system_table(&system, only)?;
         print!("{text}");
         if let Some(path) = &readme {
             replace_between_markers(path, &system, &text)?;
@@ -54,42 +48,43 @@ fn main() -> Result<()> {
     Ok(())
 }
 
-/// The boom's matrix.
-fn boom_table(only: &str) -> Result<String> {
-    let declared = BoomConfig::default();
-    let cases = matching(boom::cases(&declared)?, only)?;
-    parallel_table("boom", &cases, |s| boom::clean_error(&declared, s), |c, clean| boom::run_case(c, &declared, clean))
+/// A system's matrix from its module's three functions: its cases, a clean run's error at a
+/// seed, and one case run and scored.
+struct Matrix<D, T> {
+    cases: fn(&D) -> Result<Vec<Case<T>>>,
+    clean_error: fn(&D, u64) -> Result<f64>,
+    run_case: fn(&Case<T>, &D, f64) -> Result<Outcome>,
 }
 
-/// The vehicle's matrix.
-fn uuv_table(only: &str) -> Result<String> {
-    let declared = UuvConfig::default();
-    let cases = matching(uuv::cases(&declared)?, only)?;
-    parallel_table("uuv", &cases, |s| uuv::clean_error(&declared, s), |c, clean| uuv::run_case(c, &declared, clean))
+impl<D: Sync, T: Sync> Matrix<D, T> {
+    /// The table of the cases whose name holds `only`, against the `declared` model.
+    fn table(&self, system: &str, declared: &D, only: &str) -> Result<String> {
+        let cases = matching((self.cases)(declared)?, only)?;
+        parallel_table(
+            system,
+            &cases,
+            |s| (self.clean_error)(declared, s),
+            |c, clean| (self.run_case)(c, declared, clean),
+        )
+    }
 }
 
-/// The oscillator's matrix (4 s runs of the demo's mode and drive).
-fn oscillator_table(only: &str) -> Result<String> {
-    let declared = Scenario { duration_s: 4.0, ..Scenario::default() };
-    let cases = matching(oscillator::cases(&declared)?, only)?;
-    parallel_table(
-        "oscillator",
-        &cases,
-        |s| oscillator::clean_error(&declared, s),
-        |c, clean| oscillator::run_case(c, &declared, clean),
-    )
-}
-
-/// The rotor's matrix (3 s runs of the paper rotor).
-fn rotor_table(only: &str) -> Result<String> {
-    let declared = rotor::declared()?;
-    let cases = matching(rotor::cases(&declared)?, only)?;
-    parallel_table(
-        "rotor",
-        &cases,
-        |s| rotor::clean_error(&declared, s),
-        |c, clean| rotor::run_case(c, &declared, clean),
-    )
+/// Each system's table: the boom and the vehicle as their defaults declare them, the
+/// oscillator on 4 s runs of the demo's mode and drive, the rotor on 3 s runs of the paper rotor.
+fn system_table(system: &str, only: &str) -> Result<String> {
+    macro_rules! table {
+        ($m:ident, $declared:expr) => {
+            Matrix { cases: $m::cases, clean_error: $m::clean_error, run_case: $m::run_case }
+                .table(system, &$declared, only)
+        };
+    }
+    match system {
+        "boom" => table!(boom, BoomConfig::default()),
+        "uuv" => table!(uuv, UuvConfig::default()),
+        "oscillator" => table!(oscillator, Scenario { duration_s: 4.0, ..Scenario::default() }),
+        "rotor" => table!(rotor, rotor::declared()?),
+        _ => unreachable!("checked against SYSTEMS"),
+    }
 }
 
 /// The cases whose name holds `only` (every case for an empty `only`); none is an error.

@@ -18,8 +18,7 @@ use anyhow::Result;
 pub fn detection_limit<S: LoopSystem>(sys: &S, effect: S::Effect, options: &LoopOptions) -> Result<Option<f64>> {
     let Some((range, _)) = sys.fitting(&effect).scalar else { return Ok(None) };
     let (_, run) = sys.run(&[])?;
-    let nis = sys.summarise(&run).nis_mean;
-    let nis_scale = if nis.is_finite() { nis.max(1.0) } else { 1.0 };
+    let nis_scale = sys.summarise(&run).nis_scale();
     let engine = Engine { sys, options, t: Vec::new(), n_meas: run.measurements().max(2) as f64, nis_scale };
     let threshold = engine.penalty(&effect, false);
     let base = run.log_likelihood();

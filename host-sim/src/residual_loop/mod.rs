@@ -7,7 +7,7 @@
 //!
 //! The engine knows no system and no domain: a system implements [`LoopSystem`] in its own
 //! folder, and reaches the toolkits of [`crate::diagnostics`] (envelope analysis, locating an
-//! input) itself, the engine only through [`LoopSystem::prestage`]. A test
+//! input) itself, and hands the engine what they found through [`search_staged`]. A test
 //! (`host-sim/tests/engine_words.rs`) keeps the engine's code free of system and domain words.
 //!
 //! * [`system`]: the [`LoopSystem`] trait, how an effect is fitted ([`Fitting`]) and what a
@@ -57,7 +57,7 @@ pub use recording::Recording;
 pub use report::{
     AddedEffect, LoopReport, NotIdentifiable, Refused, Source, SystemSection, Traces, Trial, SCHEMA_VERSION,
 };
-pub use search::search;
+pub use search::{search, search_staged};
 pub use signature::{Channel, ChannelSignature, PeakSignature, RunSummary, Signature, SignatureOptions};
 pub use system::{Described, Fitting, LoopSystem, PreStage, Rivals};
 pub use vocabulary::{Applied, EffectDetail, EffectKind, EffectLabel};

@@ -80,7 +80,7 @@ impl<S: LoopSystem> Engine<'_, S> {
     /// Once the innovations look consistent: the declared settings the score test finds worth
     /// fitting ([`score`](super::score)), fitted as one tier. `Err` when none is or none pays.
     fn iterate_declared(&mut self, st: &mut State<S::Effect, S::Model>, iteration: usize) -> Result<(), String> {
-        self.nis_scale = if st.summary.nis_mean.is_finite() { st.summary.nis_mean.max(1.0) } else { 1.0 };
+        self.nis_scale = st.summary.nis_scale();
         let tier = self.declared_worth_fitting(&st.effects, &st.run);
         if tier.is_empty() {
             return Err(String::new());
@@ -99,7 +99,7 @@ impl<S: LoopSystem> Engine<'_, S> {
         tiers: Vec<Vec<S::Effect>>,
     ) -> Result<(), String> {
         let sys = self.sys;
-        self.nis_scale = if st.summary.nis_mean.is_finite() { st.summary.nis_mean.max(1.0) } else { 1.0 };
+        self.nis_scale = st.summary.nis_scale();
         let mut chosen = None;
         let mut evaluated = Vec::new();
         for (tier_index, tier) in tiers.into_iter().enumerate() {
@@ -223,7 +223,7 @@ impl<S: LoopSystem> Engine<'_, S> {
             }))
             .collect();
         // Each added effect's interval in the final model, at the final model's NIS.
-        self.nis_scale = if st.summary.nis_mean.is_finite() { st.summary.nis_mean.max(1.0) } else { 1.0 };
+        self.nis_scale = st.summary.nis_scale();
         let intervals: Vec<Option<[f64; 2]>> =
             (0..st.effects.len()).map(|i| self.interval(&st.effects, i, &st.model, &st.run)).collect();
         for (e, interval) in effects_added[corrections.len()..].iter_mut().zip(intervals) {
@@ -271,12 +271,23 @@ fn one_verdict_each<E, M>(st: &mut State<E, M>) {
     st.refused.retain(|r| !unseen.iter().any(|n| r.is_about(n)));
 }
 
-/// Closes the loop on `sys`: runs its base model and its own first stage
-/// ([`LoopSystem::prestage`]), then adds effects while the innovations are not consistent and
-/// an effect pays for its parameters (BIC) in both halves of the run (of the stretch after its
-/// onset, for an effect that starts mid-run); then screens what the data cannot see and
-/// reports what is left.
+/// Closes the loop on `sys`: runs its base model, then adds effects while the innovations are
+/// not consistent and an effect pays for its parameters (BIC) in both halves of the run (of
+/// the stretch after its onset, for an effect that starts mid-run); then screens what the data
+/// cannot see and reports what is left.
 pub fn search<S: LoopSystem>(sys: &mut S, options: &LoopOptions) -> Result<LoopReport> {
+    search_staged(sys, options, |_, _| Ok(PreStage::default()))
+}
+
+/// [`search`] with the system's own first stage run on the base model's run before the
+/// search: what it names is reported as added, and what it explains it may take out of the
+/// system's data ([`PreStage::data_changed`]), so that the search neither sees it nor stands
+/// something else in for it.
+pub fn search_staged<S: LoopSystem>(
+    sys: &mut S,
+    options: &LoopOptions,
+    first_stage: impl FnOnce(&mut S, &Run) -> Result<PreStage<S::Effect>>,
+) -> Result<LoopReport> {
     let traces = sys.traces();
     if options.progress {
         eprintln!("loop: running the base model");
@@ -289,7 +300,7 @@ pub fn search<S: LoopSystem>(sys: &mut S, options: &LoopOptions) -> Result<LoopR
         (model, run) = (t.model, t.run);
         (t.tuning, t.correction)
     });
-    let PreStage { added: first, trials, refused, excludes, data_changed } = sys.prestage(&run, options)?;
+    let PreStage { added: first, trials, refused, excludes, data_changed } = first_stage(sys, &run)?;
     if data_changed {
         (model, run) = sys.run(&[])?;
     }

@@ -210,6 +210,19 @@ pub struct RunSummary {
     pub spectra: Vec<Vec<f32>>,
 }
 
+impl RunSummary {
+    /// What the run's NIS inflates the fits' costs and intervals by: its mean where the model
+    /// under-states its innovations, never below 1 (a model that over-states them is not
+    /// flattered), 1 where it could not be computed.
+    pub fn nis_scale(&self) -> f64 {
+        if self.nis_mean.is_finite() {
+            self.nis_mean.max(1.0)
+        } else {
+            1.0
+        }
+    }
+}
+
 /// A residual signature left over: a channel (or location), the frequency if it is a line,
 /// and the statistic that flags it.
 #[derive(Debug, Clone, PartialEq, Serialize)]

@@ -8,7 +8,6 @@
 use super::correction::Correction;
 use super::filter::Run;
 use super::optimize::ScalarRange;
-use super::options::LoopOptions;
 use super::report::{AddedEffect, Refused, SystemSection, Traces, Trial};
 use super::signature::RunSummary;
 use super::vocabulary::{Applied, EffectKind, EffectLabel};
@@ -58,7 +57,9 @@ impl Fitting {
 }
 
 /// What a system's own first stage found before the search (the rotor's: periodic impacts
-/// named by their envelope lines), in the report's terms.
+/// named by their envelope lines), in the report's terms: the stage is the system's, handed
+/// to [`search_staged`](super::search::search_staged), so that a system without one (most)
+/// has nothing to implement for it.
 #[derive(Debug, Clone)]
 pub struct PreStage<E> {
     /// Effects the stage kept, each with the system's effect it stands for.
@@ -138,13 +139,6 @@ pub trait LoopSystem: Sync {
     /// by default).
     fn section(&self, _model: &Self::Model, _run: &Run) -> SystemSection {
         SystemSection::default()
-    }
-    /// The system's own first stage on the base model's `run`, before the search (none by
-    /// default): what it names is reported as added, and what it explains it may take out of
-    /// the system's data ([`PreStage::data_changed`]), so that the search neither sees it nor
-    /// stands something else in for it.
-    fn prestage(&mut self, _run: &Run, _options: &LoopOptions) -> Result<PreStage<Self::Effect>> {
-        Ok(PreStage::default())
     }
     /// Who else could explain what `effect` explains, as the system knows it (none by default;
     /// see [`Rivals`]), with `effects` in the model.

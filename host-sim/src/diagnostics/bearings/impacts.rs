@@ -1,4 +1,4 @@
-//! A machine's first stage of the loop ([`LoopSystem::prestage`](crate::residual_loop::LoopSystem::prestage)):
+//! A machine's first stage of the loop ([`search_staged`](crate::residual_loop::search_staged)):
 //! periodic impacts it can name (a bearing defect's lines), found by envelope analysis of the
 //! base model's innovations and fitted there by likelihood ([`cyclic`](super::cyclic)), before
 //! the search for the model's own effects.

@@ -20,6 +20,7 @@ use crate::residual_loop::filter::{run_segments, Run, StateSpace};
 use crate::residual_loop::onset::settled_mean;
 use crate::residual_loop::optimize::ScalarRange;
 use crate::residual_loop::signature::ReferenceLines;
+use crate::residual_loop::tuning::TunableNoise;
 use crate::residual_loop::{
     search, Applied, Channel, EffectDetail, EffectKind, EffectLabel, Fitting, LoopOptions, LoopReport, LoopSystem,
     RunSummary, Traces,
@@ -63,6 +64,9 @@ pub struct OscillatorSystem<'a> {
     channels: [Channel; 1],
     rows: [Channel; 1],
     options: LoopOptions,
+    /// The declared `[filter] motion_psd`, which the engine may scale
+    /// ([`LoopSystem::scale_noise`]).
+    motion_psd: f64,
 }
 
 impl<'a> OscillatorSystem<'a> {
@@ -80,8 +84,10 @@ impl<'a> OscillatorSystem<'a> {
         let column = data.column(CHANNEL).ok_or_else(|| anyhow!("the data file has no channel {CHANNEL}"))?;
         let offset = scenario.filter.accel_offset_m_s2;
         let ax = column.iter().map(|a| a - offset).collect();
+        let params = scenario.estimator_params();
         Ok(Self {
-            params: scenario.estimator_params(),
+            motion_psd: params.motion_psd,
+            params,
             data,
             ax,
             channels: [Channel::new(CHANNEL, "m/s^2").shown_in(1e3, "mm/s²")],
@@ -326,6 +332,15 @@ impl LoopSystem for OscillatorSystem<'_> {
 
     fn traces(&self) -> Traces {
         self.recording().traces()
+    }
+
+    /// The unmodelled acceleration on the mode stands for what one mode leaves out (its
+    /// neighbours, the structure's other paths): how much that is depends on the machine, so
+    /// the data set it.
+    fn scale_noise(&mut self, scale: f64) -> Option<TunableNoise> {
+        self.params.motion_psd = self.motion_psd * scale;
+        let keys = vec![("filter.motion_psd".into(), self.motion_psd)];
+        Some(TunableNoise { what: "the mode's unmodelled acceleration".into(), keys })
     }
 }
 

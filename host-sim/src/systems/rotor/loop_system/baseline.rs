@@ -22,7 +22,7 @@ use crate::residual_loop::baseline::{BaselineSource, Comparison};
 use crate::residual_loop::filter::Run;
 use crate::residual_loop::onset::halves;
 use crate::residual_loop::optimize::maximise;
-use crate::residual_loop::{search, Applied, LoopOptions, LoopSystem};
+use crate::residual_loop::{Applied, LoopOptions, LoopSystem};
 use crate::systems::rotor::RotorModel;
 use anyhow::{anyhow, bail, Context, Result};
 use serde::{Deserialize, Serialize};
@@ -397,7 +397,7 @@ fn leftover_gain(
 ) -> Result<f64> {
     say("measuring what the healthy record leaves unexplained (one round of the loop)".into());
     let probe = LoopOptions { max_effects: 1, screen_parameters: false, progress: false, gain_floor: 0.0, ..*options };
-    let leftover = search(&mut probe_sys, &probe)?;
+    let leftover = probe_sys.search(&probe)?;
     Ok(crate::residual_loop::levels::leftover_gain(&leftover, n_meas, say))
 }
 

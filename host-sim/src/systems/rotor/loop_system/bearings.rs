@@ -6,12 +6,18 @@ use super::effects::Effect;
 use super::RotorSystem;
 use crate::diagnostics::bearings::impacts::{self, ImpactLine};
 use crate::residual_loop::filter::Run;
-use crate::residual_loop::{EffectKind, LoopOptions, LoopSystem, PreStage};
+use crate::residual_loop::{search_staged, EffectKind, LoopOptions, LoopReport, LoopSystem, PreStage};
 use crate::systems::rotor::bearing_geometry::BearingLine;
 use anyhow::{anyhow, Result};
 use std::f64::consts::TAU;
 
 impl RotorSystem<'_> {
+    /// The loop on the rotor: the bearings' stage ([`Self::first_stage`]) on the base model's
+    /// run, then the engine's search.
+    pub(super) fn search(&mut self, options: &LoopOptions) -> Result<LoopReport> {
+        search_staged(self, options, |sys, run| sys.first_stage(run, options))
+    }
+
     /// The bearings' defects named by their envelope lines ([`impacts`]) and their vibration
     /// taken out of the data; after a defect is named, a broadband stand-in (a mode the model
     /// lacks, a catch-all input) is not fitted: the impacts ring every lightly damped mode.

@@ -33,7 +33,7 @@ use crate::io::data::DataFile;
 use crate::residual_loop::filter::{run_state_space, Run, StateSpace};
 use crate::residual_loop::onset::settled_mean;
 use crate::residual_loop::signature::{Channel, NamedLine, ReferenceLines};
-use crate::residual_loop::{search, Applied, LoopOptions, LoopReport, LoopSystem, Recording};
+use crate::residual_loop::{Applied, LoopOptions, LoopReport, LoopSystem, Recording};
 use crate::systems::rotor::bearing_geometry::BearingLine;
 use crate::systems::rotor::estimate::Tuning;
 use crate::systems::rotor::estimate::{reduce, ReducedRotor};
@@ -384,7 +384,7 @@ pub fn close_loop(
     options: &LoopOptions,
     rotor: &RotorLoopOptions,
 ) -> Result<LoopReport> {
-    search(&mut system_for(model, data, options, rotor)?, options)
+    system_for(model, data, options, rotor)?.search(options)
 }
 
 /// The system [`close_loop`] searches: `model` on `data` at its running speed (what an effect
@@ -415,7 +415,7 @@ pub fn close_loop_from(
     let rotor = &RotorLoopOptions { speed_band: rotor.speed_band.or(Some(0.1)), ..*rotor };
     let options = &LoopOptions { gain_floor: baseline::FLOOR_MARGIN * baseline.gain_floor, ..*options };
     let speed = running_speed(model, data, options, rotor)?;
-    search(&mut RotorSystem::from_baseline(model, data, options, rotor, speed, baseline)?, options)
+    RotorSystem::from_baseline(model, data, options, rotor, speed, baseline)?.search(options)
 }
 
 /// The configured running speed, or the one read from the data with `rotor.speed_band`.

@@ -8,8 +8,7 @@ use crate::io::config_edit::{ConfigEdit, Op};
 use crate::residual_loop::filter::Run;
 use crate::residual_loop::onset::settled_mean;
 use crate::residual_loop::{
-    Applied, Correction, EffectDetail, EffectLabel, Fitting, LoopOptions, LoopSystem, PreStage, Rivals, RunSummary,
-    SystemSection, Traces,
+    Applied, Correction, EffectDetail, EffectLabel, Fitting, LoopSystem, Rivals, RunSummary, SystemSection, Traces,
 };
 use anyhow::Result;
 
@@ -104,11 +103,6 @@ impl LoopSystem for RotorSystem<'_> {
     /// Every component parameter (the engine screens them for what the data cannot see).
     fn declared(&self) -> Vec<Effect> {
         Parameter::all(self.cfg).into_iter().map(Effect::Parameter).collect()
-    }
-
-    /// The bearings' defects named by their envelope lines ([`bearings`]).
-    fn prestage(&mut self, run: &Run, options: &LoopOptions) -> Result<PreStage<Effect>> {
-        self.first_stage(run, options)
     }
 
     fn traces(&self) -> Traces {
