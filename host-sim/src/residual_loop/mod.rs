@@ -18,6 +18,8 @@
 //! * [`vocabulary`]: the effect kinds, their extra fields and [`Applied`] effects;
 //! * [`report`]: what a run reports (`report.json`'s layout);
 //! * [`onset`]: effects that start mid-run (the onset's placement, the halves after it);
+//! * [`order_lines`]: the innovations' lines tested at the running speed's orders, where a
+//!   force would leave one;
 //! * [`signature`]: the innovations' statistics and what is left unexplained; [`recording`]:
 //!   a system's data as the summaries and the report's traces read them;
 //! * [`baseline`]: a healthy baseline's source and the comparison of a record with it;
@@ -40,6 +42,7 @@ pub mod modal_form;
 pub mod onset;
 pub mod optimize;
 pub mod options;
+pub mod order_lines;
 pub mod recording;
 pub mod report;
 pub mod score;

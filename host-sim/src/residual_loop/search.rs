@@ -20,6 +20,9 @@ use super::tuning::tune;
 use super::vocabulary::{Applied, EffectKind, EffectLabel};
 use anyhow::Result;
 
+/// How many places a winner may move along its neighbours ([`Rivals::neighbours`](super::system::Rivals::neighbours)).
+const CLIMB_STEPS: usize = 4;
+
 /// An effect kept, with the lines it explained.
 struct Kept<E> {
     applied: Applied<E>,
@@ -119,17 +122,12 @@ impl<S: LoopSystem> Engine<'_, S> {
             }
             let at = Round { iteration, tier: tier_index + 1 };
             let sinks = (&mut st.refused, &mut st.not_identifiable);
-            let mut results = self.fit_all(at, &st.effects, fresh, &st.run, sinks);
+            let mut results = self.fit_all(at, &st.effects, fresh, &st.run, (&mut *sinks.0, &mut *sinks.1));
+            let best = self.best_paying(&results).map(|i| self.climb(at, &st.effects, &mut results, i, &st.run, sinks));
             for f in results.iter().filter(|f| f.delta > f.penalty && !self.pays_in_halves(f)) {
                 st.partial.push(self.partial(f));
                 st.refused.push(self.refused_in_halves(f));
             }
-            let best = results
-                .iter()
-                .enumerate()
-                .filter(|(_, f)| self.pays(f))
-                .max_by(|a, b| (a.1.delta - a.1.penalty).total_cmp(&(b.1.delta - b.1.penalty)))
-                .map(|(i, _)| i);
             if let Some(i) = best {
                 let winner = results.swap_remove(self.choose(&results, i));
                 st.not_identifiable.extend(self.rivals(&st.effects, &winner, &results));
@@ -151,6 +149,50 @@ impl<S: LoopSystem> Engine<'_, S> {
         };
         self.keep(st, iteration, win);
         Ok(())
+    }
+
+    /// The paying fit of `results` that gains most over its cost.
+    fn best_paying(&self, results: &[Fitted<S::Effect, S::Model>]) -> Option<usize> {
+        results
+            .iter()
+            .enumerate()
+            .filter(|(_, f)| self.pays(f))
+            .max_by(|a, b| (a.1.delta - a.1.penalty).total_cmp(&(b.1.delta - b.1.penalty)))
+            .map(|(i, _)| i)
+    }
+
+    /// From the best fit `i` of `results`, fits its neighbours ([`Rivals::neighbours`](super::system::Rivals::neighbours)) not yet
+    /// fitted, and moves to the best while that changes, at most [`CLIMB_STEPS`] times: the
+    /// system's proposal places an effect only roughly, the fits decide. The neighbours' fits
+    /// join `results`, so that the ones the data cannot tell from the winner are listed as its
+    /// rivals. Returns the best's index in the grown `results`.
+    fn climb(
+        &self,
+        at: Round,
+        effects: &[Applied<S::Effect>],
+        results: &mut Vec<Fitted<S::Effect, S::Model>>,
+        mut i: usize,
+        base: &Run,
+        sinks: (&mut Vec<Refused>, &mut Vec<NotIdentifiable>),
+    ) -> usize {
+        for _ in 0..CLIMB_STEPS {
+            let next: Vec<S::Effect> = self
+                .sys
+                .rivals(&results[i].applied.effect, effects)
+                .neighbours
+                .into_iter()
+                .filter(|e| !results.iter().any(|f| f.applied.effect == *e))
+                .collect();
+            if next.is_empty() {
+                break;
+            }
+            results.extend(self.fit_all(at, effects, next, base, (&mut *sinks.0, &mut *sinks.1)));
+            match self.best_paying(results) {
+                Some(b) if b != i => i = b,
+                _ => break,
+            }
+        }
+        i
     }
 
     /// Drops an effect that no longer pays for itself once the effects added after it are in

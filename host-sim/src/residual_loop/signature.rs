@@ -5,6 +5,7 @@
 //! statistics come from `edgekf::residual`, the same code the node runs.
 
 use super::filter::Run;
+use super::order_lines::{order_lines, threshold, OrderLine};
 use edgekf::residual::{locate_peak, NisBounds, PeakClass, PeakTolerance, RunningStats, Welch, WhitenessWindow};
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -178,6 +179,8 @@ pub struct ChannelSignature {
     pub whiteness_p: f64,
     /// Spectral lines.
     pub peaks: Vec<PeakSignature>,
+    /// The statistic at each order of the running speed ([`order_lines`](super::order_lines)).
+    pub order_lines: Vec<OrderLine>,
 }
 
 /// A run's summary as reported.
@@ -292,7 +295,11 @@ pub fn summarise(run: &Run, ctx: &SummaryContext<'_>, o: &SignatureOptions) -> R
     let (nis_mean, nis_consistent) = nis_consistency(run, &keep, channels.len(), o);
     let error_rms = error_rms(run, ctx, t0, o);
     let whiteness_p = out.iter().map(|c| c.whiteness_p).fold(1.0, f64::min);
-    let consistent = nis_consistent && whiteness_p >= o.alpha / m as f64 && out.iter().all(|c| c.z.abs() < o.bias_z);
+    let no_order_line = add_order_lines(&mut out, ctx.lines, bin_width_hz, o.alpha);
+    let consistent = nis_consistent
+        && no_order_line
+        && whiteness_p >= o.alpha / m as f64
+        && out.iter().all(|c| c.z.abs() < o.bias_z);
     RunSummary {
         innovation_rms: out.iter().map(|c| (c.name.clone(), c.rms)).collect(),
         nis_mean,
@@ -306,6 +313,27 @@ pub fn summarise(run: &Run, ctx: &SummaryContext<'_>, o: &SignatureOptions) -> R
         bin_width_hz,
         spectra,
     }
+}
+
+/// Marks each order line over the level for all the channels' tests at once (`alpha`) as a
+/// spectral line of its channel, where the Welch spectrum had none at that order, so that the
+/// candidates at that order are asked for. `true` when there is none.
+fn add_order_lines(channels: &mut [ChannelSignature], lines: &ReferenceLines, bin_width_hz: f64, alpha: f64) -> bool {
+    let tests = channels.iter().map(|c| c.order_lines.len()).sum();
+    let level = threshold(alpha, tests);
+    let tol = PeakTolerance::new(1.2 * bin_width_hz);
+    let mut none = true;
+    for c in channels.iter_mut() {
+        for l in c.order_lines.iter().filter(|l| l.statistic > level) {
+            none = false;
+            if !c.peaks.iter().any(|p| p.order == Some(l.order)) {
+                // Its level above what white innovations give there, in dB.
+                let prominence_db = 10.0 * (l.statistic / 2.0).log10();
+                c.peaks.push(peak(l.frequency_hz, prominence_db, lines, &tol));
+            }
+        }
+    }
+    none
 }
 
 /// Channel `i`'s signature over the samples `keep`, and its spectrum (bin width, PSD) where it
@@ -324,6 +352,7 @@ fn channel_signature(
     let mut nis = RunningStats::<f64>::new();
     let mut white = WhitenessWindow::<f64, 2048>::new();
     let mut zs = Vec::with_capacity(keep.len());
+    let mut tz = Vec::with_capacity(keep.len());
     let mut z2 = Vec::with_capacity(keep.len());
     for &k in keep {
         let e = run.innovation[i][k];
@@ -337,6 +366,7 @@ fn channel_signature(
         let z = e / s.sqrt();
         white.push(z);
         zs.push(z);
+        tz.push(t[k] - t0);
     }
     let lb = white.ljung_box(20);
     let mut peaks = Vec::new();
@@ -367,6 +397,7 @@ fn channel_signature(
         step: step(&z2),
         whiteness_p: lb.p_value,
         peaks,
+        order_lines: order_lines(&zs, &tz, ctx.lines.speed, rate),
     };
     (signature, drawn)
 }

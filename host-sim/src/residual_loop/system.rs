@@ -177,11 +177,16 @@ pub struct Rivals<E> {
     /// any node of a shaft read at one housing): listed as rivals of the effect when it wins,
     /// whatever gap their fits show.
     pub tied: Vec<E>,
+    /// The same effect at the places next to its own (a force at the shaft's neighbouring
+    /// nodes): where the system's proposal places an effect only roughly, the engine fits
+    /// these too once it wins, moves it to one that fits better, and lists the ones its fit
+    /// cannot tell from it.
+    pub neighbours: Vec<E>,
 }
 
 impl<E> Default for Rivals<E> {
     fn default() -> Self {
-        Self { carried: Vec::new(), tied: Vec::new() }
+        Self { carried: Vec::new(), tied: Vec::new(), neighbours: Vec::new() }
     }
 }
 

@@ -161,6 +161,7 @@ mod tests {
             step: None,
             whiteness_p: 0.5,
             peaks: vec![peak.clone()],
+            order_lines: Vec::new(),
         };
         let mut spectrum: Vec<f32> = (0..513).map(|k| 1e-3 * (1.0 + (k % 7) as f32)).collect();
         spectrum[100] = f32::NAN;

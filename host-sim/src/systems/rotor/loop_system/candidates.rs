@@ -131,9 +131,9 @@ impl RotorSystem<'_> {
     }
 
     /// The [`PLACES`] nodes of the shaft where an `input` at `order`'s columns explains most of
-    /// the innovations of `run` (made with `model`) at the lines `hz`, and for a force any
-    /// further ones that explain as much (up to eight); all the force sites if nothing can be
-    /// ranked. Second, of those, the nodes whose force explains as much as the best's (within
+    /// the innovations of `run` (made with `model`) at the lines `hz`, for a force any further
+    /// ones that explain as much (up to eight); all the force sites if nothing can be ranked
+    /// (the engine then fits a winner's neighbours: [`Rivals::neighbours`](crate::residual_loop::Rivals)). Second, of those, the nodes whose force explains as much as the best's (within
     /// [`TIED_SHARE`]): the sensors see the same response from each, up to the force's own
     /// amplitude and phase (at one housing, a 1× force at any node).
     fn places(

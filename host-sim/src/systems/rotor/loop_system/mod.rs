@@ -281,6 +281,11 @@ impl<'a> RotorSystem<'a> {
         (0..self.channels()).map(|ch| self.bare.r[(ch, ch)].sqrt()).collect()
     }
 
+    /// The shaft's nodes, how many.
+    pub fn nodes(&self) -> usize {
+        self.red.displacement.nrows() / 2
+    }
+
     /// The disks' nodes.
     pub fn disk_nodes(&self) -> Vec<usize> {
         self.cfg.disks.iter().map(|d| d.node).collect()

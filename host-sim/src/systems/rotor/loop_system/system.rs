@@ -41,15 +41,25 @@ impl LoopSystem for RotorSystem<'_> {
     }
 
     /// A force at an order ties with the other nodes the last proposal found explaining its
-    /// lines as well (see `places`).
+    /// lines as well (see `places`); a force's and a point mass's neighbours are the shaft's
+    /// nodes beside theirs (a mass's not at a disk, where it is the disk's mass).
     fn rivals(&self, effect: &Effect, _effects: &[Applied<Effect>]) -> Rivals<Effect> {
-        let tied = match *effect {
-            Effect::HarmonicForce { node, order } => {
-                self.steady_rivals(node, order).into_iter().map(|node| Effect::HarmonicForce { node, order }).collect()
+        let beside = |node: usize| [node.wrapping_sub(1), node + 1].into_iter().filter(|&n| n < self.nodes());
+        let (tied, neighbours) = match *effect {
+            Effect::HarmonicForce { node, order } => (
+                self.steady_rivals(node, order).into_iter().map(|node| Effect::HarmonicForce { node, order }).collect(),
+                beside(node).map(|node| Effect::HarmonicForce { node, order }).collect(),
+            ),
+            Effect::PointMass { node } => {
+                let disks = self.disk_nodes();
+                (
+                    Vec::new(),
+                    beside(node).filter(|n| !disks.contains(n)).map(|node| Effect::PointMass { node }).collect(),
+                )
             }
-            _ => Vec::new(),
+            _ => (Vec::new(), Vec::new()),
         };
-        Rivals { carried: Vec::new(), tied }
+        Rivals { carried: Vec::new(), tied, neighbours }
     }
 
     fn describe(&self, e: &Effect) -> (EffectLabel, Fitting) {

@@ -231,7 +231,7 @@ impl LoopSystem for UuvSystem<'_> {
         let horizontal = matches!(e, Effect::DvlOffset(0 | 1) | Effect::Bias(Sensor::Dvl(0 | 1)));
         let carried =
             if horizontal && self.in_model(Effect::Current, effects) { vec![Effect::Current] } else { Vec::new() };
-        Rivals { carried, tied: Vec::new() }
+        Rivals { carried, ..Rivals::default() }
     }
 
     /// A health factor or an offset once settled after its onset, a current's speed, or the
