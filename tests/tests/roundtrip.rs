@@ -14,6 +14,7 @@
 
 use edgekf_tests::roundtrip::{oscillator, Setup};
 use edgekf_tests::roundtrip_boom::{boom, BoomSetup};
+use edgekf_tests::roundtrip_uuv::{uuv, UuvSetup};
 use edgekf_tests::{cross, qemu};
 use std::path::{Path, PathBuf};
 
@@ -37,6 +38,18 @@ fn the_oscillator_round_trip_closes_on_the_node() {
     let figures = oscillator(&setup, &shipped, &build).unwrap_or_else(|e| panic!("{e:#}"));
     eprintln!("{figures}");
     figures.check(setup.offset_m_s2).unwrap_or_else(|e| panic!("{e:#}"));
+}
+
+#[test]
+fn the_vehicle_round_trip_closes_on_the_node() {
+    if std::env::var_os("EDGEKF_LONG").is_none() {
+        eprintln!("the vehicle's round trip runs with EDGEKF_LONG=1 (cargo xtask test --long)");
+        return;
+    }
+    let (shipped, build, dir) = rebuilds("edgekf-uuv-qemu", "EDGEKF_UUV_MODEL", "uuv-test");
+    let figures = uuv(&UuvSetup::new(dir), &shipped, &build).unwrap_or_else(|e| panic!("{e:#}"));
+    eprintln!("{figures}");
+    figures.check().unwrap_or_else(|e| panic!("{e:#}"));
 }
 
 #[test]
