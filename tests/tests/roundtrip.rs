@@ -8,8 +8,10 @@
 //! built) and took 39 s on 2 cores.
 //!
 //! The boom's round trip (`edgekf_tests::roundtrip_boom`: a heavier platform, the loop on the
-//! uploaded recording) runs with `EDGEKF_LONG=1` (`cargo xtask test --long`, which also sets
-//! `EDGEKF_BOOM_ELF`): two 120 s recordings and their loops take minutes, more than CI's share.
+//! uploaded recording) and the vehicle's (`edgekf_tests::roundtrip_uuv`: a sideways DVL
+//! offset, likewise) run with `EDGEKF_LONG=1` (`cargo xtask test --long`, which also sets
+//! `EDGEKF_BOOM_ELF` and `EDGEKF_UUV_ELF`): their recordings and loops take minutes (72 s and
+//! 134 s here), more than CI's share.
 #![cfg(feature = "hil")]
 
 use edgekf_tests::roundtrip::{oscillator, Setup};

@@ -363,4 +363,29 @@ mod tests {
         let e = UuvEstimator::<f64, 12>::new(&Vehicle::default(), &s).err();
         assert_eq!(e, Some(EstimatorError::StateCount { layout: 20, filter: 12 }));
     }
+
+    #[test]
+    fn a_declared_dvl_offset_is_taken_off_the_readings() {
+        // Readings offset by 0.05 m/s sideways into an estimator told of it: the same estimates
+        // as the readings without it (the same arithmetic up to the subtraction's rounding).
+        let layout = Layout { main: true, vertical: true, biases: true, current: true };
+        let clean = EstimatorSettings::new(layout, 50.0);
+        let told = EstimatorSettings { dvl_offset: [0.0, 0.05, 0.0], ..clean };
+        let mut a = UuvEstimator::<f64, 20>::new(&Vehicle::default(), &clean).unwrap();
+        let mut b = UuvEstimator::<f64, 20>::new(&Vehicle::default(), &told).unwrap();
+        let row = |k: usize, v: f64| Sample {
+            acc: [0.0, -0.9, -9.77],
+            gyro: [0.0; 3],
+            depth: 10.0,
+            heading: 0.785,
+            dvl: (k % 10 == 0).then_some([1.54, v, 0.0]),
+            command: Command { n_t: 1500.0, n_v: 1670.0, ..Default::default() },
+        };
+        for k in 0..50 {
+            let (ea, eb) = (a.step(&row(k, 0.0)), b.step(&row(k, 0.05)));
+            assert!((ea.nu[1] - eb.nu[1]).abs() < 1e-9 && (ea.z - eb.z).abs() < 1e-9, "sample {k}");
+        }
+        let bad = EstimatorSettings { dvl_offset: [f64::NAN, 0.0, 0.0], ..clean };
+        assert_eq!(UuvEstimator::<f64, 20>::new(&Vehicle::default(), &bad).err(), Some(EstimatorError::Settings));
+    }
 }

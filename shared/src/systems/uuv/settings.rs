@@ -236,7 +236,7 @@ pub struct EstimatorSettings {
     pub dt: f64,
     /// The DVL's known offset on `u, v, w`, m/s, taken off each reading before it is used: how
     /// an offset the loop found (`sensor_bias` at a DVL axis) becomes part of the node's model
-    /// (`[estimator] dvl_offset`).
+    /// (`[estimator.dvl_offset]`).
     pub dvl_offset: [f64; 3],
 }
 
