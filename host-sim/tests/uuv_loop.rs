@@ -137,3 +137,30 @@ fn the_engine_screens_the_vehicles_declared_parameters() {
     assert!(r.effects_added.is_empty(), "from {from} s: {:?}", effects(&r));
     assert_eq!(unseen(&r), ["sensor_bias at dvl_u (rivals: unknown_input at current)"], "from {from} s");
 }
+
+/// A sideways DVL offset the configuration lacks is named, written into the corrected
+/// configuration's `[estimator.dvl_offset]` (which the node's estimator takes off each
+/// reading), and that configuration adds nothing, on the same flight and on a fresh one.
+#[test]
+fn a_sideways_dvl_offset_is_carried_into_the_corrected_configuration() {
+    use edgekf_sim::residual_loop::correction::corrected_config;
+    let mut sim = UuvConfig::default();
+    sim.sensors.dvl_offset = [0.0, 0.05, 0.0];
+    let shipped = include_str!("../configs/uuv_remus100.toml");
+    let flight = |seed| simulate(&sim, &SimOptions { scenario: Scenario::Healthy, duration: 150.0, seed }, &mut |_| {});
+    let first = flight(10).unwrap().to_data_file();
+    let r = close_loop(&UuvConfig::from_toml_str(shipped).unwrap(), &first, &LoopOptions::default()).unwrap();
+    assert_eq!(r.effects_added.len(), 1, "{:?}", effects(&r));
+    let e = &r.effects_added[0];
+    assert_eq!((e.kind.as_str(), e.location.as_str()), ("sensor_bias", "dvl_v"), "{:?}", effects(&r));
+    assert!((e.value - 0.05).abs() < 0.01, "{:?}", effects(&r));
+    let text = corrected_config(shipped, &r.corrections, "report.json").unwrap();
+    assert!(text.contains("[estimator.dvl_offset]\n# report.json, sensor_bias at dvl_v: was 0\nv = "), "{text}");
+    let fixed = UuvConfig::from_toml_str(&text).unwrap();
+    assert_eq!(fixed.estimator.dvl_offset.v, e.value);
+    for (name, data) in [("the same flight", first), ("a fresh one", flight(11).unwrap().to_data_file())] {
+        let again = close_loop(&fixed, &data, &LoopOptions::default()).unwrap();
+        assert!(again.effects_added.is_empty(), "{name}: {:?}", effects(&again));
+    }
+    println!("dvl_v +0.05 m/s: {:?}; the corrected configuration adds nothing", effects(&r));
+}

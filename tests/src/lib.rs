@@ -25,6 +25,7 @@ pub mod report;
 pub mod rotor;
 pub mod roundtrip;
 pub mod roundtrip_boom;
+pub mod roundtrip_uuv;
 pub mod soak;
 
 /// Compares two runs block by block and returns a readable description of the first

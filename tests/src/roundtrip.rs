@@ -11,6 +11,7 @@
 use crate::qemu;
 use crate::report::{frame, RunReport};
 use anyhow::{anyhow, bail, Context, Result};
+use edgekf_firmware::frame::Frame;
 use edgekf_firmware::monitor::MismatchFrame;
 use edgekf_firmware::systems::oscillator::BlockReport;
 use edgekf_sim::systems::oscillator::scenario::Scenario;
@@ -242,6 +243,167 @@ pub(crate) fn close_loop(dir: &Path, name: &str, args: &[&str], corrected: Optio
     effects_added(&report)
 }
 
+/// One node's run on a recording: its RMS error against the recording's truth after a
+/// settling time (in the unit of the estimate it was taken on), and its `mismatch` frames with
+/// the sample each followed.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NodeRun {
+    /// RMS of the estimate against its truth column.
+    pub error: f64,
+    /// `(sample, frame)` of each `mismatch`.
+    pub mismatches: Vec<(u32, MismatchFrame)>,
+}
+
+impl NodeRun {
+    /// Its mismatch frames on `channel`.
+    pub fn on(&self, channel: u8) -> usize {
+        self.mismatches.iter().filter(|(_, m)| m.channel == channel).count()
+    }
+
+    /// Its first mismatch on `channel` as `statistic at s (since sample n)`, or `none`.
+    pub fn first_on(&self, channel: u8, rate: f64) -> String {
+        self.mismatches.iter().find(|(_, m)| m.channel == channel).map_or("none".to_string(), |(s, m)| {
+            let statistic = m.statistic().map_or("unknown", |s| s.name());
+            format!("{statistic} at {:.2} s (since sample {})", f64::from(*s) / rate, m.since)
+        })
+    }
+}
+
+/// The part of a round trip's figures every system with a model monitor shares: the three
+/// nodes on the fresh recording, what the loop adds with the corrected configuration, the time.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Fresh {
+    /// On the fresh recording: the shipped node, the corrected one, the true one.
+    pub nodes: [NodeRun; 3],
+    /// Effects the loop adds with the corrected configuration on the first recording and on
+    /// the fresh one.
+    pub rerun_adds: (Vec<String>, Vec<String>),
+    /// Wall-clock seconds of the whole round trip.
+    pub seconds: f64,
+}
+
+impl Fresh {
+    /// The corrected node tracks within [`ERROR_RATIO_LIMIT`] of the true node (and better than
+    /// the shipped one), raises no `mismatch` on the `watched` channels (the effect's) nor any
+    /// (channel, statistic) the true node does not, and the corrected configuration adds
+    /// nothing on either recording.
+    pub fn check(&self, watched: &[u8]) -> Result<()> {
+        let [before, after, truth] = &self.nodes;
+        if after.error > ERROR_RATIO_LIMIT * truth.error || after.error >= before.error {
+            bail!(
+                "corrected node's error {:.4e} against the true node's {:.4e} and the shipped {:.4e}",
+                after.error,
+                truth.error,
+                before.error
+            );
+        }
+        let raised = |r: &NodeRun| r.mismatches.iter().map(|(_, m)| (m.channel, m.statistic)).collect::<Vec<_>>();
+        let on_watched = watched.iter().any(|&c| after.on(c) != 0);
+        if on_watched || raised(after).iter().any(|m| !raised(truth).contains(m)) {
+            bail!("the corrected node raised {:?}, the true node {:?}", after.mismatches, truth.mismatches);
+        }
+        if !self.rerun_adds.0.is_empty() || !self.rerun_adds.1.is_empty() {
+            bail!("the corrected configuration still adds {:?} / {:?}", self.rerun_adds.0, self.rerun_adds.1);
+        }
+        Ok(())
+    }
+
+    /// The figures' last lines: `what` says which error, `run` shows one node's run.
+    pub fn write(
+        &self,
+        f: &mut std::fmt::Formatter<'_>,
+        what: &str,
+        run: impl Fn(&NodeRun) -> String,
+    ) -> std::fmt::Result {
+        let [b, c, t] = &self.nodes;
+        writeln!(
+            f,
+            "fresh recording, {what}: shipped node {}, corrected {}, true-config {}; corrected/true = {:.3}",
+            run(b),
+            run(c),
+            run(t),
+            c.error / t.error
+        )?;
+        writeln!(
+            f,
+            "the loop with the corrected configuration adds: on the first recording {:?}, on the fresh one {:?}",
+            self.rerun_adds.0, self.rerun_adds.1
+        )?;
+        write!(f, "round trip: {:.0} s", self.seconds)
+    }
+}
+
+/// Runs `elf` on `csv` in QEMU: each per-sample frame `F` gives `(sample, estimate)` through
+/// `estimate`, compared with the recording's column `truth` from `settle_s` on (a NaN
+/// estimate counts as missed, not as zero error: the run fails if any is); the `mismatch`
+/// frames are kept with the sample they followed.
+pub(crate) fn node_run<F: Frame>(
+    elf: &Path,
+    csv: &Path,
+    (truth, settle_s): (&str, f64),
+    estimate: impl Fn(&F) -> (u32, f64),
+) -> Result<NodeRun> {
+    let input = std::fs::read(csv).with_context(|| format!("reading {}", csv.display()))?;
+    let run = qemu::run(elf, &input, Duration::from_secs(900))?;
+    if let Some(msg) = run.failure() {
+        bail!(msg);
+    }
+    let data = edgekf_sim::io::data::read(csv, &[truth]).map_err(|e| anyhow!("{}: {e}", csv.display()))?.0;
+    let truth = data.column(truth).ok_or_else(|| anyhow!("{}: no {truth}", csv.display()))?;
+    let (mut sum, mut n, mut sample, mut mismatches) = (0.0, 0usize, 0u32, Vec::new());
+    for line in &run.lines {
+        if let Some(f) = frame::<F>(line)? {
+            let (k, x) = estimate(&f);
+            sample = k;
+            let i = (k as usize).saturating_sub(1);
+            if let (Some(&t), Some(&want)) = (data.t.get(i), truth.get(i)) {
+                if t >= settle_s {
+                    if !x.is_finite() {
+                        bail!("{}: no estimate at sample {k}", csv.display());
+                    }
+                    sum += (x - want).powi(2);
+                    n += 1;
+                }
+            }
+        } else if let Some(m) = frame::<MismatchFrame>(line)? {
+            mismatches.push((sample, m));
+        }
+    }
+    if n == 0 {
+        bail!("{}: no sample after {settle_s} s", csv.display());
+    }
+    Ok(NodeRun { error: (sum / n as f64).sqrt(), mismatches })
+}
+
+/// Where a round trip's files go and how it rebuilds the image: `build` cross-builds the
+/// system's image with a constants file and returns its ELF, which is copied into `dir` (the
+/// next build lands on the same path).
+pub(crate) struct Rebuilds<'a> {
+    /// The round trip's folder.
+    pub dir: &'a Path,
+    /// The system's name in `edgekf <system> export`.
+    pub system: &'a str,
+    /// The image's build with a constants file.
+    pub build: &'a dyn Fn(&Path) -> Result<PathBuf>,
+}
+
+impl Rebuilds<'_> {
+    /// `elf` copied to `dir/name`.
+    pub fn copy(&self, elf: &Path, name: &str) -> Result<PathBuf> {
+        let to = self.dir.join(name);
+        std::fs::copy(elf, &to).with_context(|| format!("copying {} to {}", elf.display(), to.display()))?;
+        Ok(to)
+    }
+
+    /// `edgekf <system> export` of `config` into `dir/<name>_<system>.rs`, the image built
+    /// with it, copied to `dir/<name>.elf`.
+    pub fn image(&self, config: &Path, name: &str) -> Result<PathBuf> {
+        let rs = self.dir.join(format!("{name}_{}.rs", self.system));
+        edgekf(&[self.system, "export", "--config", arg(config), "--out", arg(&rs)])?;
+        self.copy(&(self.build)(&rs)?, &format!("{name}.elf"))
+    }
+}
+
 /// `dir`, emptied (made if missing).
 pub(crate) fn empty(dir: &Path) -> Result<()> {
     if dir.exists() {
@@ -269,13 +431,11 @@ pub fn oscillator(setup: &Setup, shipped: &Path, build: &dyn Fn(&Path) -> Result
     let (alarm_csv, fresh_csv) = (file("alarm.csv"), file("fresh.csv"));
     edgekf(&["oscillator", "simulate", "--config", arg(&alarm_toml), "--out", arg(&alarm_csv)])?;
     edgekf(&["oscillator", "simulate", "--config", arg(&fresh_toml), "--out", arg(&fresh_csv)])?;
-    let copy = |elf: &Path, name: &str| std::fs::copy(elf, file(name)).map(|_| file(name));
-    let shipped = copy(shipped, "shipped.elf")?;
+    let images = Rebuilds { dir, system: "oscillator", build };
+    let shipped = images.copy(shipped, "shipped.elf")?;
 
     // The true configuration's node (its offset declared).
-    let true_rs = file("true_harmonic.rs");
-    edgekf(&["oscillator", "export", "--config", arg(&true_toml), "--out", arg(&true_rs)])?;
-    let true_elf = copy(&build(&true_rs)?, "true.elf")?;
+    let true_elf = images.image(&true_toml, "true")?;
 
     // The alarm, the window, the loop, the corrected configuration and its constants.
     let lines = node(&shipped, &alarm_csv)?;
@@ -292,9 +452,7 @@ pub fn oscillator(setup: &Setup, shipped: &Path, build: &dyn Fn(&Path) -> Result
     let effects =
         close_loop(dir, "report", &["oscillator", "--config", arg(&declared), "--data", arg(&window)], Some(&fixed))?;
     let corrected_offset = Scenario::load(&fixed)?.filter.accel_offset_m_s2;
-    let corrected_rs = file("corrected_harmonic.rs");
-    edgekf(&["oscillator", "export", "--config", arg(&fixed), "--out", arg(&corrected_rs)])?;
-    let corrected = copy(&build(&corrected_rs)?, "corrected.elf")?;
+    let corrected = images.image(&fixed, "corrected")?;
 
     // The three nodes on the fresh recording, and the loop's checks.
     let fresh_scenario = Scenario::load(&fresh_toml)?;

@@ -8,12 +8,15 @@
 //! built) and took 39 s on 2 cores.
 //!
 //! The boom's round trip (`edgekf_tests::roundtrip_boom`: a heavier platform, the loop on the
-//! uploaded recording) runs with `EDGEKF_LONG=1` (`cargo xtask test --long`, which also sets
-//! `EDGEKF_BOOM_ELF`): two 120 s recordings and their loops take minutes, more than CI's share.
+//! uploaded recording) and the vehicle's (`edgekf_tests::roundtrip_uuv`: a sideways DVL
+//! offset, likewise) run with `EDGEKF_LONG=1` (`cargo xtask test --long`, which also sets
+//! `EDGEKF_BOOM_ELF` and `EDGEKF_UUV_ELF`): their recordings and loops take minutes (72 s and
+//! 134 s here), more than CI's share.
 #![cfg(feature = "hil")]
 
 use edgekf_tests::roundtrip::{oscillator, Setup};
 use edgekf_tests::roundtrip_boom::{boom, BoomSetup};
+use edgekf_tests::roundtrip_uuv::{uuv, UuvSetup};
 use edgekf_tests::{cross, qemu};
 use std::path::{Path, PathBuf};
 
@@ -37,6 +40,18 @@ fn the_oscillator_round_trip_closes_on_the_node() {
     let figures = oscillator(&setup, &shipped, &build).unwrap_or_else(|e| panic!("{e:#}"));
     eprintln!("{figures}");
     figures.check(setup.offset_m_s2).unwrap_or_else(|e| panic!("{e:#}"));
+}
+
+#[test]
+fn the_vehicle_round_trip_closes_on_the_node() {
+    if std::env::var_os("EDGEKF_LONG").is_none() {
+        eprintln!("the vehicle's round trip runs with EDGEKF_LONG=1 (cargo xtask test --long)");
+        return;
+    }
+    let (shipped, build, dir) = rebuilds("edgekf-uuv-qemu", "EDGEKF_UUV_MODEL", "uuv-test");
+    let figures = uuv(&UuvSetup::new(dir), &shipped, &build).unwrap_or_else(|e| panic!("{e:#}"));
+    eprintln!("{figures}");
+    figures.check().unwrap_or_else(|e| panic!("{e:#}"));
 }
 
 #[test]

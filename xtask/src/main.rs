@@ -30,6 +30,9 @@
 //! * `cargo xtask roundtrip boom` — the boom's: a heavier platform → the node's `mismatch` →
 //!   `edgekf loop boom --corrected-config` on the uploaded recording → `edgekf boom export` →
 //!   the rebuilt node on a fresh recording (files in `target/roundtrip/boom/`).
+//! * `cargo xtask roundtrip uuv` — the vehicle's: a sideways DVL offset → the node's
+//!   `mismatch` → `edgekf loop uuv --corrected-config` on the uploaded flight → `edgekf uuv
+//!   export` → the rebuilt node on a fresh flight (files in `target/roundtrip/uuv/`).
 //! * `cargo xtask provision` — install what a fresh Debian machine lacks (as root), or say what.
 //!
 //! Every build proves its image panic-free at link time (feature `no-panic-proof`); a failed
@@ -100,7 +103,7 @@ fn run() -> Result<()> {
         }
         _ => {
             eprintln!(
-                "usage: cargo xtask <test [--long] | fw [{0}] | panics [{0}] | run [--data FILE.csv] | bench [--check] | soak | fuzz [--seconds N] [TARGET…] | loop-matrix [SYSTEM…] | roundtrip oscillator|boom | provision>",
+                "usage: cargo xtask <test [--long] | fw [{0}] | panics [{0}] | run [--data FILE.csv] | bench [--check] | soak | fuzz [--seconds N] [TARGET…] | loop-matrix [SYSTEM…] | roundtrip oscillator|boom|uuv | provision>",
                 images::flags()
             );
             std::process::exit(2);
@@ -125,7 +128,8 @@ fn test(long: bool) -> Result<()> {
     let mut hil = cargo_here();
     hil.args(["test", "-p", "edgekf-tests", "--features", "hil"]);
     let mut tests: Vec<&str> = Vec::new();
-    let (mut oscillator, mut boom) = (None, None);
+    // The images whose round trips run with --long: their variables and ELFs.
+    let (mut oscillator, mut long_images) = (None, Vec::new());
     for image in IMAGES.iter().filter(|i| i.role != Role::Bench) {
         step(&format!("firmware: cross-build {} and prove it panic-free", image.what));
         let elf = firmware::build(image)?;
@@ -135,8 +139,8 @@ fn test(long: bool) -> Result<()> {
         }
         if let Role::Hil { env, tests: these } = image.role {
             hil.env(env, &elf);
-            if env == "EDGEKF_BOOM_ELF" {
-                boom = Some(elf.clone());
+            if ["EDGEKF_BOOM_ELF", "EDGEKF_UUV_ELF"].contains(&env) {
+                long_images.push((env, elf.clone()));
             }
             for t in these {
                 if !tests.contains(t) {
@@ -158,14 +162,17 @@ fn test(long: bool) -> Result<()> {
 
     // Last: it rebuilds the oscillator's image with other constants (the ELF the HIL tests
     // read is then the corrected model's until the next build).
-    // With --long, the boom's too (it rebuilds the boom's image the same way).
-    step("the round trips in QEMU (tests/roundtrip.rs: the oscillator's; the boom's with --long)");
+    // With --long, the boom's and the vehicle's too (they rebuild their images the same way).
+    step("the round trips in QEMU (tests/roundtrip.rs: the oscillator's; the boom's and the vehicle's with --long)");
     let mut rt = cargo_here();
     rt.args(["test", "-p", "edgekf-tests", "--features", "hil", "--test", "roundtrip"]);
     rt.args(["--", "--nocapture", "--test-threads", "1"]);
     rt.env("EDGEKF_FW_ELF", oscillator.context("no oscillator image was built")?);
     if long {
-        rt.env("EDGEKF_LONG", "1").env("EDGEKF_BOOM_ELF", boom.context("no boom image was built")?);
+        if long_images.len() != 2 {
+            bail!("the boom's and the vehicle's images were not both built");
+        }
+        rt.env("EDGEKF_LONG", "1").envs(long_images);
     }
     status(rt, "the round trip")?;
     step("all tests passed");
@@ -182,10 +189,10 @@ fn loop_matrix(systems: &[String]) -> Result<()> {
     status(run, "the effect matrices")
 }
 
-/// `cargo xtask roundtrip <system>`: the oscillator's and the boom's (see
-/// `edgekf_tests::roundtrip` and `edgekf_tests::roundtrip_boom`).
+/// `cargo xtask roundtrip <system>`: the oscillator's, the boom's and the vehicle's (see
+/// `edgekf_tests::roundtrip`, `edgekf_tests::roundtrip_boom` and `edgekf_tests::roundtrip_uuv`).
 fn roundtrip(system: Option<&str>) -> Result<()> {
-    use edgekf_tests::{roundtrip, roundtrip_boom};
+    use edgekf_tests::{roundtrip, roundtrip_boom, roundtrip_uuv};
     let target = std::env::var_os("CARGO_TARGET_DIR")
         .map(std::path::PathBuf::from)
         .unwrap_or_else(|| firmware::workspace_root().join("target"))
@@ -215,7 +222,14 @@ fn roundtrip(system: Option<&str>) -> Result<()> {
             println!("{figures}");
             figures.check()
         }
-        _ => bail!("roundtrip: give the system; the round trip exists for: oscillator, boom"),
+        Some("uuv") => {
+            let setup = roundtrip_uuv::UuvSetup::new(target.join("uuv"));
+            let (shipped, build) = rebuilds("edgekf-uuv-qemu", "EDGEKF_UUV_MODEL", &setup.dir)?;
+            let figures = roundtrip_uuv::uuv(&setup, &shipped, &build)?;
+            println!("{figures}");
+            figures.check()
+        }
+        _ => bail!("roundtrip: give the system; the round trip exists for: oscillator, boom, uuv"),
     }
 }
 

@@ -10,14 +10,25 @@
 //! its readings and are read as missing, not as bad lines. Output: a [`UuvFrame`] per sample,
 //! and a [`UuvEnd`] at the end of the run. Memory: the estimator (about 8 KB of matrices) lives
 //! in the caller's [`Storage`], not on the stack of every call.
+//!
+//! The image runs the model monitor ([`crate::monitor::Monitored`]) on the normalised
+//! innovations of its eleven measured channels ([`MONITORED`]), read from the estimator's own
+//! updates ([`UpdateObserver`]) rather than from a second filter. Two channels do not fit the
+//! model on healthy flights: the window means of `acc_x` (0) and of the heading (7) alarm on
+//! most 300 s flights of the simulator (10 of seeds 1–12), as the boom's gyro does; the
+//! vehicle's reduced dynamics leave slow errors in surge and yaw there that the cautious
+//! process noise follows but does not whiten. The DVL's channels (8–10) are quiet on healthy
+//! flights and flag a DVL offset (`cargo xtask roundtrip uuv`).
 
 use crate::frame::FrameSink;
 use crate::hil::{clocked_node, FileEnd, HilError, HilImage, HilNode};
 use crate::line_feed::{ByteSource, ChannelReader};
+use crate::monitor::{Monitored, Normalised};
 use crate::node::{Innovation, NodeEstimator, Poll};
 use crate::source::ChannelSource;
+use edgekf::residual::MonitorSettings;
 use edgekf::systems::uuv::{
-    Command, Estimate, EstimatorError, Layout, Sample, Status, UuvEstimator,
+    Command, Estimate, EstimatorError, Layout, Sample, Status, UpdateObserver, UuvEstimator,
 };
 
 #[cfg(all(target_os = "none", feature = "qemu"))]
@@ -50,6 +61,23 @@ pub use edgekf::systems::uuv::CHANNELS;
 
 /// The estimator, kept by the caller.
 pub type Storage = Option<UuvEstimator<f32, STATES>>;
+
+/// The channels the model monitor watches: every measured one, in the data file's names and
+/// order (`acc_x` … `gyro_z`, `depth`, `heading`, `dvl_u`, `dvl_v`, `dvl_w`), so that a
+/// `mismatch` frame's channel is the sensor whose readings the model stopped explaining.
+pub const MONITORED: usize = 11;
+
+/// The model monitor's settings: the shipped false-alarm rate (one per 100 h) at
+/// [`SAMPLE_RATE_HZ`], tests from 30 s after start-up, and the oscillator's tolerance of 0.2
+/// autocorrelation. Why 30 s: the filter starts its velocity, attitude and biases from one
+/// sample with wide spreads, and its innovations exceed their covariance until it has
+/// converged. The DVL's channels update one sample in ten: their run length, counted in their
+/// own updates, is ten times as long in time, so they alarm less often than their share (on
+/// the safe side), and a bias window of 256 readings spans 51 s.
+pub fn monitor_settings() -> MonitorSettings {
+    let rate = f64::from(SAMPLE_RATE_HZ);
+    MonitorSettings { settle_s: 30.0, whiteness_tolerance: 0.2, ..MonitorSettings::new(rate) }
+}
 
 /// A status as one byte: 0 healthy, 1 degraded, 2 failed.
 ///
@@ -127,6 +155,13 @@ impl<'s> UuvNode<'s> {
     pub fn step(&mut self, row: Option<[f32; 15]>) -> Estimate<f32> {
         self.samples = self.samples.saturating_add(1);
         self.est.step(&sample(row))
+    }
+
+    /// [`step`](Self::step), writing each monitored channel's normalised innovation into `z`
+    /// (left as it was where the channel had no update).
+    fn step_normalised_into(&mut self, row: Option<[f32; 15]>, z: &mut [f32; MONITORED]) -> Estimate<f32> {
+        self.samples = self.samples.saturating_add(1);
+        self.est.step_observed(&sample(row), &mut Normalise(z))
     }
 
     /// Samples stepped (rows, and missing rows bridged).
@@ -223,10 +258,41 @@ impl NodeEstimator for UuvNode<'_> {
     }
 }
 
+/// Writes an applied update's innovations, each over its own standard deviation `√Sᵢᵢ`, into
+/// the monitor's channels. The IMU, depth and heading are one joint update: each of its
+/// channels is standard normal on its own (its marginal), which is what the monitor tests.
+struct Normalise<'z>(&'z mut [f32; MONITORED]);
+
+impl UpdateObserver<f32> for Normalise<'_> {
+    fn seen<const K: usize>(&mut self, innovation: &edgekf::filter::Innovation<f32, K>, channels: [usize; K]) {
+        for (i, c) in channels.into_iter().enumerate() {
+            if let (Some(z), Some(&nu), Some(&s)) =
+                (self.0.get_mut(c), innovation.residual.get(i), innovation.s.get((i, i)))
+            {
+                // A variance that is not positive gives a NaN or infinite z: skipped by the
+                // monitor as a channel without an update.
+                *z = nu / libm::sqrtf(s);
+            }
+        }
+    }
+}
+
+/// Its eleven channels ([`MONITORED`]): every measured channel's innovation over its own
+/// variance.
+impl Normalised<MONITORED> for UuvNode<'_> {
+    fn step_normalised(&mut self, input: Option<[f32; 15]>, z: &mut [f32; MONITORED]) -> Innovation {
+        let e = self.step_normalised_into(input, z);
+        self.pending = Some(e);
+        Innovation::default()
+    }
+}
+
 /// The QEMU image `edgekf-uuv-qemu`: the vehicle's channels from the HIL file (other columns
 /// ignored; empty cells are missing values, lines that do not parse are stepped as missing
 /// samples and counted, lines missing by their `t` are bridged for up to
-/// [`crate::source::MAX_GAP_S`]); a `uuv` frame per sample, then `file` ([`FileEnd`]) and `uuvend`.
+/// [`crate::source::MAX_GAP_S`]); a `uuv` frame per sample (a `mismatch` after it when the
+/// model monitor found one: the channel is [`MONITORED`]'s number, 0 `acc_x` … 10 `dvl_w`), then
+/// `file` ([`FileEnd`]) and `uuvend`.
 pub struct UuvImage;
 
 impl HilImage for UuvImage {
@@ -235,7 +301,7 @@ impl HilImage for UuvImage {
     type Input = [f32; 15];
     type Storage = Storage;
     type Source<B: ByteSource> = ChannelSource<B, 15>;
-    type Estimator<'s> = UuvNode<'s>;
+    type Estimator<'s> = Monitored<UuvNode<'s>, MONITORED>;
     type StartError = EstimatorError;
 
     fn storage() -> Storage {
@@ -245,7 +311,9 @@ impl HilImage for UuvImage {
     #[inline(never)] // start-up temporaries stay out of the caller's frame
     fn start<B: ByteSource>(input: B, storage: &mut Storage) -> Result<HilNode<'_, Self, B>, HilError<EstimatorError>> {
         let reader = ChannelReader::new(input, CHANNELS).map(ChannelReader::with_empty_cells);
-        clocked_node(reader, SAMPLE_RATE_HZ, move || Ok(UuvNode::new(storage.insert(estimator()?))))
+        clocked_node(reader, SAMPLE_RATE_HZ, move || {
+            Ok(Monitored::new(UuvNode::new(storage.insert(estimator()?)), &monitor_settings()))
+        })
     }
 
     fn finish<B: ByteSource>(node: &HilNode<'_, Self, B>, sink: &mut impl FrameSink) {
@@ -260,5 +328,55 @@ impl HilImage for UuvImage {
             covariance_resets: h.covariance_resets,
             refused_updates: h.refused_updates,
         });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A level row at 1500 rpm, with a DVL reading when `dvl`.
+    fn row(dvl: bool) -> Option<[f32; 15]> {
+        let d = if dvl { [1.54, 0.0, 0.0] } else { [f32::NAN; 3] };
+        Some([0.0, -0.9, -9.77, 0.0, 0.0, 0.0, 10.0, 0.785, d[0], d[1], d[2], 1500.0, 1670.0, 0.0, 0.0])
+    }
+
+    #[test]
+    fn each_update_writes_its_channels_normalised_and_only_those() {
+        let mut est = estimator().unwrap();
+        let mut node = UuvNode::new(&mut est);
+        let mut z = [f32::NAN; MONITORED];
+        // The first sample starts the filter: no update, nothing written.
+        node.step_normalised(row(true), &mut z);
+        assert!(z.iter().all(|v| v.is_nan()), "{z:?}");
+        node.step_normalised(row(false), &mut z);
+        assert!(z[..8].iter().all(|v| v.is_finite()) && z[8..].iter().all(|v| v.is_nan()), "{z:?}");
+        let mut z = [f32::NAN; MONITORED];
+        node.step_normalised(row(true), &mut z);
+        assert!(z.iter().all(|v| v.is_finite()), "{z:?}");
+        // A missing row is a prediction: no channel is written.
+        let mut z = [f32::NAN; MONITORED];
+        node.step_normalised(None, &mut z);
+        assert!(z.iter().all(|v| v.is_nan()), "{z:?}");
+        assert_eq!(node.samples(), 4);
+    }
+
+    #[test]
+    fn a_dvl_offset_in_the_readings_is_a_biased_normalised_innovation() {
+        // 0.1 m/s on w (twenty of the DVL's σ), which the filter's vertical speed cannot take
+        // up at once: the first reading's normalised w innovation is far beyond the others.
+        let mut est = estimator().unwrap();
+        let mut node = UuvNode::new(&mut est);
+        let mut z = [f32::NAN; MONITORED];
+        for k in 0..40 {
+            node.step_normalised(row(k % 10 == 0 && k < 30), &mut z);
+        }
+        let mut biased = row(true);
+        if let Some(r) = biased.as_mut() {
+            r[10] += 0.1;
+        }
+        let mut z = [f32::NAN; MONITORED];
+        node.step_normalised(biased, &mut z);
+        assert!(z[10] > 3.0 && z[8].abs() < 3.0, "{z:?}");
     }
 }

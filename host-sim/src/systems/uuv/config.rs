@@ -169,6 +169,22 @@ pub struct EstimatorConfig {
     pub initial: InitialSpread,
     /// Change detector and status thresholds.
     pub detector: DetectorSettings,
+    /// The DVL's known offset, taken off its readings (what the loop writes when it finds
+    /// one; the simulated part's is `[sensors] dvl_offset`).
+    pub dvl_offset: DvlOffset,
+}
+
+/// `[estimator.dvl_offset]`: a table of three keys, not an array, so that a corrected
+/// configuration can name the axis it changes (`estimator.dvl_offset.v`).
+#[derive(Debug, Clone, Copy, PartialEq, Default, Deserialize, Serialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct DvlOffset {
+    /// Surge, m/s.
+    pub u: f64,
+    /// Sway, m/s.
+    pub v: f64,
+    /// Heave, m/s.
+    pub w: f64,
 }
 
 impl Default for EstimatorConfig {
@@ -181,6 +197,7 @@ impl Default for EstimatorConfig {
             noise: MeasurementNoise::default(),
             initial: InitialSpread::default(),
             detector: DetectorSettings::default(),
+            dvl_offset: DvlOffset::default(),
         }
     }
 }
@@ -199,6 +216,7 @@ impl EstimatorConfig {
             noise: self.noise,
             initial: self.initial,
             detector: self.detector,
+            dvl_offset: [self.dvl_offset.u, self.dvl_offset.v, self.dvl_offset.w],
             ..EstimatorSettings::new(self.layout(), rate)
         }
     }
@@ -258,10 +276,13 @@ impl UuvConfig {
             return bad(format!("sensors.dvl_rate = {} must divide sensors.rate = {}", s.dvl_rate, s.rate));
         }
         let noises = [s.acc_noise, s.acc_bias, s.gyro_noise, s.gyro_bias, s.depth_noise, s.heading_noise, s.dvl_noise];
-        if noises.iter().chain(&s.acc_offset).chain(&s.dvl_offset).any(|v| !v.is_finite())
+        let o = &self.estimator.dvl_offset;
+        if noises.iter().chain(&s.acc_offset).chain(&s.dvl_offset).chain(&[o.u, o.v, o.w]).any(|v| !v.is_finite())
             || noises.iter().any(|v| *v < 0.0)
         {
-            return bad("[sensors]: noises and biases must be finite and not negative".into());
+            return bad(
+                "[sensors], [estimator.dvl_offset]: noises and biases must be finite, noises not negative".into()
+            );
         }
         let c = &self.current;
         let speed_ok = c.speed[0] >= 0.0 && c.speed[1] >= c.speed[0] && c.speed[1].is_finite();

@@ -11,7 +11,7 @@ use super::detector::{Status, ThrusterMonitor};
 use super::dynamics::{Attitude, Drive, ReducedDynamics};
 use super::sample::{wrap, Command, Sample};
 use super::settings::{EstimatorSettings, Layout, VELOCITY};
-use super::update::{start_vehicle, update, Detectors, Dvl, UpdateNoise};
+use super::update::{start_vehicle, update, Detectors, Dvl, UpdateNoise, UpdateObserver};
 use super::vehicle::Vehicle;
 use crate::filter::{FilterHealth, MerweSigmaPoints, UkfError, UkfMeasurement, UkfModel, UnscentedKalmanFilter};
 use crate::Real;
@@ -182,7 +182,7 @@ impl<T: Real, const N: usize> UuvEstimator<T, N> {
             n.heading,
             n.dvl,
         ];
-        if values.iter().any(|v| !(v.is_finite() && *v > 0.0)) {
+        if values.iter().any(|v| !(v.is_finite() && *v > 0.0)) || settings.dvl_offset.iter().any(|v| !v.is_finite()) {
             return Err(EstimatorError::Settings);
         }
         Ok(Self {
@@ -216,12 +216,23 @@ impl<T: Real, const N: usize> UuvEstimator<T, N> {
     /// Takes one sample: the first starts the filter from the sensors; every later one
     /// predicts with the previous sample's commands and updates with what is present. A
     /// missing (NaN) command holds the last one; a sample with nothing present is a prediction
-    /// (a lost row bridged).
+    /// (a lost row bridged). A DVL reading has the declared offset
+    /// ([`EstimatorSettings::dvl_offset`]) taken off first.
     pub fn step(&mut self, s: &Sample<T>) -> Estimate<T> {
+        self.step_observed(s, &mut ())
+    }
+
+    /// [`step`](Self::step), with every update it applies shown to `observer` (its innovation
+    /// and the channels it covered, as [`UpdateObserver`] numbers them): how the node's model
+    /// monitor reads each channel's normalised innovation without a second filter. The first
+    /// sample starts the filter and applies no update.
+    pub fn step_observed<O: UpdateObserver<T>>(&mut self, s: &Sample<T>, observer: &mut O) -> Estimate<T> {
         let mut imu_nis = None;
+        let [ou, ov, ow] = self.settings.dvl_offset.map(T::of_f64);
+        let s = &Sample { dvl: s.dvl.map(|[u, v, w]| [u - ou, v - ov, w - ow]), ..*s };
         if self.ukf.is_none() {
             self.start(s);
-        } else if let Some(nis) = self.advance(s) {
+        } else if let Some(nis) = self.advance(s, observer) {
             imu_nis = Some(nis);
         }
         self.command = self.command.held(&s.command);
@@ -257,7 +268,7 @@ impl<T: Real, const N: usize> UuvEstimator<T, N> {
 
     /// Predict and update; the IMU update's NIS if it was applied.
     #[inline(never)]
-    fn advance(&mut self, s: &Sample<T>) -> Option<T> {
+    fn advance<O: UpdateObserver<T>>(&mut self, s: &Sample<T>, observer: &mut O) -> Option<T> {
         let layout = self.settings.layout;
         let model = StepModel { dynamics: &self.dynamics, layout, dt: self.dt, command: self.command };
         let ukf = self.ukf.as_mut()?;
@@ -265,7 +276,7 @@ impl<T: Real, const N: usize> UuvEstimator<T, N> {
         let factors = [layout.k_t(), layout.k_v()];
         let reopen = T::of_f64(self.settings.detector.reopen);
         let detectors = Detectors { monitors: &mut self.monitors, factors, reopen };
-        let nis = update(ukf, (&model, &Dvl), s, &self.r, detectors, &mut ());
+        let nis = update(ukf, (&model, &Dvl), s, &self.r, detectors, observer);
         // Dead reckoning on the updated velocity over ground.
         let x = ukf.state();
         let earth = Attitude::new(x[1], x[2], x[3]).to_earth() * x.fixed_rows::<3>(VELOCITY);
@@ -351,5 +362,30 @@ mod tests {
         let s = EstimatorSettings::new(Layout { main: true, vertical: true, biases: true, current: true }, 50.0);
         let e = UuvEstimator::<f64, 12>::new(&Vehicle::default(), &s).err();
         assert_eq!(e, Some(EstimatorError::StateCount { layout: 20, filter: 12 }));
+    }
+
+    #[test]
+    fn a_declared_dvl_offset_is_taken_off_the_readings() {
+        // Readings offset by 0.05 m/s sideways into an estimator told of it: the same estimates
+        // as the readings without it (the same arithmetic up to the subtraction's rounding).
+        let layout = Layout { main: true, vertical: true, biases: true, current: true };
+        let clean = EstimatorSettings::new(layout, 50.0);
+        let told = EstimatorSettings { dvl_offset: [0.0, 0.05, 0.0], ..clean };
+        let mut a = UuvEstimator::<f64, 20>::new(&Vehicle::default(), &clean).unwrap();
+        let mut b = UuvEstimator::<f64, 20>::new(&Vehicle::default(), &told).unwrap();
+        let row = |k: usize, v: f64| Sample {
+            acc: [0.0, -0.9, -9.77],
+            gyro: [0.0; 3],
+            depth: 10.0,
+            heading: 0.785,
+            dvl: (k % 10 == 0).then_some([1.54, v, 0.0]),
+            command: Command { n_t: 1500.0, n_v: 1670.0, ..Default::default() },
+        };
+        for k in 0..50 {
+            let (ea, eb) = (a.step(&row(k, 0.0)), b.step(&row(k, 0.05)));
+            assert!((ea.nu[1] - eb.nu[1]).abs() < 1e-9 && (ea.z - eb.z).abs() < 1e-9, "sample {k}");
+        }
+        let bad = EstimatorSettings { dvl_offset: [f64::NAN, 0.0, 0.0], ..clean };
+        assert_eq!(UuvEstimator::<f64, 20>::new(&Vehicle::default(), &bad).err(), Some(EstimatorError::Settings));
     }
 }

@@ -234,6 +234,10 @@ pub struct EstimatorSettings {
     pub detector: DetectorSettings,
     /// Sample interval, s.
     pub dt: f64,
+    /// The DVL's known offset on `u, v, w`, m/s, taken off each reading before it is used: how
+    /// an offset the loop found (`sensor_bias` at a DVL axis) becomes part of the node's model
+    /// (`[estimator.dvl_offset]`).
+    pub dvl_offset: [f64; 3],
 }
 
 impl EstimatorSettings {
@@ -246,6 +250,7 @@ impl EstimatorSettings {
             initial: InitialSpread::default(),
             detector: DetectorSettings::default(),
             dt: 1.0 / rate,
+            dvl_offset: [0.0; 3],
         }
     }
 }

@@ -110,4 +110,9 @@ pub const ESTIMATOR: EstimatorSettings = EstimatorSettings {
         failed: 0.3,
     },
     dt: 0.02,
+    dvl_offset: [
+        0.0,
+        0.0,
+        0.0,
+    ],
 };

@@ -74,7 +74,7 @@ impl<'a> UuvSystem<'a> {
             vehicle: config.vehicle,
             settings: config.estimator.settings(config.sensors.rate),
             data,
-            samples: samples(data)?,
+            samples: declared_offset(samples(data)?, &config.estimator.settings(config.sensors.rate)),
             declared: Effect::declared(&config.estimator.layout()),
             channels: CHANNELS.iter().zip(units).map(|(c, u)| Channel::new(*c, u)).collect(),
             rows: vec![Channel::new("k_t", "1"), Channel::new("k_v", "1"), Channel::new("u", "m/s")],
@@ -125,6 +125,16 @@ impl<'a> UuvSystem<'a> {
     fn in_model(&self, e: Effect, effects: &[Applied<Effect>]) -> bool {
         self.declared.contains(&e) || effects.iter().any(|a| a.effect == e)
     }
+}
+
+/// `samples` with the configuration's DVL offset taken off, as the node's estimator takes it
+/// (the loop runs the update directly, not the estimator's `step`).
+fn declared_offset(mut samples: Vec<Sample<f64>>, settings: &EstimatorSettings) -> Vec<Sample<f64>> {
+    let [ou, ov, ow] = settings.dvl_offset;
+    for dvl in samples.iter_mut().filter_map(|s| s.dvl.as_mut()) {
+        *dvl = [dvl[0] - ou, dvl[1] - ov, dvl[2] - ow];
+    }
+    samples
 }
 
 impl LoopSystem for UuvSystem<'_> {
@@ -218,7 +228,7 @@ impl LoopSystem for UuvSystem<'_> {
     }
 
     /// The vehicle's mass and surge drag, the configuration's component parameters, and a fixed
-    /// offset on each DVL axis (the sensor setting the node's estimator does not carry).
+    /// offset on each DVL axis (beyond `[estimator.dvl_offset]`, which the samples have taken off).
     fn declared(&self) -> Vec<Effect> {
         let mut out = vec![Effect::Parameter(Parameter::Mass), Effect::Parameter(Parameter::SurgeDrag)];
         out.extend((0..3).map(Effect::DvlOffset));
@@ -266,8 +276,9 @@ impl LoopSystem for UuvSystem<'_> {
                 Correction::model([ConfigEdit::or_absent("estimator.sensor_biases", Op::Switch(true), 0.0)])
             }
             Effect::Current => Correction::model([ConfigEdit::or_absent("estimator.current", Op::Switch(true), 0.0)]),
-            Effect::Bias(Sensor::Dvl(_)) | Effect::DvlOffset(_) => {
-                Correction::not_carried("the node's estimator carries no DVL bias")
+            Effect::Bias(Sensor::Dvl(axis)) | Effect::DvlOffset(axis) => {
+                let key = format!("estimator.dvl_offset.{}", ["u", "v", "w"].get(axis).unwrap_or(&"u"));
+                Correction::model([ConfigEdit::or_absent(key, Op::Add(value), 0.0)])
             }
             Effect::Health(_) => Correction::indicator(
                 [],
