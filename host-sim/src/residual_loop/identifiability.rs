@@ -17,26 +17,12 @@ impl<S: LoopSystem> Engine<'_, S> {
     /// difference the model's own mismatch could make is no evidence, as a gain below it is
     /// none).
     fn tie_margin(&self) -> f64 {
-        self.margin_at(self.nis_scale)
-    }
-
-    /// The [`tie_margin`](Self::tie_margin) at an NIS per channel of `nis` (at least 1).
-    fn margin_at(&self, nis: f64) -> f64 {
-        let nis = if nis.is_finite() { nis.max(1.0) } else { 1.0 };
-        self.options.identifiable_margin.max(self.options.gain_floor * nis * self.n_meas)
-    }
-
-    /// The margin that tells two corrections apart when `best` is the better: the margin at
-    /// the NIS `best` leaves. Both are corrected models; how far apart their likelihoods must
-    /// be is set by what a corrected model leaves unexplained, not by the larger mismatch of
-    /// the model before either (a load far off inflates that NIS tenfold).
-    fn correction_margin(&self, best: &Fitted<S::Effect, S::Model>) -> f64 {
-        self.margin_at(self.sys.summarise(&best.run).nis_mean)
+        self.options.identifiable_margin.max(self.options.gain_floor * self.nis_scale * self.n_meas)
     }
 
     /// Which of `results` (all fitted in one tier) to keep, given the best paying one `best`:
     /// the best, unless a fit of another quantity (a mass against a stiffness) pays within the
-    /// [`correction_margin`](Self::correction_margin) of it. Then `None`: the data cannot choose between
+    /// [`tie_margin`](Self::tie_margin) of it. Then `None`: the data cannot choose between
     /// two quantities, and a model corrected in the wrong one makes what it estimates worse
     /// than the declared one did (a load read as a stiffness moves every output the
     /// stiffness drives), so neither is added and each is reported with the others
@@ -44,7 +30,7 @@ impl<S: LoopSystem> Engine<'_, S> {
     /// and are listed ([`rivals`](Self::rivals)).
     pub(super) fn choose(&self, results: &[Fitted<S::Effect, S::Model>], best: usize) -> Option<usize> {
         let b = &results[best];
-        let margin = self.correction_margin(b);
+        let margin = self.tie_margin();
         let other_quantity = self.tied(results, best, margin).any(|f| quantity(&f.label) != quantity(&b.label));
         (!other_quantity).then_some(best)
     }
@@ -75,7 +61,7 @@ impl<S: LoopSystem> Engine<'_, S> {
         results: &[Fitted<S::Effect, S::Model>],
         best: usize,
     ) -> (Vec<NotIdentifiable>, String) {
-        let margin = self.correction_margin(&results[best]);
+        let margin = self.tie_margin();
         let named = |l: &EffectLabel| {
             let what = l.detail.parameter.as_deref().map(|p| format!("{p} ")).unwrap_or_default();
             format!("{} {what}at {}", l.kind, l.location)
@@ -145,7 +131,7 @@ impl<S: LoopSystem> Engine<'_, S> {
                     )
                 } else {
                     format!(
-                        "fits the data as well as {w}{value}: {:.2} better in log-likelihood, less than the {margin:.1} that tells two fits apart: the sensors cannot tell the two apart, and {w} comes first in the system's order (likelier in service)",
+                        "fits the data as well as {w}{value}: {:.2} better in log-likelihood, less than the {margin:.1} that tells two fits apart: the sensors cannot tell the two apart, and {w} gains more for what its parameters cost",
                         -gap
                     )
                 };
