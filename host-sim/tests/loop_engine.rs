@@ -69,12 +69,17 @@ enum Effect {
     /// A parameter the probe cannot see (a mount's stiffness far stiffer than the spring's):
     /// the model's response does not change with it.
     Mount,
+    /// The mass is off by `exp θ`: on a probe of displacement alone it moves the response
+    /// exactly as the stiffness off by `exp −θ` does (another quantity, the same innovations).
+    Mass,
 }
 
 struct Oscillator {
     t: Vec<f64>,
     y: Vec<f64>,
     truth: Vec<f64>,
+    /// Whether the mass is a candidate beside the stiffness.
+    mass: bool,
 }
 
 impl LoopSystem for Oscillator {
@@ -84,7 +89,8 @@ impl LoopSystem for Oscillator {
     const NAME: &'static str = "oscillator";
 
     fn run(&self, effects: &[Applied<Effect>]) -> anyhow::Result<(usize, Run)> {
-        let factor = effects.iter().find(|e| e.effect == Effect::Stiffness).map_or(1.0, |e| e.theta.exp());
+        let factor = |of: Effect| effects.iter().find(|e| e.effect == of).map_or(1.0, |e| e.theta.exp());
+        let factor = factor(Effect::Stiffness) / factor(Effect::Mass);
         let (a2, q2) = dynamics(factor);
         let bias = effects.iter().any(|e| e.effect == Effect::Bias);
         let n = if bias { 3 } else { 2 };
@@ -136,6 +142,9 @@ impl LoopSystem for Oscillator {
             // The mount too, as a careless system would: the engine must not both refuse it and
             // say the data cannot see it.
             named.extend([Effect::Stiffness, Effect::Mount]);
+            if self.mass {
+                named.push(Effect::Mass);
+            }
         }
         vec![named]
     }
@@ -151,7 +160,7 @@ impl LoopSystem for Oscillator {
     fn value(&self, _: &usize, run: &Run, e: &Applied<Effect>) -> f64 {
         match e.effect {
             Effect::Bias => settled_mean(&run.effect_states[0], 0),
-            Effect::Stiffness | Effect::Mount => e.theta.exp(),
+            Effect::Stiffness | Effect::Mount | Effect::Mass => e.theta.exp(),
         }
     }
 
@@ -160,6 +169,7 @@ impl LoopSystem for Oscillator {
             Effect::Bias => Correction::model([ConfigEdit::or_absent("probe.bias", Op::Add(value), 0.0)]),
             Effect::Stiffness => Correction::model([ConfigEdit::new("spring.k", Op::Scale(value))]),
             Effect::Mount => Correction::not_carried("the toy has no mount in its configuration"),
+            Effect::Mass => Correction::model([ConfigEdit::new("spring.m", Op::Scale(value))]),
         }
     }
 
@@ -176,6 +186,7 @@ impl Oscillator {
             Effect::Bias => (EffectKind::SensorBias, None, "m"),
             Effect::Stiffness => (EffectKind::Parameter, Some("stiffness".to_string()), "1"),
             Effect::Mount => (EffectKind::Parameter, Some("mount".to_string()), "1"),
+            Effect::Mass => (EffectKind::Parameter, Some("mass".to_string()), "1"),
         };
         let detail = EffectDetail { parameter, ..EffectDetail::default() };
         EffectLabel { kind, location: "q".into(), detail, unit: unit.into() }
@@ -186,7 +197,7 @@ impl Oscillator {
         let factor = ScalarRange::factor(0.5, 2.0, 1e-5);
         match e {
             Effect::Bias => Fitting::states(1),
-            Effect::Stiffness | Effect::Mount => Fitting::scalar(1, factor, 6),
+            Effect::Stiffness | Effect::Mount | Effect::Mass => Fitting::scalar(1, factor, 6),
         }
     }
 }
@@ -197,7 +208,7 @@ fn close(factor: f64, bias: f64, seed: u64) -> edgekf_sim::residual_loop::LoopRe
 
 fn close_with(factor: f64, bias: f64, seed: u64, options: LoopOptions) -> edgekf_sim::residual_loop::LoopReport {
     let (t, y, truth) = record(factor, bias, 4.0, seed);
-    search(&mut Oscillator { t, y, truth }, &options).unwrap()
+    search(&mut Oscillator { t, y, truth, mass: false }, &options).unwrap()
 }
 
 #[test]
@@ -241,6 +252,32 @@ fn engine_finds_a_wrong_stiffness_on_another_system() {
     let e = &r.effects_added[0];
     assert_eq!((e.kind.as_str(), e.detail.parameter.as_deref()), ("parameter", Some("stiffness")));
     assert!((e.value - 1.1).abs() < 0.01, "{}", e.value);
+}
+
+/// A stiffness 10 % high where the mass is a candidate too: on a probe of displacement the
+/// mass ×1/1.1 gives the same innovations, so the engine cannot tell which quantity is off. It
+/// adds neither (keeping the first in the system's order would add the stiffness), reports
+/// both as not identifiable, each naming the other and with its own fitted value, and says
+/// why it stopped.
+#[test]
+fn a_tie_between_two_quantities_adds_neither_and_names_both() {
+    let (t, y, truth) = record(1.1, 0.0, 4.0, 4);
+    let options = LoopOptions { screen_parameters: false, ..LoopOptions::default() };
+    let r = search(&mut Oscillator { t, y, truth, mass: true }, &options).unwrap();
+    assert!(r.effects_added.is_empty(), "{:?}", r.effects_added);
+    let tie = |p: &str| {
+        r.not_identifiable
+            .iter()
+            .find(|n| n.parameter.as_deref() == Some(p) && n.statistic == "delta_log_likelihood_gap")
+            .unwrap_or_else(|| panic!("no tie for the {p}: {:?}", r.not_identifiable))
+    };
+    let (k, m) = (tie("stiffness"), tie("mass"));
+    assert_eq!(
+        (k.rivals.as_slice(), m.rivals.as_slice()),
+        (["parameter mass at q".to_string()].as_slice(), ["parameter stiffness at q".to_string()].as_slice())
+    );
+    assert!(k.reason.contains("(fitted as ×1.") && m.reason.contains("(fitted as ×0.9"), "{k:?} {m:?}");
+    assert!(r.stopped.contains("cannot tell which"), "{}", r.stopped);
 }
 
 /// Each added effect with a scalar carries the 95 % interval of its value from the profile
@@ -293,7 +330,7 @@ fn toy_loop(
     anyhow::ensure!(cfg.get("frequency_hz").and_then(|v| v.as_float()) == Some(FREQ_HZ), "a 20 Hz toy only");
     let data = edgekf_sim::io::recording::read_data(&request.data, &["q"], RATE, &Default::default())?;
     let column = |name: &str| data.column(name).map(<[f64]>::to_vec).ok_or_else(|| anyhow::anyhow!("no {name}"));
-    let mut sys = Oscillator { t: data.t.clone(), y: column("q")?, truth: column("truth_q")? };
+    let mut sys = Oscillator { t: data.t.clone(), y: column("q")?, truth: column("truth_q")?, mass: false };
     let mut report = search(&mut sys, &request.options)?;
     report.source.data_sha256 = data.sha256.clone();
     Ok(report)

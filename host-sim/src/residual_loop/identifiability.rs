@@ -20,22 +20,77 @@ impl<S: LoopSystem> Engine<'_, S> {
         self.options.identifiable_margin.max(self.options.gain_floor * self.nis_scale * self.n_meas)
     }
 
-    /// Which of `results` (all fitted in one tier, in the system's order) to keep, given the
-    /// best paying one `best`: the best, unless a fit of another quantity (a mass against a
-    /// stiffness) pays within the [`tie_margin`](Self::tie_margin) of it. The data cannot
-    /// choose between those, so the system's order does: it lists its candidates likelier
-    /// first ([`LoopSystem::candidates`]). Ties of one quantity at other places keep the best
+    /// Which of `results` (all fitted in one tier) to keep, given the best paying one `best`:
+    /// the best, unless a fit of another quantity (a mass against a stiffness) pays within the
+    /// [`tie_margin`](Self::tie_margin) of it. Then `None`: the data cannot choose between
+    /// two quantities, and a model corrected in the wrong one makes what it estimates worse
+    /// than the declared one did (a load read as a stiffness moves every output the
+    /// stiffness drives), so neither is added and each is reported with the others
+    /// ([`undecided`](Self::undecided)). Ties of one quantity at other places keep the best
     /// and are listed ([`rivals`](Self::rivals)).
-    pub(super) fn choose(&self, results: &[Fitted<S::Effect, S::Model>], best: usize) -> usize {
+    pub(super) fn choose(&self, results: &[Fitted<S::Effect, S::Model>], best: usize) -> Option<usize> {
         let b = &results[best];
-        let tied = |f: &Fitted<S::Effect, S::Model>| {
-            family(&f.label) == family(&b.label) && self.pays(f) && (b.delta - f.delta).abs() < self.tie_margin()
+        let margin = self.tie_margin();
+        let other_quantity = self.tied(results, best, margin).any(|f| quantity(&f.label) != quantity(&b.label));
+        (!other_quantity).then_some(best)
+    }
+
+    /// The fits of `results` that pay and fit as well as `results[best]` (same family, a
+    /// log-likelihood within `margin`), `best` among them.
+    fn tied<'r>(
+        &self,
+        results: &'r [Fitted<S::Effect, S::Model>],
+        best: usize,
+        margin: f64,
+    ) -> impl Iterator<Item = &'r Fitted<S::Effect, S::Model>> + 'r {
+        let b = &results[best];
+        let (family_b, delta_b) = (family(&b.label), b.delta);
+        let paying: Vec<bool> = results.iter().map(|f| self.pays(f)).collect();
+        results
+            .iter()
+            .zip(paying)
+            .filter(move |(f, pays)| *pays && family(&f.label) == family_b && (delta_b - f.delta).abs() < margin)
+            .map(|(f, _)| f)
+    }
+
+    /// When [`choose`](Self::choose) keeps none: every fit tied with `results[best]`, each
+    /// reported as what the sensors cannot tell from the others (named as its rivals), with
+    /// its own fitted value; and the reason the search stops.
+    pub(super) fn undecided(
+        &self,
+        results: &[Fitted<S::Effect, S::Model>],
+        best: usize,
+    ) -> (Vec<NotIdentifiable>, String) {
+        let margin = self.tie_margin();
+        let named = |l: &EffectLabel| {
+            let what = l.detail.parameter.as_deref().map(|p| format!("{p} ")).unwrap_or_default();
+            format!("{} {what}at {}", l.kind, l.location)
         };
-        let other_quantity = results.iter().any(|f| tied(f) && quantity(&f.label) != quantity(&b.label));
-        if !other_quantity {
-            return best;
-        }
-        results.iter().position(tied).unwrap_or(best)
+        let tied: Vec<_> = self.tied(results, best, margin).collect();
+        let b = &results[best];
+        let out = tied
+            .iter()
+            .map(|f| {
+                let rivals: Vec<String> =
+                    tied.iter().filter(|r| r.label != f.label).map(|r| named(&r.label)).collect();
+                let gap = b.delta - f.delta;
+                let value = self.reported_value(f).map(|v| format!(" (fitted as {})", shown(v, &f.label.unit)));
+                let reason = format!(
+                    "fits the data{} as well as {}: log-likelihoods within {margin:.1} of the best, too close to tell the quantities apart, so none of them is added",
+                    value.unwrap_or_default(),
+                    rivals.join(", ")
+                );
+                let mut n = NotIdentifiable::of(&f.label, "delta_log_likelihood_gap", gap, reason);
+                n.rivals = rivals;
+                n
+            })
+            .collect();
+        let names: Vec<String> = tied.iter().map(|f| named(&f.label)).collect();
+        let why = format!(
+            "the best candidates ({}) change different quantities and fit the data equally well (within {margin:.1} in log-likelihood): these sensors cannot tell which, so none is added",
+            names.join(", ")
+        );
+        (out, why)
     }
 
     /// Rivals of `winner` among `results`: same family, another location, a log-likelihood
@@ -76,7 +131,7 @@ impl<S: LoopSystem> Engine<'_, S> {
                     )
                 } else {
                     format!(
-                        "fits the data as well as {w}{value}: {:.2} better in log-likelihood, less than the {margin:.1} that tells two fits apart: the sensors cannot tell the two apart, and {w} comes first in the system's order (likelier in service)",
+                        "fits the data as well as {w}{value}: {:.2} better in log-likelihood, less than the {margin:.1} that tells two fits apart: the sensors cannot tell the two apart, and {w} gains more for what its parameters cost",
                         -gap
                     )
                 };

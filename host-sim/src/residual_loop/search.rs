@@ -104,6 +104,7 @@ impl<S: LoopSystem> Engine<'_, S> {
         let sys = self.sys;
         self.nis_scale = st.summary.nis_scale();
         let mut chosen = None;
+        let mut undecided = None;
         let mut evaluated = Vec::new();
         for (tier_index, tier) in tiers.into_iter().enumerate() {
             let mut fresh: Vec<S::Effect> = Vec::new();
@@ -117,7 +118,7 @@ impl<S: LoopSystem> Engine<'_, S> {
                     None => fresh.push(e),
                 }
             }
-            if chosen.is_some() || fresh.is_empty() {
+            if chosen.is_some() || undecided.is_some() || fresh.is_empty() {
                 continue;
             }
             let at = Round { iteration, tier: tier_index + 1 };
@@ -128,10 +129,18 @@ impl<S: LoopSystem> Engine<'_, S> {
                 st.partial.push(self.partial(f));
                 st.refused.push(self.refused_in_halves(f));
             }
-            if let Some(i) = best {
-                let winner = results.swap_remove(self.choose(&results, i));
-                st.not_identifiable.extend(self.rivals(&st.effects, &winner, &results));
-                chosen = Some(winner);
+            match best.map(|i| (i, self.choose(&results, i))) {
+                Some((_, Some(i))) => {
+                    let winner = results.swap_remove(i);
+                    st.not_identifiable.extend(self.rivals(&st.effects, &winner, &results));
+                    chosen = Some(winner);
+                }
+                Some((i, None)) => {
+                    let (unseen, why) = self.undecided(&results, i);
+                    st.not_identifiable.extend(unseen);
+                    undecided = Some(why);
+                }
+                None => {}
             }
             evaluated.extend(results);
         }
@@ -139,6 +148,9 @@ impl<S: LoopSystem> Engine<'_, S> {
             st.trials.push(self.trial(iteration, f, false));
         }
         let Some(win) = chosen else {
+            if let Some(why) = undecided {
+                return Err(why);
+            }
             let best = evaluated.iter().max_by(|a, b| (a.delta - a.penalty).total_cmp(&(b.delta - b.penalty)));
             return Err(match best {
                 Some(f) => {

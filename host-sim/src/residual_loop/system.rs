@@ -113,8 +113,9 @@ pub trait LoopSystem: Sync {
     /// drops effects already in the model. A system with many places an effect could act
     /// ranks them from the run's innovations ([`locate`](crate::diagnostics::locate)) and
     /// proposes the few they point to. Within a tier the likelier in service comes first
-    /// (a platform's load before a damaged section): where the data cannot choose between two
-    /// quantities, the engine keeps the first and lists the other as not identifiable.
+    /// (a platform's load before a damaged section). Where the data cannot choose between two
+    /// quantities, the engine adds neither and lists each as not identifiable, the others
+    /// named as its rivals (a model corrected in the wrong quantity estimates worse).
     fn candidates(
         &self,
         summary: &RunSummary,

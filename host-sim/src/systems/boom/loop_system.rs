@@ -17,9 +17,10 @@
 //!   innovations at none of the reduced boom's frequencies; its frequency is fitted within two
 //!   bins of the line, in the filter's [`ExtraMode`] slot.
 //!
-//! The parameters are proposed load first, then the whole boom, then each section: where the
+//! The parameters are proposed load first, then the whole boom, then each section. Where the
 //! data cannot tell a load from a stiffness (the gyro sees the first mode best, and each moves
-//! it), the loop keeps the likelier in service and lists the others as not identifiable.
+//! it), the loop adds neither and lists each as not identifiable with the others as rivals: a
+//! boom corrected in the wrong one estimates its tip worse than the declared boom does.
 //!
 //! Each is a setting of the filter fitted by maximum likelihood. A parameter re-reduces the
 //! boom; only the extra mode uses states, the slot the filter keeps for it. The report's
