@@ -56,6 +56,31 @@ fn a_healthy_rig_adds_nothing() {
     assert!(r.after.consistent);
 }
 
+/// The housing's vibration velocity graded as ISO 20816-3 does, from the accelerometers:
+/// checked against the simulator's own displacement of the housing's node, differentiated,
+/// on a rig unbalanced enough (×100) that the sensor's noise (about 0.01 mm/s) is negligible.
+#[test]
+fn the_report_grades_the_housings_vibration_velocity() {
+    let mut cfg = RotorConfig::from_toml_str(include_str!("../configs/rotor_rig_bearing.toml")).unwrap();
+    cfg.unbalances[0].magnitude *= 100.0;
+    let model = RotorModel::from_config(&cfg).unwrap();
+    let data = recording(&model, 4);
+    let r = close(&model, &data, 0);
+    let rows = r.section.fields["severity"].as_array().unwrap();
+    assert_eq!(rows.len(), 2, "{rows:?}");
+    let dt = data.t[1] - data.t[0];
+    for (row, axis) in rows.iter().zip(["x", "y"]) {
+        let x = data.column(&format!("truth_n1_{axis}")).unwrap();
+        let v: Vec<f64> = x.windows(3).map(|w| (w[2] - w[0]) / (2.0 * dt)).collect();
+        let mean = v.iter().sum::<f64>() / v.len() as f64;
+        let truth = (v.iter().map(|a| (a - mean).powi(2)).sum::<f64>() / v.len() as f64).sqrt() * 1e3;
+        let got = row["velocity_rms_mm_s"].as_f64().unwrap();
+        assert!((got / truth - 1.0).abs() < 0.05, "{row:?}: the housing moves at {truth} mm/s r.m.s.");
+        assert_eq!(row["band_hz"][0].as_f64(), Some(10.0));
+        assert!(row.get("zone").is_none(), "no class configured, no zone: {row:?}");
+    }
+}
+
 /// An unbalance the configuration does not declare, at node 3 (between the housing and the
 /// disk), on a machine that has run for a while (no start-up transient, as in service), read
 /// by the one housing's accelerometer pair: a 1× force at any node gives the same forward

@@ -79,6 +79,20 @@ pub struct RotorConfig {
     /// rotor's [`weight`](RotorConfig::weight)).
     #[serde(default)]
     pub bounds: crate::systems::rotor::bounds::Bounds,
+    /// How the report grades the housings' vibration (`[severity]`); default: velocity only.
+    #[serde(default)]
+    pub severity: SeverityConfig,
+}
+
+/// The machine's class for the vibration zones (`[severity] machine_class = "group2_rigid"`;
+/// also `group2_flexible`, `group1_rigid`, `group1_flexible` of ISO 20816-3, and
+/// `class1_small` for machines up to 15 kW). Without it the report gives the
+/// housings' vibration velocity and no zone: the zone's boundaries depend on the class.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SeverityConfig {
+    /// The class, if known.
+    pub machine_class: Option<crate::diagnostics::severity::MachineClass>,
 }
 
 /// The virtual-sensing filter's noise levels for a machine (`[filter]`), e.g. from `edgekf

@@ -4,6 +4,7 @@
 
 use super::effects::{AugmentedModel, Effect, Parameter};
 use super::RotorSystem;
+use crate::diagnostics::severity::Severity;
 use crate::io::config_edit::{ConfigEdit, Op};
 use crate::residual_loop::filter::Run;
 use crate::residual_loop::onset::settled_mean;
@@ -128,6 +129,13 @@ impl LoopSystem for RotorSystem<'_> {
             section.fields.insert("running_speed".into(), v);
         }
         section.lines.push(("running speed".into(), self.speed.describe()));
+        let severity = self.severity();
+        for v in &severity {
+            section.lines.push(("vibration severity".into(), v.describe()));
+        }
+        if let Ok(v) = serde_json::to_value(&severity) {
+            section.fields.insert("severity".into(), v);
+        }
         if let Some(b) = &self.baseline {
             let about = serde_json::json!({
                 "condition": b.condition,
@@ -153,6 +161,21 @@ impl LoopSystem for RotorSystem<'_> {
 }
 
 impl RotorSystem<'_> {
+    /// The housings' vibration velocity and its ISO 20816-3 zone, per accelerometer (the
+    /// standard grades housings; shaft displacement probes are left out), from the raw record.
+    fn severity(&self) -> Vec<Severity> {
+        let t = &self.data.t;
+        let fs = match (t.first(), t.last()) {
+            (Some(a), Some(b)) if b > a && t.len() > 1 => (t.len() - 1) as f64 / (b - a),
+            _ => return Vec::new(),
+        };
+        let class = self.cfg.severity.machine_class;
+        let accelerometers = self.channel_info.iter().filter(|c| c.unit == "m/s^2");
+        accelerometers
+            .filter_map(|c| Severity::of(&c.name, self.data.column(&c.name)?, fs, self.speed.hz, class))
+            .collect()
+    }
+
     /// How the report names `e`.
     pub fn label(&self, e: &Effect) -> EffectLabel {
         let detail = EffectDetail {
