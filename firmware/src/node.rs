@@ -97,6 +97,50 @@ pub struct Innovation {
     pub nis: Option<f32>,
 }
 
+/// What a node's steps keep for its next poll, where a poll reports the last of its steps'
+/// results (a sample's frame or estimate, a completed window's report): the one slot of the
+/// boom's, the vehicle's and the crank's nodes.
+///
+/// ```
+/// use edgekf_firmware::node::{Innovation, Pending};
+/// let mut pending = Pending::new();
+/// assert_eq!(pending.keep(Some(1u32), Innovation::default()), Innovation::default());
+/// pending.keep(Some(2), Innovation::default());
+/// pending.keep(None, Innovation::default()); // a step with nothing new keeps the last
+/// assert_eq!(pending.report(|n| n * 10), Some(20));
+/// assert_eq!(pending.report(|n| n * 10), None); // reported once
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Pending<T>(Option<T>);
+
+impl<T> Pending<T> {
+    /// Nothing kept.
+    pub const fn new() -> Self {
+        Self(None)
+    }
+
+    /// Keeps a step's result, if it has one (in place of the earlier steps' of this poll);
+    /// returns the step's `innovation`, for [`NodeEstimator::step`] to give.
+    pub fn keep(&mut self, result: Option<T>, innovation: Innovation) -> Innovation {
+        if result.is_some() {
+            self.0 = result;
+        }
+        innovation
+    }
+
+    /// The poll's report: the kept result as its frame (`frame` of it), taken, so that the next
+    /// poll reports only what its own steps keep.
+    pub fn report<F>(&mut self, frame: impl FnOnce(T) -> F) -> Option<F> {
+        self.0.take().map(frame)
+    }
+}
+
+impl<T> Default for Pending<T> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
 /// What one poll did, for the estimator's report.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Poll {

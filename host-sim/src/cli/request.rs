@@ -1,10 +1,12 @@
 //! What the command line asks of a system: the requests its registry row's functions take
 //! (`edgekf loop`, `edgekf baseline`, `edgekf demo`) and the arguments systems' commands share
-//! (`export`), apart from the commands that build them,
+//! (`export`, and the files of `estimate` and `simulate`), apart from the commands that build them,
 //! so that a system and the registry depend on these types and on nothing else of `cli`.
 
+use crate::report::summary::{EstimateSummary, Prose};
 use crate::residual_loop::baseline::BaselineSource;
 use crate::residual_loop::{LoopOptions, LoopReport};
+use crate::systems::common::SimOptions;
 use clap::Args;
 use std::path::{Path, PathBuf};
 
@@ -132,4 +134,98 @@ pub struct ExportArgs {
     /// Rust file to write.
     #[arg(long, value_name = "RS")]
     pub out: PathBuf,
+}
+
+impl ExportArgs {
+    /// The command: checks the files, loads the configuration (`load`, the default without
+    /// `--config`), writes the Rust source `constants` makes of it, and says what it wrote
+    /// (`what`: `the node's …`).
+    pub fn write<C>(
+        &self,
+        load: impl FnOnce(Option<&Path>) -> anyhow::Result<C>,
+        constants: impl FnOnce(&C) -> anyhow::Result<String>,
+        what: impl FnOnce(&C) -> String,
+    ) -> anyhow::Result<()> {
+        use anyhow::Context as _;
+        crate::io::output::check(&[Some(&self.out)], &[self.config.as_deref()])?;
+        let config = load(self.config.as_deref())?;
+        let text = constants(&config)?;
+        crate::io::output::write_atomic(&self.out, text)
+            .with_context(|| format!("cannot write {}", self.out.display()))?;
+        println!("wrote {}: {}", self.out.display(), what(&config));
+        Ok(())
+    }
+}
+
+/// The files of every system's `estimate`: the configuration and the recording it reads, the
+/// estimate file it writes, and whether it prints a JSON summary. Each system's arguments
+/// flatten it first; where a system says more of a file (its columns, its default), its
+/// command sets that help (`mut_arg`), so `--help` reads as the system's own.
+#[derive(Debug, Clone, Args)]
+pub struct EstimateFiles {
+    /// Configuration (default: the system's shipped one, in host-sim/configs/).
+    #[arg(long, value_name = "TOML")]
+    pub config: Option<PathBuf>,
+    /// Data file to read.
+    #[arg(long, value_name = "CSV")]
+    pub data: PathBuf,
+    /// Estimate file to write.
+    #[arg(long, value_name = "CSV")]
+    pub out: PathBuf,
+    /// Print one JSON object on stdout (the text goes to stderr): the estimate's statistics.
+    #[arg(long)]
+    pub json: bool,
+}
+
+impl EstimateFiles {
+    /// Where the text goes: stderr under `--json`, else stdout.
+    pub fn prose(&self) -> Prose {
+        Prose { json: self.json }
+    }
+
+    /// The JSON summary of `system`'s estimate over the samples at times `t`, naming these files.
+    pub fn summary(&self, system: &'static str, t: &[f64]) -> EstimateSummary {
+        let mut j = EstimateSummary::new(system, &self.data, self.config.as_deref(), t);
+        j.out = Some(self.out.clone());
+        j
+    }
+}
+
+/// The files and the seed of every system's `simulate`: the configuration it reads, the data
+/// file it writes and the seed of its noise. Flattened first, with the system's own help
+/// where it says more (as [`EstimateFiles`]).
+#[derive(Debug, Clone, Args)]
+pub struct SimulateFiles {
+    /// Configuration (default: the system's shipped one, in host-sim/configs/).
+    #[arg(long, value_name = "TOML")]
+    pub config: Option<PathBuf>,
+    /// Data file to write.
+    #[arg(long, value_name = "CSV")]
+    pub out: PathBuf,
+    /// Seed of the sensors' noise.
+    #[arg(long, value_name = "N", default_value_t = 1)]
+    pub seed: u64,
+}
+
+/// The run of a system that simulates a named scenario (the boom, the vehicle): its files and
+/// seed, the scenario and the length, read as the shared [`SimOptions`]. The length's default
+/// and limit are the system's (`mut_arg("duration", …)` on its command).
+#[derive(Debug, Clone, Args)]
+pub struct ScenarioRun<S: clap::ValueEnum + Clone + Send + Sync + 'static> {
+    /// `--config`, `--out`, `--seed`.
+    #[command(flatten)]
+    pub files: SimulateFiles,
+    /// The run.
+    #[arg(long, value_enum)]
+    pub scenario: S,
+    /// Length, s.
+    #[arg(long, value_name = "S", value_parser = crate::cli::values::positive_seconds)]
+    pub duration: f64,
+}
+
+impl<S: clap::ValueEnum + Copy + Send + Sync + 'static> ScenarioRun<S> {
+    /// The simulator's options.
+    pub fn options(&self) -> SimOptions<S> {
+        SimOptions { scenario: self.scenario, duration: self.duration, seed: self.files.seed }
+    }
 }

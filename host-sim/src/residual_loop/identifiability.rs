@@ -38,19 +38,16 @@ impl<S: LoopSystem> Engine<'_, S> {
     /// The fits of `results` that pay and fit as well as `results[best]` (same family, a
     /// log-likelihood within `margin`), `best` among them.
     fn tied<'r>(
-        &self,
+        &'r self,
         results: &'r [Fitted<S::Effect, S::Model>],
         best: usize,
         margin: f64,
     ) -> impl Iterator<Item = &'r Fitted<S::Effect, S::Model>> + 'r {
         let b = &results[best];
         let (family_b, delta_b) = (family(&b.label), b.delta);
-        let paying: Vec<bool> = results.iter().map(|f| self.pays(f)).collect();
         results
             .iter()
-            .zip(paying)
-            .filter(move |(f, pays)| *pays && family(&f.label) == family_b && (delta_b - f.delta).abs() < margin)
-            .map(|(f, _)| f)
+            .filter(move |f| self.pays(f) && family(&f.label) == family_b && (delta_b - f.delta).abs() < margin)
     }
 
     /// When [`choose`](Self::choose) keeps none: every fit tied with `results[best]`, each
@@ -62,10 +59,6 @@ impl<S: LoopSystem> Engine<'_, S> {
         best: usize,
     ) -> (Vec<NotIdentifiable>, String) {
         let margin = self.tie_margin();
-        let named = |l: &EffectLabel| {
-            let what = l.detail.parameter.as_deref().map(|p| format!("{p} ")).unwrap_or_default();
-            format!("{} {what}at {}", l.kind, l.location)
-        };
         let tied: Vec<_> = self.tied(results, best, margin).collect();
         let b = &results[best];
         let out = tied
@@ -115,9 +108,8 @@ impl<S: LoopSystem> Engine<'_, S> {
             })
             .map(|r| {
                 let gap = winner.delta - r.delta;
-                let what = r.label.detail.parameter.as_deref().map(|p| format!("{p} ")).unwrap_or_default();
                 let value = match self.reported_value(r) {
-                    Some(v) => format!(" (fitted as {what}{})", shown(v, &r.label.unit)),
+                    Some(v) => format!(" (fitted as {}{})", parameter_word(&r.label), shown(v, &r.label.unit)),
                     None => String::new(),
                 };
                 let w = &winner.label.location;
@@ -313,6 +305,17 @@ fn family(l: &EffectLabel) -> (EffectKind, Option<u64>, Option<&str>) {
 /// stiffness, though both are parameters).
 fn quantity(l: &EffectLabel) -> (EffectKind, Option<u64>, Option<&str>) {
     (l.kind, l.detail.order.map(f64::to_bits), l.detail.parameter.as_deref())
+}
+
+/// The parameter an effect changes, with a space after it (`mass `), or nothing: how a fitted
+/// value and a tied effect name it.
+fn parameter_word(l: &EffectLabel) -> String {
+    l.detail.parameter.as_deref().map(|p| format!("{p} ")).unwrap_or_default()
+}
+
+/// An effect as a tie names it: `kind parameter at location` (`parameter_tweak mass at tip`).
+fn named(l: &EffectLabel) -> String {
+    format!("{} {}at {}", l.kind, parameter_word(l), l.location)
 }
 
 /// `value unit`, or `×value` for a factor (unit `1`).

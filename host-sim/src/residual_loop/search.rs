@@ -57,6 +57,29 @@ fn excluded<S: LoopSystem>(sys: &S, e: &S::Effect, excludes: &[(EffectKind, Stri
     Some(Refused::of(&label, None, reason.clone()))
 }
 
+/// Of `candidates`, the ones worth fitting, each once: not in the model already, not `seen`
+/// (fitted before), and not [`excluded`] (whose refusal is recorded in `refused`, once). The
+/// one filter of a tier's candidates and of a winner's neighbours.
+fn fresh<S: LoopSystem>(
+    sys: &S,
+    candidates: impl IntoIterator<Item = S::Effect>,
+    seen: impl Fn(&S::Effect) -> bool,
+    st: &mut State<S::Effect, S::Model>,
+) -> Vec<S::Effect> {
+    let mut out: Vec<S::Effect> = Vec::new();
+    for e in candidates {
+        if st.effects.iter().any(|x| x.effect == e) || out.contains(&e) || seen(&e) {
+            continue;
+        }
+        match excluded(sys, &e, &st.excludes) {
+            Some(r) if !st.refused.contains(&r) => st.refused.push(r),
+            Some(_) => {}
+            None => out.push(e),
+        }
+    }
+    out
+}
+
 /// Where the search stands: the current model and what has been decided so far.
 struct State<E, M> {
     effects: Vec<Applied<E>>,
@@ -107,24 +130,14 @@ impl<S: LoopSystem> Engine<'_, S> {
         let mut undecided = None;
         let mut evaluated = Vec::new();
         for (tier_index, tier) in tiers.into_iter().enumerate() {
-            let mut fresh: Vec<S::Effect> = Vec::new();
-            for e in tier {
-                if st.effects.iter().any(|x| x.effect == e) || fresh.contains(&e) {
-                    continue;
-                }
-                match excluded(sys, &e, &st.excludes) {
-                    Some(r) if !st.refused.contains(&r) => st.refused.push(r),
-                    Some(_) => {}
-                    None => fresh.push(e),
-                }
-            }
+            let fresh = fresh(sys, tier, |_| false, st);
             if chosen.is_some() || undecided.is_some() || fresh.is_empty() {
                 continue;
             }
             let at = Round { iteration, tier: tier_index + 1 };
             let sinks = (&mut st.refused, &mut st.not_identifiable);
-            let mut results = self.fit_all(at, &st.effects, fresh, &st.run, (&mut *sinks.0, &mut *sinks.1));
-            let best = self.best_paying(&results).map(|i| self.climb(at, &st.effects, &mut results, i, &st.run, sinks));
+            let mut results = self.fit_all(at, &st.effects, fresh, &st.run, sinks);
+            let best = self.best_paying(&results).map(|i| self.climb(at, st, &mut results, i));
             for f in results.iter().filter(|f| f.delta > f.penalty && !self.pays_in_halves(f)) {
                 st.partial.push(self.partial(f));
                 st.refused.push(self.refused_in_halves(f));
@@ -173,32 +186,28 @@ impl<S: LoopSystem> Engine<'_, S> {
             .map(|(i, _)| i)
     }
 
-    /// From the best fit `i` of `results`, fits its neighbours ([`Rivals::neighbours`](super::system::Rivals::neighbours)) not yet
-    /// fitted, and moves to the best while that changes, at most [`CLIMB_STEPS`] times: the
+    /// From the best fit `i` of `results`, fits its neighbours
+    /// ([`Rivals::neighbours`](super::system::Rivals::neighbours)) that are [`fresh`] (the filter
+    /// of a tier's candidates) and not fitted yet, and moves to the best while that changes, at
+    /// most [`CLIMB_STEPS`] times: the
     /// system's proposal places an effect only roughly, the fits decide. The neighbours' fits
     /// join `results`, so that the ones the data cannot tell from the winner are listed as its
     /// rivals. Returns the best's index in the grown `results`.
     fn climb(
         &self,
         at: Round,
-        effects: &[Applied<S::Effect>],
+        st: &mut State<S::Effect, S::Model>,
         results: &mut Vec<Fitted<S::Effect, S::Model>>,
         mut i: usize,
-        base: &Run,
-        sinks: (&mut Vec<Refused>, &mut Vec<NotIdentifiable>),
     ) -> usize {
         for _ in 0..CLIMB_STEPS {
-            let next: Vec<S::Effect> = self
-                .sys
-                .rivals(&results[i].applied.effect, effects)
-                .neighbours
-                .into_iter()
-                .filter(|e| !results.iter().any(|f| f.applied.effect == *e))
-                .collect();
+            let neighbours = self.sys.rivals(&results[i].applied.effect, &st.effects).neighbours;
+            let next = fresh(self.sys, neighbours, |e| results.iter().any(|f| f.applied.effect == *e), st);
             if next.is_empty() {
                 break;
             }
-            results.extend(self.fit_all(at, effects, next, base, (&mut *sinks.0, &mut *sinks.1)));
+            let sinks = (&mut st.refused, &mut st.not_identifiable);
+            results.extend(self.fit_all(at, &st.effects, next, &st.run, sinks));
             match self.best_paying(results) {
                 Some(b) if b != i => i = b,
                 _ => break,

@@ -56,10 +56,10 @@ where
     if a.nrows() != n.value() || a.ncols() != n.value() || block.value() != n.value() + m.value() {
         return Err(LinalgError::SizeMismatch);
     }
-    let mut big = OMatrix::<T, B, B>::zeros_generic(block, block);
-    big.generic_view_mut((0, 0), (n, n)).copy_from(&(a * dt));
-    big.generic_view_mut((0, n.value()), (n, m)).copy_from(&(b * dt));
-    let e = expm(&big)?;
+    let e = block_expm(block, |big| {
+        big.generic_view_mut((0, 0), (n, n)).copy_from(&(a * dt));
+        big.generic_view_mut((0, n.value()), (n, m)).copy_from(&(b * dt));
+    })?;
     Ok((e.generic_view((0, 0), (n, n)).into_owned(), e.generic_view((0, n.value()), (n, m)).into_owned()))
 }
 
@@ -121,15 +121,29 @@ where
         return Err(LinalgError::SizeMismatch);
     }
     let k = n.value();
-    let mut big = OMatrix::<T, B, B>::zeros_generic(block, block);
-    big.generic_view_mut((0, 0), (n, n)).copy_from(&(-a * dt));
-    big.generic_view_mut((0, k), (n, n)).copy_from(&(qc * dt));
-    big.generic_view_mut((k, k), (n, n)).copy_from(&(a.transpose() * dt));
-    let e = expm(&big)?;
+    let e = block_expm(block, |big| {
+        big.generic_view_mut((0, 0), (n, n)).copy_from(&(-a * dt));
+        big.generic_view_mut((0, k), (n, n)).copy_from(&(qc * dt));
+        big.generic_view_mut((k, k), (n, n)).copy_from(&(a.transpose() * dt));
+    })?;
     let ad = e.generic_view((k, k), (n, n)).transpose();
     let qd = &ad * e.generic_view((0, k), (n, n));
     let half = T::of_f64(0.5);
     Ok((ad, (&qd + qd.transpose()) * half))
+}
+
+/// The exponential of the `block`-square matrix that `fill` writes its blocks into (zero
+/// elsewhere): the one step of both discretisations above.
+fn block_expm<T: Real, B: Dim>(
+    block: B,
+    fill: impl FnOnce(&mut OMatrix<T, B, B>),
+) -> Result<OMatrix<T, B, B>, LinalgError>
+where
+    DefaultAllocator: Allocator<B, B>,
+{
+    let mut big = OMatrix::<T, B, B>::zeros_generic(block, block);
+    fill(&mut big);
+    expm(&big)
 }
 
 #[cfg(test)]

@@ -18,7 +18,7 @@ use crate::hil::{clocked_node, FileEnd, HilError, HilImage, HilNode};
 use crate::line_feed::{ByteSource, ChannelReader};
 use crate::monitor::{Monitored, Normalised};
 use edgekf::residual::MonitorSettings;
-use crate::node::{Innovation, NodeEstimator, Poll};
+use crate::node::{Innovation, NodeEstimator, Pending, Poll};
 use crate::source::ChannelSource;
 use edgekf::systems::boom::{
     ModelError, ModelEstimate, ModelEstimator, ModelSettings, PaperEstimator, PaperSettings,
@@ -86,13 +86,13 @@ pub struct BoomNode<'s> {
     fusions: u32,
     /// The last finite length (the paper's method has no prediction to bridge with).
     length: f32,
-    pending: Option<BoomFrame>,
+    pending: Pending<BoomFrame>,
 }
 
 impl<'s> BoomNode<'s> {
     /// The node on its estimators.
     pub fn new(model: &'s mut ModelEstimator<f32>, paper: &'s mut PaperEstimator<f32>) -> Self {
-        Self { model, paper, samples: 0, fusions: 0, length: START_LENGTH as f32, pending: None }
+        Self { model, paper, samples: 0, fusions: 0, length: START_LENGTH as f32, pending: Pending::new() }
     }
 
     /// One row (`None`: missing or unparsable, predicted through); the frame after it.
@@ -188,18 +188,25 @@ crate::frame! {
     }
 }
 
+impl BoomFrame {
+    /// What its step gives the block statistics: the NIS (two sequential updates have no one
+    /// residual).
+    fn innovation(&self) -> Innovation {
+        Innovation { residual: None, nis: Some(self.nis) }
+    }
+}
+
 impl NodeEstimator for BoomNode<'_> {
     type Input = [f32; 4];
     type Frame = BoomFrame;
 
     fn step(&mut self, input: Option<[f32; 4]>) -> Innovation {
         let f = BoomNode::step(self, input);
-        self.pending = Some(f);
-        Innovation { residual: None, nis: Some(f.nis) }
+        self.pending.keep(Some(f), f.innovation())
     }
 
     fn report(&mut self, _: &Poll) -> Option<BoomFrame> {
-        self.pending.take()
+        self.pending.report(|f| f)
     }
 }
 
@@ -208,12 +215,11 @@ impl NodeEstimator for BoomNode<'_> {
 impl Normalised<2> for BoomNode<'_> {
     fn step_normalised(&mut self, input: Option<[f32; 4]>, z: &mut [f32; 2]) -> Innovation {
         let (f, variance) = self.step_variances(input);
-        self.pending = Some(f);
         for ((z, nu), var) in z.iter_mut().zip([f.innovation_gyro, f.innovation_incl]).zip(variance) {
             // A missing reading's variance is NaN, and so is its z.
             *z = nu / libm::sqrtf(var);
         }
-        Innovation { residual: None, nis: Some(f.nis) }
+        self.pending.keep(Some(f), f.innovation())
     }
 }
 

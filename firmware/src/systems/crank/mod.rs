@@ -11,7 +11,7 @@
 use crate::frame::FrameSink;
 use crate::hil::{clocked_node, FileEnd, HilError, HilImage, HilNode};
 use crate::line_feed::{ByteSource, ChannelReader};
-use crate::node::{Innovation, NodeEstimator, Poll};
+use crate::node::{Innovation, NodeEstimator, Pending, Poll};
 use crate::source::ChannelSource;
 use edgekf::systems::crank::{ClearanceEstimate, ClearanceEstimator, ClearanceModel, FeatureError, FEATURES};
 
@@ -87,7 +87,7 @@ pub struct CrankNode<'s> {
     est: ClearanceEstimator<'static, f32, &'s mut Storage>,
     samples: u32,
     /// The last window's report, until the node reports it.
-    pending: Option<WindowReport>,
+    pending: Pending<WindowReport>,
 }
 
 impl<'s> CrankNode<'s> {
@@ -106,7 +106,7 @@ impl<'s> CrankNode<'s> {
         Ok(Self {
             est: ClearanceEstimator::new(&MODEL, storage, f64::from(SAMPLE_RATE_HZ))?,
             samples: 0,
-            pending: None,
+            pending: Pending::new(),
         })
     }
 
@@ -319,14 +319,12 @@ impl NodeEstimator for CrankNode<'_> {
     type Frame = WindowFrame;
 
     fn step(&mut self, input: Option<[f32; 1]>) -> Innovation {
-        if let Some(report) = CrankNode::step(self, input.map(|[a]| a)) {
-            self.pending = Some(report);
-        }
-        Innovation::default()
+        let report = CrankNode::step(self, input.map(|[a]| a));
+        self.pending.keep(report, Innovation::default())
     }
 
     fn report(&mut self, _: &Poll) -> Option<WindowFrame> {
-        self.pending.take().as_ref().map(WindowFrame::from)
+        self.pending.report(|r| WindowFrame::from(&r))
     }
 }
 

@@ -24,7 +24,7 @@ use crate::frame::FrameSink;
 use crate::hil::{clocked_node, FileEnd, HilError, HilImage, HilNode};
 use crate::line_feed::{ByteSource, ChannelReader};
 use crate::monitor::{Monitored, Normalised};
-use crate::node::{Innovation, NodeEstimator, Poll};
+use crate::node::{Innovation, NodeEstimator, Pending, Poll};
 use crate::source::ChannelSource;
 use edgekf::residual::MonitorSettings;
 use edgekf::systems::uuv::{
@@ -127,13 +127,13 @@ pub fn estimator() -> Result<UuvEstimator<f32, STATES>, EstimatorError> {
 pub struct UuvNode<'s> {
     est: &'s mut UuvEstimator<f32, STATES>,
     samples: u32,
-    pending: Option<Estimate<f32>>,
+    pending: Pending<Estimate<f32>>,
 }
 
 impl<'s> UuvNode<'s> {
     /// The node on an estimator.
     pub fn new(est: &'s mut UuvEstimator<f32, STATES>) -> Self {
-        Self { est, samples: 0, pending: None }
+        Self { est, samples: 0, pending: Pending::new() }
     }
 
     /// One row (`None`: missing or unparsable); the estimate after it.
@@ -249,12 +249,12 @@ impl NodeEstimator for UuvNode<'_> {
 
     fn step(&mut self, input: Option<[f32; 15]>) -> Innovation {
         let e = UuvNode::step(self, input);
-        self.pending = Some(e);
-        Innovation::default()
+        self.pending.keep(Some(e), Innovation::default())
     }
 
     fn report(&mut self, _: &Poll) -> Option<UuvFrame> {
-        self.pending.take().map(|e| UuvFrame::of(self.samples, &e))
+        let samples = self.samples;
+        self.pending.report(|e| UuvFrame::of(samples, &e))
     }
 }
 
@@ -282,8 +282,7 @@ impl UpdateObserver<f32> for Normalise<'_> {
 impl Normalised<MONITORED> for UuvNode<'_> {
     fn step_normalised(&mut self, input: Option<[f32; 15]>, z: &mut [f32; MONITORED]) -> Innovation {
         let e = self.step_normalised_into(input, z);
-        self.pending = Some(e);
-        Innovation::default()
+        self.pending.keep(Some(e), Innovation::default())
     }
 }
 

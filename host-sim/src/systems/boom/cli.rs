@@ -13,11 +13,12 @@ use super::estimate::{estimate_with, gyro_model, Method, INCLINOMETER_NOISE};
 use super::peaks::peak_errors;
 use super::plot::vibration_figure;
 use super::runs::Scenario;
-use super::simulate::{simulate, static_inclinometer, static_record, SimOptions};
+use super::simulate::{simulate, static_inclinometer, static_record};
 use super::simulate::{MEASURED, TRUTH};
+use crate::cli::request::{EstimateFiles, ScenarioRun};
 use crate::io::output::{check, write_atomic};
 use crate::io::timeline::TimelineOptions;
-use crate::report::summary::{truth, EstimateSummary, Prose, Quantity};
+use crate::report::summary::{truth, EstimateSummary, Quantity};
 use anyhow::Context as _;
 use clap::{Args, Subcommand};
 use std::path::PathBuf;
@@ -34,11 +35,24 @@ pub enum BoomCommand {
     /// boom_length (m), luff_rate_cmd (rad/s, the operator's command), and truth_ columns
     /// (tip_angle from the horizontal, tip_deflection with the gravity sag, tip_vibration about
     /// the static equilibrium, root_angle, root_rate, gyro_bias).
+    #[command(mut_arg("config", |a| a.help("Configuration (default: host-sim/configs/boom_ladder30.toml)")))]
+    #[command(mut_arg("duration", |a| {
+        let up_to_an_hour = crate::cli::values::up_to_an_hour;
+        a.required(false).default_value("120").value_parser(up_to_an_hour).help("Length, s (up to an hour)")
+    }))]
     Simulate(SimulateArgs),
     /// Estimate the tip's vibration from a data CSV and the static record into an estimate CSV:
     /// t, tip_angle (rad, from the horizontal), tip_vibration (m, about the static
     /// equilibrium), tip_deflection (m, with the model's sag; empty for the paper's method,
     /// which has no sag). With truth_tip_vibration in the data, prints the peak errors.
+    #[command(mut_arg("config", |a| a.help("Configuration (default: host-sim/configs/boom_ladder30.toml)")))]
+    #[command(mut_arg("data", |a| a.help(
+        "Data file (t, gyro_rate, incl_angle, boom_length, luff_rate_cmd; truth_ columns optional)"
+    )))]
+    #[command(mut_arg("json", |a| a.help(
+        "Print one JSON object on stdout (the text goes to stderr): the tip's vibration, angle and deflection with \
+         their statistics, the peak vibration and the peak errors"
+    )))]
     Estimate(EstimateArgs),
     /// Write the node's boom and sensors (sections, platform, damping, drive, the gyro's noise
     /// model, the inclinometer) as Rust constants.
@@ -54,12 +68,9 @@ pub enum BoomCommand {
 /// Arguments of `edgekf boom estimate`.
 #[derive(Debug, Args)]
 pub struct EstimateArgs {
-    /// Configuration (default: host-sim/configs/boom_ladder30.toml).
-    #[arg(long, value_name = "TOML")]
-    pub config: Option<PathBuf>,
-    /// Data file (t, gyro_rate, incl_angle, boom_length, luff_rate_cmd; truth_ columns optional).
-    #[arg(long, value_name = "CSV")]
-    pub data: PathBuf,
+    /// `--config`, `--data`, `--out`, `--json` (their help: [`BoomCommand::Estimate`]'s).
+    #[command(flatten)]
+    pub files: EstimateFiles,
     /// The sensors at rest (t, gyro_rate; incl_angle optional): the gyro's AR(2) noise and bias,
     /// the inclinometer's noise.
     #[arg(long = "static", value_name = "CSV")]
@@ -67,36 +78,17 @@ pub struct EstimateArgs {
     /// The estimator (`model` needs luff_rate_cmd in the data).
     #[arg(long, value_enum, default_value_t = Method::Model)]
     pub method: Method,
-    /// Estimate file to write.
-    #[arg(long, value_name = "CSV")]
-    pub out: PathBuf,
     /// Also draw the tip's vibration (SVG), against truth_tip_vibration where the data have it.
     #[arg(long, value_name = "SVG")]
     pub plot: Option<PathBuf>,
-    /// Print one JSON object on stdout (the text goes to stderr): the tip's vibration, angle
-    /// and deflection with their statistics, the peak vibration and the peak errors.
-    #[arg(long)]
-    pub json: bool,
 }
 
 /// Arguments of `edgekf boom simulate`.
 #[derive(Debug, Args)]
 pub struct SimulateArgs {
-    /// Configuration (default: host-sim/configs/boom_ladder30.toml).
-    #[arg(long, value_name = "TOML")]
-    pub config: Option<PathBuf>,
-    /// The run.
-    #[arg(long, value_enum)]
-    pub scenario: Scenario,
-    /// Length, s (up to an hour).
-    #[arg(long, value_name = "S", default_value_t = 120.0, value_parser = crate::cli::values::up_to_an_hour)]
-    pub duration: f64,
-    /// Seed of the sensors' noise.
-    #[arg(long, value_name = "N", default_value_t = 1)]
-    pub seed: u64,
-    /// Data file to write.
-    #[arg(long, value_name = "CSV")]
-    pub out: PathBuf,
+    /// `--config`, `--out`, `--seed`, `--scenario`, `--duration` (their help: [`BoomCommand::Simulate`]'s).
+    #[command(flatten)]
+    pub run: ScenarioRun<Scenario>,
     /// Also write 60 s of the sensors with the boom at rest (t, gyro_rate, incl_angle): the
     /// static record.
     #[arg(long = "static", value_name = "CSV")]
@@ -108,14 +100,9 @@ pub fn run(command: BoomCommand) -> anyhow::Result<()> {
     match command {
         BoomCommand::Simulate(args) => simulate_command(args),
         BoomCommand::Estimate(args) => estimate_command(args),
-        BoomCommand::Export(args) => {
-            check(&[Some(args.out.as_path())], &[args.config.as_deref()])?;
-            let config = load(args.config.as_deref())?;
-            let text = super::export::node_constants(&config)?;
-            write_atomic(&args.out, text).with_context(|| format!("cannot write {}", args.out.display()))?;
-            println!("wrote {}: the node's boom ({} kg platform) and sensors", args.out.display(), config.tip.mass);
-            Ok(())
-        }
+        BoomCommand::Export(args) => args.write(load, super::export::node_constants, |config| {
+            format!("the node's boom ({} kg platform) and sensors", config.tip.mass)
+        }),
     }
 }
 
@@ -127,28 +114,29 @@ fn load(path: Option<&std::path::Path>) -> anyhow::Result<BoomConfig> {
 }
 
 fn simulate_command(args: SimulateArgs) -> anyhow::Result<()> {
-    check(&[Some(args.out.as_path()), args.static_out.as_deref()], &[args.config.as_deref()])?;
-    if args.static_out.as_ref() == Some(&args.out) {
-        anyhow::bail!("{}: --out and --static are the same file", args.out.display());
+    check(&[Some(args.run.files.out.as_path()), args.static_out.as_deref()], &[args.run.files.config.as_deref()])?;
+    if args.static_out.as_ref() == Some(&args.run.files.out) {
+        anyhow::bail!("{}: --out and --static are the same file", args.run.files.out.display());
     }
-    let config = load(args.config.as_deref())?;
-    let options = SimOptions { scenario: args.scenario, duration: args.duration, seed: args.seed };
-    let rec = simulate(&config, &options, &mut |t| eprintln!("simulated {t:.0} s of {:.0} s", args.duration))?;
-    let text = rec.to_csv(&args.out)?;
+    let config = load(args.run.files.config.as_deref())?;
+    let options = args.run.options();
+    let rec = simulate(&config, &options, &mut |t| eprintln!("simulated {t:.0} s of {:.0} s", args.run.duration))?;
+    let text = rec.to_csv(&args.run.files.out)?;
     let statics = match &args.static_out {
-        Some(path) => Some((path, static_csv(&config, args.seed, path)?)),
+        Some(path) => Some((path, static_csv(&config, args.run.files.seed, path)?)),
         None => None,
     };
-    write_atomic(&args.out, text).with_context(|| format!("cannot write {}", args.out.display()))?;
+    write_atomic(&args.run.files.out, text)
+        .with_context(|| format!("cannot write {}", args.run.files.out.display()))?;
     let vib = rec.column("truth_tip_vibration").unwrap_or_default();
     let peak = vib.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     println!(
         "{}: {} rows at {} Hz, run {}, seed {}; largest tip vibration {peak:.3} m",
-        args.out.display(),
+        args.run.files.out.display(),
         rec.t.len(),
         config.gyro.sample_rate,
-        args.scenario.name(),
-        args.seed
+        args.run.scenario.name(),
+        args.run.files.seed
     );
     if let Some((path, text)) = statics {
         write_atomic(path, text).with_context(|| format!("cannot write {}", path.display()))?;
@@ -168,31 +156,32 @@ pub fn static_csv(config: &BoomConfig, seed: u64, path: &std::path::Path) -> any
 
 fn estimate_command(args: EstimateArgs) -> anyhow::Result<()> {
     check(
-        &[Some(args.out.as_path()), args.plot.as_deref()],
-        &[Some(args.data.as_path()), Some(args.static_data.as_path()), args.config.as_deref()],
+        &[Some(args.files.out.as_path()), args.plot.as_deref()],
+        &[Some(args.files.data.as_path()), Some(args.static_data.as_path()), args.files.config.as_deref()],
     )?;
-    if args.plot.as_ref() == Some(&args.out) {
-        anyhow::bail!("{}: --out and --plot are the same file", args.out.display());
+    if args.plot.as_ref() == Some(&args.files.out) {
+        anyhow::bail!("{}: --out and --plot are the same file", args.files.out.display());
     }
-    let prose = Prose { json: args.json };
-    let config = load(args.config.as_deref())?;
+    let prose = args.files.prose();
+    let config = load(args.files.config.as_deref())?;
     let known: Vec<&str> = MEASURED.iter().chain(TRUTH.iter()).copied().collect();
     let required = match args.method {
         Method::Model => &MEASURED[..],
         Method::Paper => &MEASURED[..3],
     };
     let (file, restarts) =
-        crate::io::recording::read_estimator_data(&args.data, required, &known, config.gyro.sample_rate)?;
+        crate::io::recording::read_estimator_data(&args.files.data, required, &known, config.gyro.sample_rate)?;
     let (statics, notes) =
         crate::io::data::read_required(&args.static_data, &["gyro_rate"], &["gyro_rate", "incl_angle"])?;
     eprintln!("{}: {notes}", args.static_data.display());
     let ar = gyro_model(&config, statics.column("gyro_rate").unwrap_or_default())?;
     let incl_noise = statics.column("incl_angle").and_then(spread).unwrap_or(INCLINOMETER_NOISE);
     let est = estimate_with(&config, &file, ar, incl_noise, args.method, &restarts)?;
-    write_atomic(&args.out, est.to_csv(&args.out)?).with_context(|| format!("cannot write {}", args.out.display()))?;
+    write_atomic(&args.files.out, est.to_csv(&args.files.out)?)
+        .with_context(|| format!("cannot write {}", args.files.out.display()))?;
     prose.say(format_args!(
         "{}: {} rows by the {} method; gyro AR(2) [{:.4}, {:.5}], noise {:.2e} rad/s, bias {:.3e} rad/s",
-        args.out.display(),
+        args.files.out.display(),
         est.t.len(),
         args.method.name(),
         ar.a[0],
@@ -205,7 +194,7 @@ fn estimate_command(args: EstimateArgs) -> anyhow::Result<()> {
     if let Some(path) = &args.plot {
         vibration_figure(&est, args.method.name(), truth_vib, file.column(MEASURED[3]))
             .and_then(|svg| write_atomic(path, svg).with_context(|| format!("cannot write {}", path.display())))
-            .with_context(|| format!("{} written, but not the plot", args.out.display()))?;
+            .with_context(|| format!("{} written, but not the plot", args.files.out.display()))?;
         let against =
             if truth_vib.is_some() { " against truth" } else { " (the recording has no truth_tip_vibration)" };
         if truth_vib.is_none() {
@@ -226,7 +215,7 @@ fn estimate_command(args: EstimateArgs) -> anyhow::Result<()> {
             p.peaks, p.mean_pct, p.median_pct, p.free_decay_peaks, p.free_decay_mean_pct
         ));
     }
-    if args.json {
+    if args.files.json {
         json_summary(&args, &file, &est, peaks.as_ref()).print()?;
     }
     Ok(())
@@ -241,7 +230,7 @@ fn json_summary(
     est: &super::estimate::BoomEstimate,
     peaks: Option<&super::peaks::PeakErrors>,
 ) -> EstimateSummary {
-    let mut j = EstimateSummary::new("boom", &args.data, args.config.as_deref(), &file.t);
+    let mut j = args.files.summary("boom", &file.t);
     for (name, unit) in [("tip_vibration", "m"), ("tip_angle", "rad"), ("tip_deflection", "m")] {
         let Some(values) = est.column(name) else { continue };
         let mut q = Quantity::of(unit, values).map(|q| q.against(values, truth(file.column(&format!("truth_{name}")))));
@@ -261,7 +250,6 @@ fn json_summary(
         j.quantity(name, q);
     }
     j.detail("method", args.method.name());
-    j.out = Some(args.out.clone());
     j.plot = args.plot.clone();
     j
 }

@@ -10,11 +10,12 @@
 use super::config::UuvConfig;
 use super::estimate::{estimate, EstimateTable, REQUIRED};
 use super::scenario::Scenario;
-use super::simulate::{simulate, SimOptions, TRUTH};
+use super::simulate::{simulate, TRUTH};
+use crate::cli::request::{EstimateFiles, ScenarioRun};
 use crate::io::data::DataFile;
 use crate::io::output::{check, write_atomic};
 use crate::io::timeline::TimelineOptions;
-use crate::report::summary::{truth, EstimateSummary, Prose, Quantity, Stats};
+use crate::report::summary::{truth, Prose, Quantity, Stats};
 use crate::residual_loop::LoopReport;
 use anyhow::Context as _;
 use clap::{Args, Subcommand};
@@ -30,11 +31,20 @@ pub enum UuvCommand {
     /// between DVL updates), cmd_n_t, cmd_n_v (rpm), cmd_rudder, cmd_elevator (rad; in force
     /// until the next row), and truth_ columns (health factors, position, attitude, velocity,
     /// current, sensor biases).
+    #[command(mut_arg("config", |a| a.help("Configuration (default: host-sim/configs/uuv_remus100.toml's values)")))]
+    #[command(mut_arg("seed", |a| a.help("Seed of the current and of the sensors' noise and biases")))]
+    #[command(mut_arg("scenario", |a| a.help("Health timeline")))]
+    #[command(mut_arg("duration", |a| a.required(false).default_value("300")))]
     Simulate(SimulateArgs),
     /// Estimate the thrusters' health and the vehicle's state from a data CSV into an
     /// estimate CSV: t, k_t, k_v, k_t_std, k_v_std, status_t, status_v (healthy, degraded,
     /// failed), x, y, z, phi, theta, psi, u, v, w, p, q, r, then the nuisance states. A
     /// thruster without a health state has empty k and status columns.
+    #[command(mut_arg("config", |a| a.help("Configuration (default: host-sim/configs/uuv_remus100.toml's values)")))]
+    #[command(mut_arg("json", |a| a.help(
+        "Print one JSON object on stdout (the text goes to stderr): per health factor and speed its statistics, \
+         final value and error against truth, per thruster its alarms"
+    )))]
     Estimate(EstimateArgs),
     /// Write the node's vehicle and estimator (`[vehicle]`, `[estimator]`, `[sensors] rate`)
     /// as Rust constants.
@@ -49,46 +59,24 @@ pub enum UuvCommand {
 /// Arguments of `edgekf uuv simulate`.
 #[derive(Debug, Args)]
 pub struct SimulateArgs {
-    /// Configuration (default: host-sim/configs/uuv_remus100.toml's values).
-    #[arg(long, value_name = "TOML")]
-    pub config: Option<PathBuf>,
-    /// Health timeline.
-    #[arg(long, value_enum)]
-    pub scenario: Scenario,
-    /// Length, s.
-    #[arg(long, value_name = "S", default_value_t = 300.0, value_parser = crate::cli::values::positive_seconds)]
-    pub duration: f64,
-    /// Seed of the current and of the sensors' noise and biases.
-    #[arg(long, value_name = "N", default_value_t = 1)]
-    pub seed: u64,
+    /// `--config`, `--out`, `--seed`, `--scenario`, `--duration` (their help: [`UuvCommand::Simulate`]'s).
+    #[command(flatten)]
+    pub run: ScenarioRun<Scenario>,
     /// Sample rate, Hz (default: the configuration's `sensors.rate`).
     #[arg(long, value_name = "HZ")]
     pub rate: Option<f64>,
-    /// Data file to write.
-    #[arg(long, value_name = "CSV")]
-    pub out: PathBuf,
 }
 
 /// Arguments of `edgekf uuv estimate`.
 #[derive(Debug, Args)]
 pub struct EstimateArgs {
-    /// Configuration (default: host-sim/configs/uuv_remus100.toml's values).
-    #[arg(long, value_name = "TOML")]
-    pub config: Option<PathBuf>,
-    /// Data file to read.
-    #[arg(long, value_name = "CSV")]
-    pub data: PathBuf,
-    /// Estimate file to write.
-    #[arg(long, value_name = "CSV")]
-    pub out: PathBuf,
+    /// `--config`, `--data`, `--out`, `--json` (their help: [`UuvCommand::Estimate`]'s).
+    #[command(flatten)]
+    pub files: EstimateFiles,
     /// Also draw the health factors (against truth where the data has it) into this SVG; with
     /// no health factor in the configuration, the speeds u, v, w.
     #[arg(long, value_name = "SVG")]
     pub plot: Option<PathBuf>,
-    /// Print one JSON object on stdout (the text goes to stderr): per health factor and speed
-    /// its statistics, final value and error against truth, per thruster its alarms.
-    #[arg(long)]
-    pub json: bool,
 }
 
 /// Runs one `edgekf uuv` command.
@@ -97,11 +85,7 @@ pub fn run(command: UuvCommand) -> anyhow::Result<()> {
         UuvCommand::Simulate(a) => simulate_command(a),
         UuvCommand::Estimate(a) => estimate_command(a),
         UuvCommand::Export(a) => {
-            check(&[Some(&a.out)], &[a.config.as_deref()])?;
-            let text = super::export::node_constants(&load(a.config.as_deref())?)?;
-            write_atomic(&a.out, text).with_context(|| format!("cannot write {}", a.out.display()))?;
-            println!("wrote {}: the node's vehicle and estimator", a.out.display());
-            Ok(())
+            a.write(load, super::export::node_constants, |_| "the node's vehicle and estimator".into())
         }
     }
 }
@@ -114,49 +98,51 @@ fn load(path: Option<&Path>) -> anyhow::Result<UuvConfig> {
 }
 
 fn simulate_command(args: SimulateArgs) -> anyhow::Result<()> {
-    check(&[Some(&args.out)], &[args.config.as_deref()])?;
-    let mut config = load(args.config.as_deref())?;
+    check(&[Some(&args.run.files.out)], &[args.run.files.config.as_deref()])?;
+    let mut config = load(args.run.files.config.as_deref())?;
     if let Some(rate) = args.rate {
         config.sensors.rate = rate;
         config.validate()?;
     }
-    let options = SimOptions { scenario: args.scenario, duration: args.duration, seed: args.seed };
-    let rec = simulate(&config, &options, &mut |t| eprintln!("simulated {t:.0} s of {:.0} s", args.duration))?;
-    let text = rec.to_csv(&args.out)?;
-    write_atomic(&args.out, text).with_context(|| format!("cannot write {}", args.out.display()))?;
+    let options = args.run.options();
+    let rec = simulate(&config, &options, &mut |t| eprintln!("simulated {t:.0} s of {:.0} s", args.run.duration))?;
+    let text = rec.to_csv(&args.run.files.out)?;
+    write_atomic(&args.run.files.out, text)
+        .with_context(|| format!("cannot write {}", args.run.files.out.display()))?;
     let u = rec.column("truth_u").unwrap_or_default();
     let mean_u = u.iter().sum::<f64>() / u.len().max(1) as f64;
     println!(
         "{}: {} rows at {} Hz, scenario {}, seed {}; mean speed {mean_u:.3} m/s",
-        args.out.display(),
+        args.run.files.out.display(),
         rec.t.len(),
         config.sensors.rate,
-        args.scenario.name(),
-        args.seed
+        args.run.scenario.name(),
+        args.run.files.seed
     );
     Ok(())
 }
 
 fn estimate_command(args: EstimateArgs) -> anyhow::Result<()> {
-    check(&[Some(&args.out), args.plot.as_deref()], &[Some(&args.data), args.config.as_deref()])?;
-    if args.plot.as_ref() == Some(&args.out) {
-        anyhow::bail!("{}: --out and --plot are the same file", args.out.display());
+    check(&[Some(&args.files.out), args.plot.as_deref()], &[Some(&args.files.data), args.files.config.as_deref()])?;
+    if args.plot.as_ref() == Some(&args.files.out) {
+        anyhow::bail!("{}: --out and --plot are the same file", args.files.out.display());
     }
-    let prose = Prose { json: args.json };
-    let config = load(args.config.as_deref())?;
+    let prose = args.files.prose();
+    let config = load(args.files.config.as_deref())?;
     let known: Vec<&str> = REQUIRED.iter().chain(TRUTH.iter()).copied().collect();
     let (file, restarts) =
-        crate::io::recording::read_estimator_data(&args.data, &REQUIRED, &known, config.sensors.rate)?;
+        crate::io::recording::read_estimator_data(&args.files.data, &REQUIRED, &known, config.sensors.rate)?;
     let table = estimate(&config, &file, &restarts)?;
-    write_atomic(&args.out, table.to_csv()).with_context(|| format!("cannot write {}", args.out.display()))?;
-    prose.say(format_args!("{}: {} rows", args.out.display(), table.t.len()));
+    write_atomic(&args.files.out, table.to_csv())
+        .with_context(|| format!("cannot write {}", args.files.out.display()))?;
+    prose.say(format_args!("{}: {} rows", args.files.out.display(), table.t.len()));
     if let Some(path) = &args.plot {
         plot(prose, path, &table, &file)
-            .with_context(|| format!("{} written, but not the plot", args.out.display()))?;
+            .with_context(|| format!("{} written, but not the plot", args.files.out.display()))?;
     }
     let thrusters = summarise(prose, &table, &file);
-    if args.json {
-        let mut j = EstimateSummary::new("uuv", &args.data, args.config.as_deref(), &file.t);
+    if args.files.json {
+        let mut j = args.files.summary("uuv", &file.t);
         for k in ["k_t", "k_v", "u", "v", "w"] {
             let Some(est) = table.column(k) else { continue };
             let unit = if k.starts_with("k_") { "1" } else { "m/s" };
@@ -165,7 +151,6 @@ fn estimate_command(args: EstimateArgs) -> anyhow::Result<()> {
         }
         j.detail("thrusters", thrusters);
         j.detail("filter_repairs", table.repairs);
-        j.out = Some(args.out);
         j.plot = args.plot;
         j.print()?;
     }

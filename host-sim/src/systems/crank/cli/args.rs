@@ -1,6 +1,7 @@
 //! The arguments of the `crank` commands, as clap reads them.
 
 use super::super::Joint;
+use crate::cli::request::{EstimateFiles, SimulateFiles};
 use clap::{Args, ValueEnum};
 use std::path::PathBuf;
 
@@ -78,15 +79,9 @@ pub enum MethodArg {
 /// Arguments of `edgekf crank estimate`.
 #[derive(Debug, Args)]
 pub struct EstimateArgs {
-    /// Configuration file of the mechanism (default: the paper's case); its `[timeline]
-    /// max_gap_s` (default 2 s) is the longest gap in `t` bridged: the recording ends at a longer
-    /// one.
-    #[arg(long, value_name = "TOML")]
-    pub config: Option<PathBuf>,
-    /// Data file with `t` and `crank_alpha` (rad/s²). Rows lost from `t` are missing samples,
-    /// like empty cells: `fast` steps through them, `ukf` and a legacy `--model` map refuse them.
-    #[arg(long, value_name = "CSV")]
-    pub data: PathBuf,
+    /// `--config`, `--data`, `--out`, `--json` (their help: [`CrankCommand::Estimate`](super::CrankCommand::Estimate)'s).
+    #[command(flatten)]
+    pub files: EstimateFiles,
     /// Estimator.
     #[arg(long, value_enum)]
     pub method: MethodArg,
@@ -111,21 +106,14 @@ pub struct EstimateArgs {
     /// impact-rate map (`impact_rate`, `clearance`; joint A only) is also accepted.
     #[arg(long, value_name = "TOML")]
     pub model: Option<PathBuf>,
-    /// Estimate file to write.
-    #[arg(long, value_name = "CSV")]
-    pub out: PathBuf,
-    /// Print one JSON object on stdout (the text goes to stderr): per joint the clearance's
-    /// statistics over the windows, its final value and its error against the truth.
-    #[arg(long)]
-    pub json: bool,
 }
 
 /// Arguments of `edgekf crank simulate`.
 #[derive(Debug, Args)]
 pub struct SimulateArgs {
-    /// Configuration file (default: the paper's case, as in host-sim/configs/crank_paper.toml).
-    #[arg(long, value_name = "TOML")]
-    pub config: Option<PathBuf>,
+    /// `--config`, `--out`, `--seed` (their help: [`CrankCommand::Simulate`](super::CrankCommand::Simulate)'s).
+    #[command(flatten)]
+    pub files: SimulateFiles,
     /// Radial clearance of a joint, JOINT=METRES (JOINT is A, B or C; 0 means ideal).
     /// Repeat for several joints; joints not named are ideal.
     #[arg(long = "clearance", value_name = "JOINT=M", value_parser = parse_clearance)]
@@ -133,12 +121,6 @@ pub struct SimulateArgs {
     /// Simulated time, s.
     #[arg(long, value_name = "S", allow_hyphen_values = true, value_parser = crate::cli::values::positive_seconds)]
     pub duration: f64,
-    /// Data file to write.
-    #[arg(long, value_name = "CSV")]
-    pub out: PathBuf,
-    /// Seed of the sensor noise.
-    #[arg(long, value_name = "N", default_value_t = 1)]
-    pub seed: u64,
     /// Integrator (default: the configuration's, symplectic Euler in the paper's case).
     #[arg(long, value_enum)]
     pub integrator: Option<IntegratorArg>,

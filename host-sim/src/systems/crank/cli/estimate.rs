@@ -16,26 +16,26 @@ use std::path::Path;
 use std::time::Instant;
 
 pub(super) fn estimate(args: EstimateArgs) -> anyhow::Result<()> {
-    check(&[Some(&args.out)], &[Some(&args.data), args.config.as_deref(), args.model.as_deref()])?;
-    let config = load_config(args.config.as_deref())?;
-    let (rec, notes) = Recording::read(&args.data, &config.timeline)?;
+    check(&[Some(&args.files.out)], &[Some(&args.files.data), args.files.config.as_deref(), args.model.as_deref()])?;
+    let config = load_config(args.files.config.as_deref())?;
+    let (rec, notes) = Recording::read(&args.files.data, &config.timeline)?;
     for line in notes {
         eprintln!("{line}");
     }
     let truth = rec.truth_clearance.map(|c| describe_clearances(&c.map(|v| (v > 0.0).then_some(v))));
     let truth = truth.map_or(String::new(), |t| format!("; truth: {t}"));
     let started = Instant::now();
-    let prose = Prose { json: args.json };
+    let prose = args.files.prose();
     let rows = match args.method {
         MethodArg::Ukf => by_ukf(prose, &args, &config, &rec, &truth, started)?,
         MethodArg::Fast => match fast_model(args.model.as_deref())? {
-            Fast::Model(model) => by_model(prose, &args.data, &config, &rec, &model, &truth, started)?,
-            Fast::Legacy(map) => by_legacy_map(prose, &args.data, &rec, &map, &truth)?,
+            Fast::Model(model) => by_model(prose, &args.files.data, &config, &rec, &model, &truth, started)?,
+            Fast::Legacy(map) => by_legacy_map(prose, &args.files.data, &rec, &map, &truth)?,
         },
     };
-    estimate::write_estimates(&args.out, &rows).map_err(|e| anyhow::anyhow!("{e}"))?;
-    prose.say(format_args!("wrote {}: {} rows", args.out.display(), rows.len()));
-    if args.json {
+    estimate::write_estimates(&args.files.out, &rows).map_err(|e| anyhow::anyhow!("{e}"))?;
+    prose.say(format_args!("wrote {}: {} rows", args.files.out.display(), rows.len()));
+    if args.files.json {
         json_summary(&args, &rec, &rows).print()?;
     }
     Ok(())
@@ -45,7 +45,7 @@ pub(super) fn estimate(args: EstimateArgs) -> anyhow::Result<()> {
 /// estimate for the whole recording), and against the truth the final estimate's error in m
 /// and, at a loose joint, in per cent.
 fn json_summary(args: &EstimateArgs, rec: &Recording, rows: &[EstimateRow]) -> EstimateSummary {
-    let mut j = EstimateSummary::new("crank", &args.data, args.config.as_deref(), &rec.t);
+    let mut j = args.files.summary("crank", &rec.t);
     for joint in Joint::ALL {
         let values: Vec<f64> = rows.iter().map(|r| r.clearance[joint.index()]).collect();
         let mut q = Quantity::of("m", &values);
@@ -57,7 +57,6 @@ fn json_summary(args: &EstimateArgs, rec: &Recording, rows: &[EstimateRow]) -> E
     }
     j.detail("method", format!("{:?}", args.method).to_lowercase());
     j.detail("windows", rows.len().saturating_sub(1));
-    j.out = Some(args.out.clone());
     j
 }
 
@@ -90,7 +89,7 @@ fn by_ukf(
         );
     };
     let run = ukf::run(config, rec, &opts, &mut progress).map_err(|e| match e {
-        CrankError::Data(_) => on_data(&args.data)(e.into()),
+        CrankError::Data(_) => on_data(&args.files.data)(e.into()),
         e => e.into(),
     })?;
     prose.say(format_args!(

@@ -36,6 +36,9 @@ pub enum CrankCommand {
     /// truth_crank_rate, truth_slider_x, truth_contact_force_A/B/C (N), truth_eccentricity_A/B/C,
     /// truth_clearance_A/B/C (m, 0 = ideal joint), truth_energy, truth_dissipated,
     /// truth_balance (J). A summary goes to stdout, progress to stderr.
+    #[command(mut_arg("config", |a| a.help(
+        "Configuration file (default: the paper's case, as in host-sim/configs/crank_paper.toml)"
+    )))]
     Simulate(SimulateArgs),
     /// Print the spectral clearance feature (fit y = a·e^(b·f) of the FFT amplitude) of each
     /// window of a data CSV.
@@ -43,6 +46,18 @@ pub enum CrankCommand {
     /// Estimate the clearance from a recording's crank angular acceleration into an estimate
     /// CSV (t, clearance_A, clearance_B, clearance_C in m, 0 = tight; one row per window, the
     /// last row the estimate for the whole recording).
+    #[command(mut_arg("config", |a| a.help(
+        "Configuration file of the mechanism (default: the paper's case); its `[timeline] max_gap_s` (default 2 s) \
+         is the longest gap in `t` bridged: the recording ends at a longer one"
+    )))]
+    #[command(mut_arg("data", |a| a.help(
+        "Data file with `t` and `crank_alpha` (rad/s²). Rows lost from `t` are missing samples, like empty cells: \
+         `fast` steps through them, `ukf` and a legacy `--model` map refuse them"
+    )))]
+    #[command(mut_arg("json", |a| a.help(
+        "Print one JSON object on stdout (the text goes to stderr): per joint the clearance's statistics over the \
+         windows, its final value and its error against the truth"
+    )))]
     Estimate(EstimateArgs),
     /// Learn the fast estimator's model (joint discriminant and per-joint clearance regression)
     /// from simulated runs, and write it as TOML (`--model` of `estimate --method fast`; the

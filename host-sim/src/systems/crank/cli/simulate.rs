@@ -11,8 +11,8 @@ use std::io::Write as _;
 use std::time::Instant;
 
 pub(super) fn simulate(args: SimulateArgs) -> anyhow::Result<()> {
-    check(&[Some(&args.out)], &[args.config.as_deref()])?;
-    let mut config = load_config(args.config.as_deref())?;
+    check(&[Some(&args.files.out)], &[args.files.config.as_deref()])?;
+    let mut config = load_config(args.files.config.as_deref())?;
     if let Some(step) = args.step {
         config.integrator.step = step;
     }
@@ -38,7 +38,7 @@ pub(super) fn simulate(args: SimulateArgs) -> anyhow::Result<()> {
     }
     let mech = Mechanism::new(&config, clearances)?;
     let mut opts = SimOptions::from_config(&config, args.duration);
-    opts.seed = args.seed;
+    opts.seed = args.files.seed;
     let started = Instant::now();
     // Progress only for runs that take a while: at most one line per second of wall time.
     let mut last_shown = 0.0;
@@ -58,10 +58,10 @@ pub(super) fn simulate(args: SimulateArgs) -> anyhow::Result<()> {
     let rec = mech.simulate_with_progress(&opts, &mut progress)?;
     let wall = started.elapsed().as_secs_f64();
     // The data error already names its cause; flatten it so the cause is printed once.
-    rec.write_csv(&args.out).map_err(|e| anyhow::anyhow!("{e}"))?;
+    rec.write_csv(&args.files.out).map_err(|e| anyhow::anyhow!("{e}"))?;
     println!(
         "wrote {}: {} samples at {} Hz over {} s, seed {}",
-        args.out.display(),
+        args.files.out.display(),
         rec.len(),
         opts.sample_rate,
         args.duration,
