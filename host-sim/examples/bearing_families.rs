@@ -63,7 +63,10 @@ fn print(name: &str, d: &Diagnosis) {
         }
         Verdict::Nothing => "no bearing defect the data can show".to_string(),
     };
-    println!("{name}: {verdict}  (shaft {:.3} Hz ± {:.3}, {} orders)", d.shaft.hz, d.shaft.uncertainty_hz, d.shaft.orders);
+    println!(
+        "{name}: {verdict}  (shaft {:.3} Hz ± {:.3}, {} orders)",
+        d.shaft.hz, d.shaft.uncertainty_hz, d.shaft.orders
+    );
     for f in d.families.iter().take(3) {
         println!("    {}", members(f));
     }

@@ -202,7 +202,9 @@ impl Ses {
         let mut buf: Vec<Complex<f64>> = env
             .iter()
             .enumerate()
-            .map(|(i, v)| Complex::new((v - mean) * (0.5 - 0.5 * (std::f64::consts::TAU * i as f64 / n as f64).cos()), 0.0))
+            .map(|(i, v)| {
+                Complex::new((v - mean) * (0.5 - 0.5 * (std::f64::consts::TAU * i as f64 / n as f64).cos()), 0.0)
+            })
             .collect();
         FftPlanner::<f64>::new().plan_fft_forward(n).process(&mut buf);
         let df = fs / n as f64;
@@ -249,9 +251,8 @@ fn ln_choose(m: usize, i: usize) -> f64 {
 /// `ln P(Binomial(m, p) ≥ j)` from `ln p`.
 fn ln_binomial_tail(m: usize, ln_p: f64, j: usize) -> f64 {
     let ln_q = (-ln_p.exp()).ln_1p();
-    let terms: Vec<f64> = (j..=m)
-        .map(|i| ln_choose(m, i) + i as f64 * ln_p + if i < m { (m - i) as f64 * ln_q } else { 0.0 })
-        .collect();
+    let terms: Vec<f64> =
+        (j..=m).map(|i| ln_choose(m, i) + i as f64 * ln_p + if i < m { (m - i) as f64 * ln_q } else { 0.0 }).collect();
     let top = terms.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     top + terms.iter().map(|t| (t - top).exp()).sum::<f64>().ln()
 }

@@ -82,10 +82,8 @@ fn argmax(p: &[f64], lo: usize, hi: usize) -> Option<usize> {
 
 /// The median of `p` over `±reach` bins around `k`, the three bins each side of `k` left out.
 fn local_median(p: &[f64], k: usize, reach: usize) -> f64 {
-    let mut v: Vec<f64> = (k.saturating_sub(reach)..=(k + reach).min(p.len() - 1))
-        .filter(|&j| j.abs_diff(k) > 3)
-        .map(|j| p[j])
-        .collect();
+    let mut v: Vec<f64> =
+        (k.saturating_sub(reach)..=(k + reach).min(p.len() - 1)).filter(|&j| j.abs_diff(k) > 3).map(|j| p[j]).collect();
     if v.is_empty() {
         return 0.0;
     }
