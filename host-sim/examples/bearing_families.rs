@@ -17,7 +17,11 @@ use edgekf_sim::diagnostics::bearings::family::{diagnose, BearingSpec, Diagnosis
 use edgekf_sim::systems::rotor::RotorConfig;
 use std::path::Path;
 
-fn read_csv(path: &Path) -> Result<(f64, Vec<(String, Vec<f64>)>)> {
+/// Named columns.
+type Channels = Vec<(String, Vec<f64>)>;
+
+/// The sample rate and every column but `t` of a CSV.
+fn read_csv(path: &Path) -> Result<(f64, Channels)> {
     let mut rdr = csv::Reader::from_path(path).with_context(|| path.display().to_string())?;
     let headers: Vec<String> = rdr.headers()?.iter().map(str::to_string).collect();
     let mut cols: Vec<Vec<f64>> = vec![Vec::new(); headers.len()];

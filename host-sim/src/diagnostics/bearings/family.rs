@@ -102,8 +102,8 @@ impl Family {
         }
     }
 
-    /// Its members: (label, kinematic order scaled by `1 + s`, shaft order added unscaled).
-    fn members(self, k: &Kinematics) -> Vec<(String, f64, f64)> {
+    /// Its members.
+    fn members(self, k: &Kinematics) -> Members {
         let mut m = Vec::new();
         match self {
             Family::OuterRace => (1..=4).for_each(|h| m.push((format!("{h}×BPFO"), h as f64 * k.bpfo, 0.0))),
@@ -269,6 +269,9 @@ fn ln_combined(mut ln_p: Vec<f64>, rule: &CarryRule) -> f64 {
     (best + ((m + 1 - rule.members) as f64).ln()).min(0.0)
 }
 
+/// A family's members: (label, kinematic order scaled by `1 + s`, shaft order added unscaled).
+type Members = Vec<(String, f64, f64)>;
+
 /// A family evaluated on one SES at one kinematic factor.
 struct Trial {
     slip: f64,
@@ -362,7 +365,7 @@ fn bands(xw: &[f64], fs: f64, min_width: f64) -> Vec<Band> {
 /// the running speed searched within ±10 % of `nominal_hz`. `None` if no speed can be read.
 pub fn diagnose(channels: &[&[f64]], fs: f64, nominal_hz: f64, bearings: &[BearingSpec]) -> Option<Diagnosis> {
     let shaft = shaft_speed(channels, fs, nominal_hz, 0.1)?;
-    let specs: Vec<(usize, Family, Vec<(String, f64, f64)>)> = bearings
+    let specs: Vec<(usize, Family, Members)> = bearings
         .iter()
         .enumerate()
         .flat_map(|(b, spec)| Family::ALL.map(|f| (b, f, f.members(&spec.orders))))
