@@ -93,6 +93,17 @@ impl BearingGeometry {
             BearingLine::Ftf => 0.5 * (1.0 - ratio),
         }
     }
+
+    /// The four lines as the family diagnosis reads them
+    /// ([`family`](crate::diagnostics::bearings::family)).
+    pub fn kinematics(&self) -> crate::diagnostics::bearings::family::Kinematics {
+        crate::diagnostics::bearings::family::Kinematics {
+            bpfo: self.order(BearingLine::Bpfo),
+            bpfi: self.order(BearingLine::Bpfi),
+            bsf: self.order(BearingLine::Bsf),
+            ftf: self.order(BearingLine::Ftf),
+        }
+    }
 }
 
 #[cfg(test)]
