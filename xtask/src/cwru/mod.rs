@@ -236,11 +236,11 @@ fn progress_line(row: &Row) -> String {
         RunResult::Failed(why) => format!("failed: {why}"),
     };
     format!(
-        "{} ({}, {} hp): {what} — {:?}, {:.0} s",
+        "{} ({}, {} hp): {what} — {}, {:.0} s",
         row.record.number,
         row.record.label(),
         row.record.load_hp,
-        row.verdict(),
+        row.verdict().word(),
         row.seconds
     )
 }
@@ -297,13 +297,14 @@ pub fn main(root: &Path, argv: &[String]) -> Result<()> {
     };
     let jobs =
         args.jobs.map(|j| j as usize).unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
-    let runner = Runner { edgekf, configs, work, jobs };
-    let rows = runner.run(&plan)?;
+    // The commit and date of the start: the tree may change while the runs go on.
     let heading = format!(
         "CWRU 12 kHz drive-end fault records, `edgekf loop rotor` against the 0 hp baseline (097a); {} hp; {}",
         args.loads.iter().map(u8::to_string).collect::<Vec<_>>().join(", "),
         provenance(root)
     );
+    let runner = Runner { edgekf, configs, work, jobs };
+    let rows = runner.run(&plan)?;
     let text = table::markdown(&rows, &heading);
     print!("{text}");
     if let Some(out) = &args.out {

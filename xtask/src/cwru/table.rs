@@ -68,10 +68,23 @@ impl Outcome {
             let _ = write!(text, "; not identifiable: {}", self.undecided.join(", "));
         }
         if !self.others.is_empty() {
-            let _ = write!(text, "; also {}", self.others.join(", "));
+            let _ = write!(text, "; also {}", collapse(&self.others).join(", "));
         }
         text
     }
+}
+
+/// `items` with repeats said once, with their count (`extra_mode at all channels ×4`), in the
+/// order of first appearance.
+fn collapse(items: &[String]) -> Vec<String> {
+    let mut seen: Vec<(&str, usize)> = Vec::new();
+    for item in items {
+        match seen.iter_mut().find(|(s, _)| *s == item.as_str()) {
+            Some((_, n)) => *n += 1,
+            None => seen.push((item.as_str(), 1)),
+        }
+    }
+    seen.into_iter().map(|(s, n)| if n == 1 { s.to_string() } else { format!("{s} ×{n}") }).collect()
 }
 
 /// How a run went.
@@ -97,12 +110,21 @@ pub enum Verdict {
 }
 
 impl Verdict {
-    fn text(self) -> &'static str {
+    /// In words: `right`, `wrong`, `missed`, `failed`.
+    pub fn word(self) -> &'static str {
         match self {
             Verdict::Right => "right",
-            Verdict::Wrong => "**wrong**",
+            Verdict::Wrong => "wrong",
             Verdict::Missed => "missed",
             Verdict::Failed => "failed",
+        }
+    }
+
+    /// For the table: a wrong answer stands out.
+    fn text(self) -> &'static str {
+        match self {
+            Verdict::Wrong => "**wrong**",
+            v => v.word(),
         }
     }
 }
@@ -257,7 +279,9 @@ mod tests {
             "effects_added": [
                 {"kind": "bearing_defect", "location": "bearing 11", "line": "FTF", "value": 0.9},
                 {"kind": "extra_mode", "location": "n1_ay"},
-                {"kind": "bearing_defect", "location": "bearing 1", "line": "BPFO"}
+                {"kind": "bearing_defect", "location": "bearing 1", "line": "BPFO"},
+                {"kind": "unknown_input", "location": "node 6"},
+                {"kind": "extra_mode", "location": "n1_ay"}
             ],
             "running_speed": {"hz": 29.95, "declared_hz": 29.95, "source": "estimated"},
             "not_identifiable": [
@@ -267,11 +291,11 @@ mod tests {
         });
         let o = Outcome::from_report(&report).unwrap();
         assert_eq!(o.defects, [("FTF".into(), "bearing 11".into()), ("BPFO".into(), "bearing 1".into())]);
-        assert_eq!(o.others, ["extra_mode at n1_ay"]);
+        assert_eq!(o.others, ["extra_mode at n1_ay", "unknown_input at node 6", "extra_mode at n1_ay"]);
         assert!((o.rpm.unwrap() - 1797.0).abs() < 1e-9);
         assert_eq!(
             o.named(),
-            "FTF at bearing 11, then BPFO at bearing 1; not identifiable: bearing 1 (rivals bearing 11); also extra_mode at n1_ay"
+            "FTF at bearing 11, then BPFO at bearing 1; not identifiable: bearing 1 (rivals bearing 11); also extra_mode at n1_ay ×2, unknown_input at node 6"
         );
         assert!(Outcome::from_report(&json!({"system": "rotor"})).is_err());
         assert_eq!(Outcome::from_report(&json!({"effects_added": []})).unwrap().named(), "nothing");

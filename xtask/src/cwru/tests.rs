@@ -145,6 +145,8 @@ fn a_run_goes_on_past_a_failed_record_and_a_failed_baseline_stops_it() {
     let rows = runner.run(&p).unwrap();
     let verdicts: Vec<(u32, Verdict)> = rows.iter().map(|r| (r.record.number, r.verdict())).collect();
     assert_eq!(verdicts, [(105, Verdict::Right), (106, Verdict::Failed), (3001, Verdict::Right)]);
+    assert!(progress_line(&rows[0]).starts_with("105 (IR007, 0 hp): BPFI at bearing 1 — right, "));
+    assert!(progress_line(&rows[1]).starts_with("106 (IR007, 1 hp): failed: "));
     let RunResult::Failed(why) = &rows[1].result else { unreachable!() };
     assert!(why.ends_with("106.csv: a 0.500 s gap is too long to bridge"), "{why}");
     assert!(
