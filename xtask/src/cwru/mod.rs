@@ -97,7 +97,8 @@ pub fn plan(dir: &Path, loads: &[u8]) -> Result<Plan> {
     if found.is_empty() {
         bail!(
             "{} holds none of the 60 12 kHz drive-end fault records (`105.csv`, … or the mirror's \
-             `12k_Drive_End_IR007_0_105.csv`, …): convert them with tools/cwru_to_csv.py (README, \"The CWRU bearing data\")",
+             `12k_Drive_End_IR007_0_105.csv`, …): convert the mirror with tools/cwru_convert_all.sh, or a record with \
+             tools/cwru_to_csv.py (README, \"The CWRU bearing data\")",
             dir.display()
         );
     }

@@ -23,7 +23,7 @@ fn a_missing_or_empty_folder_is_refused_with_what_to_do() {
     let e = format!("{:#}", plan(Path::new("/no/such/cwru"), &[0]).unwrap_err());
     assert_eq!(e, "--dir /no/such/cwru: no such folder");
     let e = plan_error(&["097a.csv", "notes.txt"], &[0, 1, 2, 3]);
-    assert!(e.contains("holds none of the 60") && e.contains("tools/cwru_to_csv.py"), "{e}");
+    assert!(e.contains("holds none of the 60") && e.contains("tools/cwru_convert_all.sh"), "{e}");
 }
 
 #[test]
