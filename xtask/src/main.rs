@@ -33,6 +33,11 @@
 //! * `cargo xtask roundtrip uuv` — the vehicle's: a sideways DVL offset → the node's
 //!   `mismatch` → `edgekf loop uuv --corrected-config` on the uploaded flight → `edgekf uuv
 //!   export` → the rebuilt node on a fresh flight (files in `target/roundtrip/uuv/`).
+//! * `cargo xtask cwru --dir D [--jobs N] [--loads 0,1,2,3] [--out FILE.md] [--keep DIR]` — issue
+//!   #35's benchmark: the 0 hp baseline from `D/097a.csv`, then `edgekf loop rotor --baseline` on
+//!   every 12 kHz drive-end fault record of the Case Western Reserve University data in D, and the
+//!   table record → expected → named → right/wrong → Smith & Randall's grade with the counts
+//!   ([`cwru`]).
 //! * `cargo xtask provision` — install what a fresh Debian machine lacks (as root), or say what.
 //!
 //! Every build proves its image panic-free at link time (feature `no-panic-proof`); a failed
@@ -42,6 +47,7 @@
 //! the systems' rows come from the firmware's manifest (`edgekf_firmware::systems::IMAGES`).
 
 mod bench;
+mod cwru;
 mod firmware;
 mod fuzz;
 mod images;
@@ -97,13 +103,14 @@ fn run() -> Result<()> {
             bench::run(&firmware::workspace_root(), !flag("--check")).map(|_| ())
         }
         Some("loop-matrix") => loop_matrix(&args[1..]),
+        Some("cwru") => cwru::main(&firmware::workspace_root(), &args[1..]),
         Some("roundtrip") => {
             provision::ensure()?;
             roundtrip(args.get(1).map(String::as_str))
         }
         _ => {
             eprintln!(
-                "usage: cargo xtask <test [--long] | fw [{0}] | panics [{0}] | run [--data FILE.csv] | bench [--check] | soak | fuzz [--seconds N] [TARGET…] | loop-matrix [SYSTEM…] | roundtrip oscillator|boom|uuv | provision>",
+                "usage: cargo xtask <test [--long] | fw [{0}] | panics [{0}] | run [--data FILE.csv] | bench [--check] | soak | fuzz [--seconds N] [TARGET…] | loop-matrix [SYSTEM…] | cwru --dir D [--jobs N] [--loads 0,1,2,3] [--out FILE.md] [--keep DIR] | roundtrip oscillator|boom|uuv | provision>",
                 images::flags()
             );
             std::process::exit(2);
