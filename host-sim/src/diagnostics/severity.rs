@@ -146,7 +146,7 @@ impl Severity {
 /// samples are replaced by the mean (they carry no information about the level).
 pub fn velocity_rms(accel: &[f64], fs: f64, band: [f64; 2]) -> Option<f64> {
     let finite: Vec<f64> = accel.iter().copied().filter(|x| x.is_finite()).collect();
-    if finite.len() < 16 || !(fs > 0.0) {
+    if finite.len() < 16 || fs.is_nan() || fs <= 0.0 {
         return None;
     }
     let mean = finite.iter().sum::<f64>() / finite.len() as f64;
