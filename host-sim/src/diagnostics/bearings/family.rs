@@ -23,11 +23,9 @@
 //! integer shaft order is not counted (a synchronous modulation makes the same line): the
 //! family's other members decide.
 
-use super::envelope::{kurtogram_bands, squared_envelope, Band};
+use super::envelope::{kurtogram_bands, spectrum, squared_envelope, Band};
 use super::prewhiten::prewhiten;
 use super::shaft::{interpolated_peak, shaft_speed, ShaftSpeed};
-use rustfft::num_complex::Complex;
-use rustfft::FftPlanner;
 use serde::Serialize;
 
 /// The kinematic factor of a family's lines is searched within `±SLIP`.
@@ -196,20 +194,11 @@ struct Ses {
 impl Ses {
     /// The SES of `x` in `band` up to `max_hz`, its floor the median over `±reach_hz`.
     fn of(x: &[f64], fs: f64, band: &Band, max_hz: f64, reach_hz: f64) -> Ses {
-        let env = squared_envelope(x, fs, band);
-        let n = env.len();
-        let mean = env.iter().sum::<f64>() / n.max(1) as f64;
-        let mut buf: Vec<Complex<f64>> = env
-            .iter()
-            .enumerate()
-            .map(|(i, v)| {
-                Complex::new((v - mean) * (0.5 - 0.5 * (std::f64::consts::TAU * i as f64 / n as f64).cos()), 0.0)
-            })
-            .collect();
-        FftPlanner::<f64>::new().plan_fft_forward(n).process(&mut buf);
-        let df = fs / n as f64;
-        let bins = ((max_hz / df).ceil() as usize + 2).min(n / 2);
-        let power: Vec<f64> = buf[..bins].iter().map(|b| b.norm_sqr()).collect();
+        // Power up to a constant (the floor is read the same way, so the ratios are exact).
+        let spec = spectrum(&squared_envelope(x, fs, band), fs);
+        let df = spec.df;
+        let bins = ((max_hz / df).ceil() as usize + 2).min(spec.amplitude.len().saturating_sub(1));
+        let power: Vec<f64> = spec.amplitude[..bins].iter().map(|a| a * a).collect();
         let reach = ((reach_hz / df).round() as usize).max(20);
         let floor = (0..bins)
             .map(|k| {
