@@ -79,3 +79,37 @@ fn a_healthy_rig_has_no_bearing_defect() {
         eprintln!("healthy seed {seed}: {} lines fitted, best Δ − BIC {best:.1}", r.trials.len());
     }
 }
+
+#[test]
+fn a_ball_defect_is_named_bsf_from_its_family() {
+    // The ball strikes both races at twice its spin, carried round at the cage's rate: the
+    // family (2×BSF, its FTF sidebands, the cage's lines) names it, reported by its spin.
+    let model = rig();
+    let r = close(&model, &recording(&model, Some(BearingLine::Bsf), 6));
+    let found = defects(&r);
+    assert_eq!(found.len(), 1, "{:?}\n{:?}", r.effects_added, r.refused);
+    assert_eq!((found[0].detail.line.as_deref(), found[0].location.as_str()), (Some("BSF"), "bearing 1"));
+    let families = &r.section.fields["bearing_families"];
+    assert_eq!(families["verdict"], "named", "{families}");
+    assert_eq!(families["named"]["family"], "ball", "{families}");
+}
+
+#[test]
+fn identical_bearings_are_reported_as_a_tie_not_guessed() {
+    // Both bearings of one geometry: an outer-race defect's lines fit either equally, so the
+    // report says the sensors cannot tell which bearing, names the rival, and adds neither.
+    let healthy = rig();
+    let mut cfg = healthy.config().clone();
+    cfg.bearings[1].geometry = cfg.bearings[0].geometry;
+    let model = RotorModel::from_config(&cfg).unwrap();
+    let r = close(&model, &recording(&model, Some(BearingLine::Bpfo), 7));
+    assert!(defects(&r).is_empty(), "{:?}", r.effects_added);
+    let tie: Vec<_> = r.not_identifiable.iter().filter(|n| n.kind == "bearing_defect").collect();
+    assert_eq!(tie.len(), 1, "{:?}", r.not_identifiable);
+    assert_eq!(tie[0].statistic, "family_score_gap");
+    assert!(tie[0].value.abs() < 2.0, "{:?}", tie[0]);
+    let places = [tie[0].location.as_str(), tie[0].rivals[0].as_str()];
+    assert!(places[0].starts_with("bearing ") && places[1].contains("bearing "), "{places:?}");
+    assert_ne!(places[0], places[1].trim_start_matches("bearing_defect at ").split(" (").next().unwrap());
+    assert_eq!(r.section.fields["bearing_families"]["verdict"], "cannot_tell");
+}

@@ -31,7 +31,8 @@ pub struct AddedEffect {
     /// Spectral lines (Hz) of the innovations that were there before this effect and are gone
     /// after it.
     pub explains: Vec<f64>,
-    /// Gain in log-likelihood.
+    /// Gain in log-likelihood (0 for an effect named by a test of its own whose model was not
+    /// fitted: [`EffectDetail::named_by`]).
     pub delta_log_likelihood: f64,
     /// Its cost: `½ p ln n`, plus a baseline's gain floor over the run.
     pub bic_penalty: f64,

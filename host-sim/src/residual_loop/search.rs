@@ -363,7 +363,7 @@ pub fn search_staged<S: LoopSystem>(
         (model, run) = (t.model, t.run);
         (t.tuning, t.correction)
     });
-    let PreStage { added: first, trials, refused, excludes, data_changed } = first_stage(sys, &run)?;
+    let PreStage { added: first, trials, refused, excludes, data_changed, not_identifiable } = first_stage(sys, &run)?;
     if data_changed {
         (model, run) = sys.run(&[])?;
     }
@@ -378,7 +378,7 @@ pub fn search_staged<S: LoopSystem>(
         summary,
         added: Vec::new(),
         trials,
-        not_identifiable: Vec::new(),
+        not_identifiable,
         partial: Vec::new(),
         refused,
         excludes,

@@ -8,7 +8,7 @@
 use super::correction::Correction;
 use super::filter::Run;
 use super::optimize::ScalarRange;
-use super::report::{AddedEffect, Refused, SystemSection, Traces, Trial};
+use super::report::{AddedEffect, NotIdentifiable, Refused, SystemSection, Traces, Trial};
 use super::signature::RunSummary;
 use super::vocabulary::{Applied, EffectKind, EffectLabel};
 use anyhow::Result;
@@ -74,11 +74,20 @@ pub struct PreStage<E> {
     /// Whether the stage changed the system's data (took the vibration it explained out), so
     /// that the base model must be run again.
     pub data_changed: bool,
+    /// What the stage found the data cannot tell apart (two defects whose lines fit equally).
+    pub not_identifiable: Vec<NotIdentifiable>,
 }
 
 impl<E> Default for PreStage<E> {
     fn default() -> Self {
-        Self { added: Vec::new(), trials: Vec::new(), refused: Vec::new(), excludes: Vec::new(), data_changed: false }
+        Self {
+            added: Vec::new(),
+            trials: Vec::new(),
+            refused: Vec::new(),
+            excludes: Vec::new(),
+            data_changed: false,
+            not_identifiable: Vec::new(),
+        }
     }
 }
 

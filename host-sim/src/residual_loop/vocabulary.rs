@@ -96,6 +96,10 @@ pub struct EffectDetail {
     /// When the effect began, s on the data's `t` (change-point effects, fitted by the engine).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub onset_s: Option<f64>,
+    /// The test that named the effect when its model was not fitted (its Δ log-likelihood
+    /// and BIC cost are then 0): a bearing defect named by its family of envelope lines.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub named_by: Option<String>,
 }
 
 /// How an effect is written in the report.

@@ -111,8 +111,14 @@ pub(super) fn effects(out: &mut String, added: &[AddedEffect]) {
                     }),
                     "",
                 ),
-                Cell::num(fixed(e.delta_log_likelihood, 1), ""),
-                Cell::num(fixed(e.bic_penalty, 1), ""),
+                match &e.detail.named_by {
+                    Some(_) => Cell::num("–".to_string(), ""),
+                    None => Cell::num(fixed(e.delta_log_likelihood, 1), ""),
+                },
+                match &e.detail.named_by {
+                    Some(test) => Cell::text(format!("named by {test}")),
+                    None => Cell::num(fixed(e.bic_penalty, 1), ""),
+                },
                 Cell::text(frequencies(&e.explains)),
             ]
         })

@@ -1,12 +1,17 @@
-//! The rotor's bearings in the loop: their defect lines at the running speed, looked for in the
-//! envelope of the base model's innovations before the search ([`impacts`]), and the impacts'
-//! vibration taken out of the data once a defect is named.
+//! The rotor's bearings in the loop: which fault family the housings' vibration carries
+//! ([`family`]: the whole family of lines, prewhitened, as the field diagnoses), that family's
+//! lines then fitted in the envelope of the base model's innovations before the search
+//! ([`impacts`]), and the impacts' vibration taken out of the data once a defect is named.
+//! Two families that explain the lines equally are reported as such, not guessed between.
 
 use super::effects::Effect;
 use super::RotorSystem;
+use crate::diagnostics::bearings::family::{self, BearingSpec, Diagnosis, Family, FamilyFit, Kinematics, Verdict};
 use crate::diagnostics::bearings::impacts::{self, ImpactLine};
 use crate::residual_loop::filter::Run;
-use crate::residual_loop::{search_staged, EffectKind, LoopOptions, LoopReport, LoopSystem, PreStage};
+use crate::residual_loop::{
+    search_staged, AddedEffect, EffectKind, LoopOptions, LoopReport, LoopSystem, NotIdentifiable, PreStage,
+};
 use crate::systems::rotor::bearing_geometry::BearingLine;
 use anyhow::{anyhow, Result};
 use std::f64::consts::TAU;
@@ -22,7 +27,19 @@ impl RotorSystem<'_> {
     /// taken out of the data; after a defect is named, a broadband stand-in (a mode the model
     /// lacks, a catch-all input) is not fitted: the impacts ring every lightly damped mode.
     pub(super) fn first_stage(&mut self, run: &Run, options: &LoopOptions) -> Result<PreStage<Effect>> {
-        let lines = self.impact_lines();
+        self.families = self.diagnose_families();
+        let (lines, not_identifiable) = match self.families.as_ref().map(|d| &d.verdict) {
+            Some(Verdict::Named(fit)) => (self.family_lines(fit), Vec::new()),
+            Some(Verdict::CannotTell(a, b)) => (Vec::new(), self.tie(a, b)),
+            Some(Verdict::Nothing) => (Vec::new(), Vec::new()),
+            // No running speed in the raw spectrum: every line, each refused on a shaft order.
+            None => (self.impact_lines(), Vec::new()),
+        };
+        if options.progress {
+            if let Some(d) = &self.families {
+                eprintln!("loop: bearing families: {}", describe(d));
+            }
+        }
         let traces = self.traces();
         let found = impacts::stage(&lines, |e| self.label(e), run, &traces, &self.rotor.envelope, options.half_gain);
         for (channel, signal) in &found.signals {
@@ -34,6 +51,12 @@ impl RotorSystem<'_> {
                     "loop: impacts {} at {}: Δ log-likelihood {:.1}, BIC cost {:.1}",
                     a.kind, a.location, a.delta_log_likelihood, a.bic_penalty
                 );
+            }
+        }
+        let mut found = found;
+        if let Some(Verdict::Named(fit)) = self.families.as_ref().map(|d| &d.verdict) {
+            if let Some(named) = self.named_by_family(fit, &found.added) {
+                found.added.push(named);
             }
         }
         let excludes = match found.added.first() {
@@ -55,7 +78,146 @@ impl RotorSystem<'_> {
             trials: found.trials,
             refused: found.refused,
             excludes,
+            not_identifiable,
         })
+    }
+
+    /// Every bearing with a geometry, as the family detector reads it (`bearing N`, its lines
+    /// as orders).
+    fn bearing_specs(&self) -> Vec<(usize, BearingSpec)> {
+        let mut out: Vec<(usize, BearingSpec)> = Vec::new();
+        for &(bearing, line, order) in &self.lines {
+            let name = format!("bearing {}", self.cfg.bearings[bearing].node);
+            let at = match out.iter().position(|(b, _)| *b == bearing) {
+                Some(i) => i,
+                None => {
+                    let orders = Kinematics { bpfo: 0.0, bpfi: 0.0, bsf: 0.0, ftf: 0.0 };
+                    out.push((bearing, BearingSpec { name, orders }));
+                    out.len() - 1
+                }
+            };
+            let k = &mut out[at].1.orders;
+            match line {
+                BearingLine::Bpfo => k.bpfo = order,
+                BearingLine::Bpfi => k.bpfi = order,
+                BearingLine::Bsf => k.bsf = order,
+                BearingLine::Ftf => k.ftf = order,
+            }
+        }
+        out
+    }
+
+    /// The fault family the raw housings' vibration carries (the accelerometers'; every
+    /// channel if none is one), or `None` without bearing geometry or a readable speed.
+    fn diagnose_families(&self) -> Option<Diagnosis> {
+        let specs: Vec<BearingSpec> = self.bearing_specs().into_iter().map(|(_, s)| s).collect();
+        let t = &self.data.t;
+        let (first, last) = (*t.first()?, *t.last()?);
+        if specs.is_empty() || t.len() < 2 || last <= first {
+            return None;
+        }
+        let fs = (t.len() - 1) as f64 / (last - first);
+        let accelerometers: Vec<&[f64]> = self
+            .channel_info
+            .iter()
+            .zip(&self.columns)
+            .filter(|(c, _)| c.unit == "m/s^2")
+            .map(|(_, x)| x.as_slice())
+            .collect();
+        let channels =
+            if accelerometers.is_empty() { self.columns.iter().map(Vec::as_slice).collect() } else { accelerometers };
+        family::diagnose(&channels, fs, self.speed.hz, &specs)
+    }
+
+    /// The named family's lines at its bearing, at the speed and kinematic factor the
+    /// detector found; a ball's impacts are looked for at twice its spin (both races, carried
+    /// round at the cage's rate) and at the cage's rate (what ball faults mostly show), both
+    /// reported as the ball's defect. No line is refused for its distance to a shaft order:
+    /// the family was told from the shaft's harmonics by all its members.
+    fn family_lines(&self, fit: &FamilyFit) -> Vec<ImpactLine<Effect>> {
+        let Some((bearing, spec)) = self.bearing_specs().into_iter().find(|(_, s)| s.name == fit.bearing) else {
+            return Vec::new();
+        };
+        let shaft_hz = self.families.as_ref().map_or(self.red.speed / TAU, |d| d.shaft.hz);
+        let k = spec.orders;
+        let scale = 1.0 + fit.slip;
+        let line = |line: BearingLine, order: f64, hz_order: f64, modulation_hz: Option<f64>| ImpactLine {
+            effect: Effect::BearingDefect { bearing, line, order_milli: (order * scale * 1e3).round() as u32 },
+            hz: hz_order * scale * shaft_hz,
+            modulation_hz,
+            synchronous_hz: None,
+        };
+        match fit.family {
+            Family::OuterRace => vec![line(BearingLine::Bpfo, k.bpfo, k.bpfo, None)],
+            Family::InnerRace => vec![line(BearingLine::Bpfi, k.bpfi, k.bpfi, Some(shaft_hz))],
+            Family::Ball => vec![
+                line(BearingLine::Bsf, k.bsf, 2.0 * k.bsf, Some(k.ftf * scale * shaft_hz)),
+                line(BearingLine::Bsf, k.bsf, k.ftf, None),
+            ],
+        }
+    }
+
+    /// The named family's defect as the detector found it, when the impacts' fit in the
+    /// innovations did not pay its cost (their model has two parameters per envelope bin; the
+    /// family's lines are a test of their own, [`family::CARRY`]): named, its vibration not
+    /// modelled. `None` when the fit named it already.
+    fn named_by_family(&self, fit: &FamilyFit, added: &[(Effect, AddedEffect)]) -> Option<(Effect, AddedEffect)> {
+        let (bearing, spec) = self.bearing_specs().into_iter().find(|(_, s)| s.name == fit.bearing)?;
+        if added.iter().any(|(e, _)| matches!(e, Effect::BearingDefect { bearing: b, .. } if *b == bearing)) {
+            return None;
+        }
+        let (line, order) = family_line(fit.family, &spec.orders);
+        let effect =
+            Effect::BearingDefect { bearing, line, order_milli: (order * (1.0 + fit.slip) * 1e3).round() as u32 };
+        let mut label = self.label(&effect);
+        let strong: Vec<&family::Member> =
+            fit.members.iter().filter(|m| !m.on_order && m.strength_db >= family::CARRY.min_db).collect();
+        label.detail.band_hz = Some([fit.band.low_hz, fit.band.high_hz]);
+        label.detail.named_by = Some(format!(
+            "its family of envelope lines ({}; chance 10^-{:.1} < {:.0e}); its vibration is not modelled: impacts \
+             fitted to the innovations did not pay their cost",
+            strong.iter().map(|m| format!("{} {:.1} dB", m.label, m.strength_db)).collect::<Vec<_>>().join(", "),
+            fit.score,
+            family::CARRY.false_alarm
+        ));
+        let added = AddedEffect {
+            kind: label.kind,
+            location: label.location,
+            value: strong.iter().map(|m| m.strength_db).fold(f64::NEG_INFINITY, f64::max),
+            unit: "dB".into(),
+            detail: label.detail,
+            explains: strong.iter().map(|m| (m.hz * 100.0).round() / 100.0).collect(),
+            delta_log_likelihood: 0.0,
+            bic_penalty: 0.0,
+            interval: None,
+        };
+        Some((effect, added))
+    }
+
+    /// Two families whose lines the data carry equally: the best is not identifiable, the
+    /// other its rival.
+    fn tie(&self, a: &FamilyFit, b: &FamilyFit) -> Vec<NotIdentifiable> {
+        let label = |f: &FamilyFit| {
+            let (bearing, spec) = self.bearing_specs().into_iter().find(|(_, s)| s.name == f.bearing)?;
+            let (line, order) = family_line(f.family, &spec.orders);
+            Some(self.label(&Effect::BearingDefect { bearing, line, order_milli: (order * 1e3).round() as u32 }))
+        };
+        let Some(best) = label(a) else { return Vec::new() };
+        let reason = format!(
+            "the envelope carries the {} family at {} (score {:.1}) and the {} family at {} (score {:.1}) about \
+             equally (within a factor 10^{:.0}): these sensors cannot tell which",
+            a.family.name(),
+            a.bearing,
+            a.score,
+            b.family.name(),
+            b.bearing,
+            b.score,
+            family::TIE_MARGIN
+        );
+        let mut n = NotIdentifiable::of(&best, "family_score_gap", a.score - b.score, reason);
+        n.rivals =
+            label(b).map(|l| format!("{} at {} ({})", l.kind, l.location, b.family.name())).into_iter().collect();
+        vec![n]
     }
 
     /// Every defect line of every bearing with a geometry, at the running speed: an inner-race
@@ -94,4 +256,61 @@ impl RotorSystem<'_> {
         col.iter_mut().zip(signal).for_each(|(v, s)| *v -= s);
         Ok(())
     }
+}
+
+/// The line a family is reported by (the ball's by its spin) and its order.
+fn family_line(f: Family, k: &Kinematics) -> (BearingLine, f64) {
+    match f {
+        Family::OuterRace => (BearingLine::Bpfo, k.bpfo),
+        Family::InnerRace => (BearingLine::Bpfi, k.bpfi),
+        Family::Ball => (BearingLine::Bsf, k.bsf),
+    }
+}
+
+/// The detector's verdict in a line: the family, its bearing, score and kinematic factor.
+pub(super) fn describe(d: &Diagnosis) -> String {
+    let fit = |f: &FamilyFit| {
+        format!("{} at {} (score {:.1}, lines ×{:.4})", f.family.name(), f.bearing, f.score, 1.0 + f.slip)
+    };
+    match &d.verdict {
+        Verdict::Named(f) => format!("{} at a shaft speed of {:.3} Hz", fit(f), d.shaft.hz),
+        Verdict::CannotTell(a, b) => format!("cannot tell {} from {}", fit(a), fit(b)),
+        Verdict::Nothing => match d.families.first() {
+            Some(best) => format!("no family carried; the strongest, {}, is within chance", fit(best)),
+            None => "no family carried".to_string(),
+        },
+    }
+}
+
+/// The detector's verdict for `report.json`'s `bearing_families`: `verdict` (`named`,
+/// `cannot_tell`, `nothing`), the shaft speed it read, and every family with its score.
+pub(super) fn summary(d: &Diagnosis) -> serde_json::Value {
+    let fit = |f: &FamilyFit| {
+        serde_json::json!({
+            "family": f.family.name(),
+            "bearing": f.bearing,
+            "score": f.score,
+            "carried": f.carried,
+            "line_factor": 1.0 + f.slip,
+            "channel": f.channel,
+            "band_hz": [f.band.low_hz, f.band.high_hz],
+            "members": f.members.iter().filter(|m| !m.on_order && m.strength_db >= family::CARRY.min_db)
+                .map(|m| serde_json::json!({"label": m.label, "hz": m.hz, "strength_db": m.strength_db}))
+                .collect::<Vec<_>>(),
+        })
+    };
+    let (verdict, named, rival) = match &d.verdict {
+        Verdict::Named(f) => ("named", Some(fit(f)), None),
+        Verdict::CannotTell(a, b) => ("cannot_tell", Some(fit(a)), Some(fit(b))),
+        Verdict::Nothing => ("nothing", None, None),
+    };
+    serde_json::json!({
+        "verdict": verdict,
+        "named": named,
+        "rival": rival,
+        "shaft_hz": d.shaft.hz,
+        "families": d.families.iter().map(|f| serde_json::json!({
+            "family": f.family.name(), "bearing": f.bearing, "score": f.score, "carried": f.carried,
+        })).collect::<Vec<_>>(),
+    })
 }

@@ -29,6 +29,7 @@ use self::effects::{apply_parameters, augment, AugmentedModel, Effect, EffectTun
 use self::healthy::Healthy;
 use self::speed::{estimate_speed, RunningSpeed};
 use crate::diagnostics::bearings::envelope::LineSearch;
+use crate::diagnostics::bearings::family::Diagnosis;
 use crate::io::data::DataFile;
 use crate::residual_loop::filter::{run_state_space, Run, StateSpace};
 use crate::residual_loop::onset::settled_mean;
@@ -85,6 +86,8 @@ pub struct RotorSystem<'a> {
     lines: Vec<(usize, BearingLine, f64)>,
     /// Where the innovations' lines are placed.
     reference: ReferenceLines,
+    /// The bearings' fault family the raw vibration carries (set by the first stage).
+    families: Option<Diagnosis>,
     /// The sensor channels with their units.
     channel_info: Vec<Channel>,
     /// The virtual-sensing rows (displacements, m).
@@ -213,6 +216,7 @@ impl<'a> RotorSystem<'a> {
             force_sites,
             lines,
             reference,
+            families: None,
             channel_info,
             row_info,
             speed: running,

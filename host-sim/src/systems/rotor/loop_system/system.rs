@@ -129,6 +129,10 @@ impl LoopSystem for RotorSystem<'_> {
             section.fields.insert("running_speed".into(), v);
         }
         section.lines.push(("running speed".into(), self.speed.describe()));
+        if let Some(d) = &self.families {
+            section.lines.push(("bearing families".into(), super::bearings::describe(d)));
+            section.fields.insert("bearing_families".into(), super::bearings::summary(d));
+        }
         let severity = self.severity();
         for v in &severity {
             section.lines.push(("vibration severity".into(), v.describe()));

@@ -3,8 +3,9 @@
 //! its own resonance near 3 kHz under broadband forces, the motor adds line-frequency
 //! harmonics, the sensors their noise, and the shaft turns 0.4 % below its declared speed.
 //! Optionally a drive-end bearing defect (impacts at its line's rate with 1.5 % slip, the inner
-//! race's load zone modulated at the shaft rate, through the drive-end housing's resonance) and
-//! a grown unbalance. Nothing in the configuration declares any of it.
+//! race's load zone modulated at the shaft rate, a ball's at twice its spin, striking both
+//! races, carried round at the cage's rate; through the drive-end housing's resonance) and a
+//! grown unbalance. Nothing in the configuration declares any of it.
 //!
 //! ```
 //! use edgekf_sim::systems::rotor::loop_system::twin::{rig, Twin};
@@ -74,13 +75,18 @@ impl Twin {
         if let Some(line) = self.defect {
             let shaft_hz = speed / TAU;
             let geometry = cfg.bearings[0].geometry.ok_or_else(|| anyhow!("the drive-end bearing has no geometry"))?;
+            let (strikes, modulation_hz) = match line {
+                BearingLine::Bpfi => (1.0, Some(shaft_hz)),
+                BearingLine::Bsf => (2.0, Some(geometry.order(BearingLine::Ftf) * shaft_hz)),
+                BearingLine::Bpfo | BearingLine::Ftf => (1.0, None),
+            };
             let signal = DefectSignal {
-                frequency_hz: geometry.order(line) * shaft_hz,
+                frequency_hz: strikes * geometry.order(line) * shaft_hz,
                 peak: 1.5,
                 resonance_hz: HOUSINGS[0].1,
                 damping: 0.04,
                 slip: 0.015,
-                modulation_hz: (line == BearingLine::Bpfi).then_some(shaft_hz),
+                modulation_hz,
                 load_zone: 0.5,
             };
             inject_bearing_defect(&mut d, "n1_ay", &signal, seed + 100)?;
