@@ -92,6 +92,11 @@ fn a_ball_defect_is_named_bsf_from_its_family() {
     let families = &r.section.fields["bearing_families"];
     assert_eq!(families["verdict"], "named", "{families}");
     assert_eq!(families["named"]["family"], "ball", "{families}");
+    // The page shows the evidence: the family's envelope spectrum with its members marked.
+    let page = edgekf_sim::report::html::render(&r).unwrap();
+    let at = page.find("Squared envelope spectrum of the prewhitened").expect("the family's figure");
+    let figure = &page[page[..at].rfind("<figure>").unwrap()..at];
+    assert!(figure.contains("<svg") && figure.contains("2×BSF") && figure.contains("ball at bearing 1"));
 }
 
 #[test]

@@ -58,7 +58,8 @@ pub use optimize::ScalarRange;
 pub use options::LoopOptions;
 pub use recording::Recording;
 pub use report::{
-    AddedEffect, LoopReport, NotIdentifiable, Refused, Source, SystemSection, Traces, Trial, SCHEMA_VERSION,
+    AddedEffect, LoopReport, NotIdentifiable, Refused, Source, SystemFigure, SystemSection, Traces, Trial,
+    SCHEMA_VERSION,
 };
 pub use search::{search, search_staged};
 pub use signature::{Channel, ChannelSignature, PeakSignature, RunSummary, Signature, SignatureOptions};

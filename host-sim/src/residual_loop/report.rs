@@ -102,6 +102,18 @@ pub struct SystemSection {
     /// The same for people: `(label, text)`, printed under the verdict and on the page.
     #[serde(skip)]
     pub lines: Vec<(String, String)>,
+    /// The system's own figures for the page (the evidence behind a diagnosis of its own).
+    #[serde(skip)]
+    pub figures: Vec<SystemFigure>,
+}
+
+/// A system's figure on the report page.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct SystemFigure {
+    /// Inline SVG.
+    pub svg: String,
+    /// What it shows, in words.
+    pub caption: String,
 }
 
 /// An effect (or location) the data cannot resolve.

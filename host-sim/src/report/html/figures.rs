@@ -54,6 +54,9 @@ pub(super) fn plots(out: &mut String, r: &LoopReport) -> Result<()> {
     for (svg, caption) in &figures {
         figure(out, svg, caption);
     }
+    for f in &r.section.figures {
+        figure(out, &f.svg, &f.caption);
+    }
     let rows = truth_rows(r);
     if rows.is_empty() {
         para(

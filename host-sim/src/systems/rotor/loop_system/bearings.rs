@@ -107,25 +107,32 @@ impl RotorSystem<'_> {
         out
     }
 
-    /// The fault family the raw housings' vibration carries (the accelerometers'; every
-    /// channel if none is one), or `None` without bearing geometry or a readable speed.
+    /// The channels the family detector reads, raw (before the first stage takes the impacts
+    /// out): the housings' accelerometers, every channel if none is one; and their sample rate
+    /// (0 without two distinct times).
+    pub(super) fn family_channels(&self) -> (Vec<(&str, &[f64])>, f64) {
+        let t = &self.data.t;
+        let fs = match (t.first(), t.last()) {
+            (Some(a), Some(b)) if b > a && t.len() > 1 => (t.len() - 1) as f64 / (b - a),
+            _ => 0.0,
+        };
+        let raw = |only_accelerometers: bool| -> Vec<(&str, &[f64])> {
+            let chosen = self.channel_info.iter().filter(|c| !only_accelerometers || c.unit == "m/s^2");
+            chosen.filter_map(|c| Some((c.name.as_str(), self.data.column(&c.name)?))).collect()
+        };
+        let accelerometers = raw(true);
+        (if accelerometers.is_empty() { raw(false) } else { accelerometers }, fs)
+    }
+
+    /// The fault family the raw housings' vibration carries, or `None` without bearing
+    /// geometry or a readable speed.
     fn diagnose_families(&self) -> Option<Diagnosis> {
         let specs: Vec<BearingSpec> = self.bearing_specs().into_iter().map(|(_, s)| s).collect();
-        let t = &self.data.t;
-        let (first, last) = (*t.first()?, *t.last()?);
-        if specs.is_empty() || t.len() < 2 || last <= first {
+        let (named, fs) = self.family_channels();
+        let channels: Vec<&[f64]> = named.iter().map(|c| c.1).collect();
+        if specs.is_empty() || fs <= 0.0 {
             return None;
         }
-        let fs = (t.len() - 1) as f64 / (last - first);
-        let accelerometers: Vec<&[f64]> = self
-            .channel_info
-            .iter()
-            .zip(&self.columns)
-            .filter(|(c, _)| c.unit == "m/s^2")
-            .map(|(_, x)| x.as_slice())
-            .collect();
-        let channels =
-            if accelerometers.is_empty() { self.columns.iter().map(Vec::as_slice).collect() } else { accelerometers };
         family::diagnose(&channels, fs, self.speed.hz, &specs)
     }
 

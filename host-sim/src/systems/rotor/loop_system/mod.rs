@@ -18,6 +18,7 @@ pub mod bearings;
 pub mod candidates;
 pub mod cases;
 pub mod effects;
+mod family_figure;
 pub mod healthy;
 pub mod inject;
 pub mod speed;

@@ -132,6 +132,8 @@ impl LoopSystem for RotorSystem<'_> {
         if let Some(d) = &self.families {
             section.lines.push(("bearing families".into(), super::bearings::describe(d)));
             section.fields.insert("bearing_families".into(), super::bearings::summary(d));
+            let (channels, fs) = self.family_channels();
+            section.figures.extend(super::family_figure::figure(&d.verdict, &channels, fs, d.shaft.hz));
         }
         let severity = self.severity();
         for v in &severity {
