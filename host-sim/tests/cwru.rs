@@ -176,3 +176,18 @@ fn against_the_baseline_the_outer_race_gets_only_its_defect() {
 fn against_the_baseline_the_larger_inner_race_gets_only_its_defect() {
     only_the_defect("169", "BPFI");
 }
+
+#[test]
+fn against_the_baseline_an_outer_race_on_the_cage_comb_is_bpfo() {
+    // 144's envelope is a comb of fifth orders where 4×FTF + 2× sits on BPFO: line by line the
+    // cage's lines stole it; as a family the outer race wins (Smith & Randall: Y2).
+    only_the_defect("144", "BPFO");
+}
+
+#[test]
+fn against_the_baseline_a_ball_is_named_by_its_family() {
+    // 222 shows 2×FTF and 2×BSF: the ball family, never named before (Smith & Randall: Y2).
+    only_the_defect("222", "BSF");
+    let Some(r) = diagnose_from_baseline("222") else { return };
+    assert_eq!(r.section.fields["bearing_families"]["named"]["family"], "ball");
+}
