@@ -33,10 +33,13 @@ pub fn summary_table(r: &LoopReport) -> String {
         let order = e.detail.order.map(|o| format!(" at {o}x")).unwrap_or_default();
         let what = e.detail.parameter.as_ref().or(e.detail.line.as_ref()).map(|p| format!(" {p}")).unwrap_or_default();
         let from = e.detail.onset_s.map(|o| format!(" from {o:.3} s")).unwrap_or_default();
-        let evidence = match &e.detail.named_by {
+        let mut evidence = match &e.detail.named_by {
             Some(test) => format!("named by {test}"),
             None => format!("Δ log-likelihood {:.1}, BIC cost {:.1}", e.delta_log_likelihood, e.bic_penalty),
         };
+        if let Some(why) = &e.detail.not_modelled {
+            evidence.push_str(&format!("; {why}"));
+        }
         s.push_str(&format!(
             "  + {}{} at {}{}{}: {}{} ({evidence})\n",
             e.kind,

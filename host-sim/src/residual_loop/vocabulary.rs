@@ -100,6 +100,10 @@ pub struct EffectDetail {
     /// and BIC cost are then 0): a bearing defect named by its family of envelope lines.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub named_by: Option<String>,
+    /// Why the final model does not carry the effect although it was named (its vibration was
+    /// not taken out, say): the report's "after" then does not show it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub not_modelled: Option<String>,
 }
 
 /// How an effect is written in the report.

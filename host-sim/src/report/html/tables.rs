@@ -65,8 +65,10 @@ fn table(head: &[&str], rows: &[Vec<Cell>], row_class: impl Fn(usize) -> &'stati
 fn effect_detail(e: &AddedEffect) -> String {
     let d = &e.detail;
     let onset = d.onset_s.map(|o| format!("from {o:.3} s"));
-    let parts: Vec<String> =
-        [d.parameter.clone(), d.line.clone(), d.order.map(order), onset].into_iter().flatten().collect();
+    let parts: Vec<String> = [d.parameter.clone(), d.line.clone(), d.order.map(order), onset, d.not_modelled.clone()]
+        .into_iter()
+        .flatten()
+        .collect();
     if parts.is_empty() {
         "–".into()
     } else {

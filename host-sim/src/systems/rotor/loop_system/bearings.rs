@@ -41,10 +41,9 @@ impl RotorSystem<'_> {
             }
         }
         let traces = self.traces();
-        let found = impacts::stage(&lines, |e| self.label(e), run, &traces, &self.rotor.envelope, options.half_gain);
-        for (channel, signal) in &found.signals {
-            self.subtract(*channel, signal)?;
-        }
+        let mut found =
+            impacts::stage(&lines, |e| self.label(e), run, &traces, &self.rotor.envelope, options.half_gain);
+        let data_changed = self.take_out(&mut found, run.log_likelihood())?;
         if options.progress {
             for (_, a) in &found.added {
                 eprintln!(
@@ -53,7 +52,6 @@ impl RotorSystem<'_> {
                 );
             }
         }
-        let mut found = found;
         if let Some(Verdict::Named(fit)) = self.families.as_ref().map(|d| &d.verdict) {
             if let Some(named) = self.named_by_family(fit, &found.added) {
                 found.added.push(named);
@@ -73,13 +71,42 @@ impl RotorSystem<'_> {
             None => Vec::new(),
         };
         Ok(PreStage {
-            data_changed: !found.signals.is_empty(),
+            data_changed,
             added: found.added,
             trials: found.trials,
             refused: found.refused,
             excludes,
             not_identifiable,
         })
+    }
+
+    /// Takes the impacts' vibration `found` predicts out of the data, if the base model then
+    /// explains the data better than its log-likelihood `before`; otherwise puts it back and
+    /// says so on each defect (`not_modelled`), so that the report's "after" is never made
+    /// worse by the stage. Whether the data changed.
+    fn take_out(&mut self, found: &mut impacts::Outcome<Effect>, before: f64) -> Result<bool> {
+        if found.signals.is_empty() {
+            return Ok(false);
+        }
+        for (channel, signal) in &found.signals {
+            self.subtract(*channel, signal)?;
+        }
+        let after = self.run(&[])?.1.log_likelihood();
+        if after > before {
+            return Ok(true);
+        }
+        for (channel, signal) in &found.signals {
+            let back: Vec<f64> = signal.iter().map(|v| -v).collect();
+            self.subtract(*channel, &back)?;
+        }
+        let why = format!(
+            "its vibration is left in the data: taking the impacts' predicted vibration out made the base model's \
+             log-likelihood worse ({before:.1} → {after:.1}); the filter does not model impacts"
+        );
+        for (_, a) in &mut found.added {
+            a.detail.not_modelled = Some(why.clone());
+        }
+        Ok(false)
     }
 
     /// Every bearing with a geometry, as the family detector reads it (`bearing N`, its lines
@@ -180,9 +207,10 @@ impl RotorSystem<'_> {
         let strong: Vec<&family::Member> =
             fit.members.iter().filter(|m| !m.on_order && m.strength_db >= family::CARRY.min_db).collect();
         label.detail.band_hz = Some([fit.band.low_hz, fit.band.high_hz]);
+        label.detail.not_modelled =
+            Some("impacts fitted to the innovations did not pay their cost: its vibration is left in the data".into());
         label.detail.named_by = Some(format!(
-            "its family of envelope lines ({}; chance 10^-{:.1} < {:.0e}); its vibration is not modelled: impacts \
-             fitted to the innovations did not pay their cost",
+            "its family of envelope lines ({}; chance 10^-{:.1} < {:.0e})",
             strong.iter().map(|m| format!("{} {:.1} dB", m.label, m.strength_db)).collect::<Vec<_>>().join(", "),
             fit.score,
             family::CARRY.false_alarm
