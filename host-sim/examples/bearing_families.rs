@@ -68,7 +68,7 @@ fn print(name: &str, d: &Diagnosis) {
         Verdict::Nothing => "no bearing defect the data can show".to_string(),
     };
     println!(
-        "{name}: {verdict}  (shaft {:.3} Hz ± {:.3}, {} orders)",
+        "{name}: {verdict}  (shaft {:.3} Hz ± {:.2e}, {} orders)",
         d.shaft.hz, d.shaft.uncertainty_hz, d.shaft.orders
     );
     for f in d.families.iter().take(3) {
