@@ -102,6 +102,9 @@ fn a_ball_defect_is_named_bsf_from_its_family() {
     let at = page.find("Squared envelope spectrum of the prewhitened").expect("the family's figure");
     let figure = &page[page[..at].rfind("<figure>").unwrap()..at];
     assert!(figure.contains("<svg") && figure.contains("2×BSF") && figure.contains("ball at bearing 1"));
+    // And says it first, in words an engineer acts on.
+    let findings = &page[page.find("<h2>Findings</h2>").expect("findings")..page.find("<h2>Effects").unwrap_or(at)];
+    assert!(findings.contains("Bearing 1: rolling-element (ball) defect (BSF"), "{findings}");
 }
 
 #[test]
@@ -122,4 +125,6 @@ fn identical_bearings_are_reported_as_a_tie_not_guessed() {
     assert!(places[0].starts_with("bearing ") && places[1].contains("bearing "), "{places:?}");
     assert_ne!(places[0], places[1].trim_start_matches("bearing_defect at ").split(" (").next().unwrap());
     assert_eq!(r.section.fields["bearing_families"]["verdict"], "cannot_tell");
+    let page = edgekf_sim::report::html::render(&r).unwrap();
+    assert!(page.contains("These sensors cannot tell: bearing_defect at bearing"), "no tie in the findings");
 }

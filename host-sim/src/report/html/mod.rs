@@ -18,6 +18,7 @@
 //! ```
 
 mod figures;
+mod findings;
 mod format;
 mod tables;
 
@@ -60,6 +61,7 @@ pub fn render(report: &LoopReport) -> Result<String> {
     let mut html = String::with_capacity(1 << 18);
     head(&mut html, report);
     verdict(&mut html, report);
+    findings::findings(&mut html, report);
     effects(&mut html, &report.effects_added);
     comparison(&mut html, report);
     plots(&mut html, report)?;
