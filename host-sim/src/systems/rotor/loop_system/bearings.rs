@@ -110,39 +110,19 @@ impl RotorSystem<'_> {
     }
 
     /// Every bearing with a geometry, as the family detector reads it (`bearing N`, its lines
-    /// as orders).
+    /// as orders), with its index in the configuration.
     fn bearing_specs(&self) -> Vec<(usize, BearingSpec)> {
-        let mut out: Vec<(usize, BearingSpec)> = Vec::new();
-        for &(bearing, line, order) in &self.lines {
-            let name = format!("bearing {}", self.cfg.bearings[bearing].node);
-            let at = match out.iter().position(|(b, _)| *b == bearing) {
-                Some(i) => i,
-                None => {
-                    let orders = Kinematics { bpfo: 0.0, bpfi: 0.0, bsf: 0.0, ftf: 0.0 };
-                    out.push((bearing, BearingSpec { name, orders }));
-                    out.len() - 1
-                }
-            };
-            let k = &mut out[at].1.orders;
-            match line {
-                BearingLine::Bpfo => k.bpfo = order,
-                BearingLine::Bpfi => k.bpfi = order,
-                BearingLine::Bsf => k.bsf = order,
-                BearingLine::Ftf => k.ftf = order,
-            }
-        }
-        out
+        let with_geometry = self.cfg.bearings.iter().enumerate().filter_map(|(i, b)| Some((i, b.node, b.geometry?)));
+        with_geometry
+            .map(|(i, node, g)| (i, BearingSpec { name: format!("bearing {node}"), orders: g.kinematics() }))
+            .collect()
     }
 
     /// The channels the family detector reads, raw (before the first stage takes the impacts
     /// out): the housings' accelerometers, every channel if none is one; and their sample rate
-    /// (0 without two distinct times).
+    /// (the filter's).
     pub(super) fn family_channels(&self) -> (Vec<(&str, &[f64])>, f64) {
-        let t = &self.data.t;
-        let fs = match (t.first(), t.last()) {
-            (Some(a), Some(b)) if b > a && t.len() > 1 => (t.len() - 1) as f64 / (b - a),
-            _ => 0.0,
-        };
+        let fs = self.sample_rate();
         let raw = |only_accelerometers: bool| -> Vec<(&str, &[f64])> {
             let chosen = self.channel_info.iter().filter(|c| !only_accelerometers || c.unit == "m/s^2");
             chosen.filter_map(|c| Some((c.name.as_str(), self.data.column(&c.name)?))).collect()
