@@ -39,8 +39,8 @@ pub trait HilImage {
     /// Why the sensor or the estimator may not start.
     type StartError: core::fmt::Debug;
 
-    /// Fresh storage.
-    fn storage() -> Self::Storage;
+    /// Fresh storage, as a constant: the caller's frame holds it from the start.
+    const STORAGE: Self::Storage;
 
     /// Reads the input's header and starts the node.
     #[allow(clippy::type_complexity)]
@@ -152,6 +152,35 @@ pub fn clocked_node<B: ByteSource, E: NodeEstimator<Input = [f32; M]>, X, const 
 ) -> Result<Node<ChannelSource<B, M>, E>, HilError<X>> {
     let source = clocked_source(reader.map_err(HilError::Header)?, rate_hz);
     Ok(Node::new(source, estimator().map_err(HilError::Start)?, Default::default()))
+}
+
+/// [`clocked_node`] on a file whose empty cells are missing readings of their channel alone
+/// ([`ChannelReader::with_empty_cells`]): the images of systems whose sensors come at several
+/// rates in one file (the boom's, the vehicle's).
+///
+/// ```
+/// use edgekf_firmware::hil::sensors_node;
+/// use edgekf_firmware::node::{Innovation, NodeEstimator, Poll};
+/// # struct Seen(u32);
+/// # impl NodeEstimator for Seen {
+/// #     type Input = [f32; 2];
+/// #     type Frame = edgekf_firmware::frame::Done;
+/// #     fn step(&mut self, x: Option<[f32; 2]>) -> Innovation { self.0 += x.map_or(0, |[_, b]| u32::from(b.is_nan())); Innovation::default() }
+/// #     fn report(&mut self, _: &Poll) -> Option<Self::Frame> { None }
+/// # }
+/// // The second line has no `b`: a missing reading of `b` alone, not a bad line.
+/// let text = b"t,a,b\n0,1,2\n0.1,3,\n";
+/// let mut node = sensors_node(&text[..], ["a", "b"], 10, || Ok::<_, ()>(Seen(0))).unwrap();
+/// node.run(|_| {});
+/// assert_eq!(node.estimator().0, 1);
+/// ```
+pub fn sensors_node<B: ByteSource, E: NodeEstimator<Input = [f32; M]>, X, const M: usize>(
+    input: B,
+    channels: [&'static str; M],
+    rate_hz: u32,
+    estimator: impl FnOnce() -> Result<E, X>,
+) -> Result<Node<ChannelSource<B, M>, E>, HilError<X>> {
+    clocked_node(ChannelReader::new(input, channels).map(ChannelReader::with_empty_cells), rate_hz, estimator)
 }
 
 /// Polls `node` until its input has run out, every report to `sink` followed by the model

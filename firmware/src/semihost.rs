@@ -73,7 +73,7 @@ where
         defmt::error!("no input file");
         exit(2)
     };
-    let mut storage = I::storage();
+    let mut storage = I::STORAGE;
     // Matched by reference: the node stays where `start` built it (moving it out of the
     // `Result` would put a second copy of it, several KB for the rotor, on this frame).
     let mut started = I::start(file, &mut storage);

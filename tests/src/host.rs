@@ -25,7 +25,7 @@ impl FrameSink for Lines {
 /// Runs image `I` over CSV text exactly as its QEMU binary does (without the `stack` frame);
 /// returns the frames as lines.
 pub fn lines<I: HilImage>(csv: &[u8]) -> Result<Vec<String>> {
-    let mut storage = I::storage();
+    let mut storage = I::STORAGE;
     let mut node = I::start(csv, &mut storage).map_err(|e| anyhow!("{} did not start: {e:?}", I::NAME))?;
     let mut sink = Lines::default();
     I::started(&node, &mut sink);

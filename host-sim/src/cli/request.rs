@@ -228,4 +228,28 @@ impl<S: clap::ValueEnum + Copy + Send + Sync + 'static> ScenarioRun<S> {
     pub fn options(&self) -> SimOptions<S> {
         SimOptions { scenario: self.scenario, duration: self.duration, seed: self.files.seed }
     }
+
+    /// The simulator's progress on stderr: `t` seconds simulated of `--duration`.
+    pub fn progress(&self) -> impl FnMut(f64) + '_ {
+        move |t| eprintln!("simulated {t:.0} s of {:.0} s", self.duration)
+    }
+
+    /// Writes a simulated recording's CSV `text` to `--out` (whole, or not at all) and prints
+    /// the line every scenario run ends with: rows, rate, scenario, seed, then `headline` (what
+    /// the system's run is about, e.g. its largest tip vibration).
+    pub fn write(
+        &self,
+        text: String,
+        rows: usize,
+        rate_hz: impl std::fmt::Display,
+        headline: &str,
+    ) -> anyhow::Result<()> {
+        use anyhow::Context;
+        let out = &self.files.out;
+        crate::io::output::write_atomic(out, text).with_context(|| format!("cannot write {}", out.display()))?;
+        let scenario = self.scenario.to_possible_value().map(|v| v.get_name().to_owned()).unwrap_or_default();
+        let seed = self.files.seed;
+        println!("{}: {rows} rows at {rate_hz} Hz, scenario {scenario}, seed {seed}; {headline}", out.display());
+        Ok(())
+    }
 }

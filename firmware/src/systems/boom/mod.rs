@@ -14,8 +14,8 @@
 //! about 12 KB of stack in `f64`.
 
 use crate::frame::FrameSink;
-use crate::hil::{clocked_node, FileEnd, HilError, HilImage, HilNode};
-use crate::line_feed::{ByteSource, ChannelReader};
+use crate::hil::{sensors_node, FileEnd, HilError, HilImage, HilNode};
+use crate::line_feed::ByteSource;
 use crate::monitor::{Monitored, Normalised};
 use edgekf::residual::MonitorSettings;
 use crate::node::{Innovation, NodeEstimator, Pending, Poll};
@@ -240,14 +240,11 @@ impl HilImage for BoomImage {
     type Estimator<'s> = Monitored<BoomNode<'s>, 2>;
     type StartError = ModelError;
 
-    fn storage() -> Storage {
-        None
-    }
+    const STORAGE: Storage = None;
 
     #[inline(never)] // start-up temporaries stay out of the caller's frame
     fn start<B: ByteSource>(input: B, storage: &mut Storage) -> Result<HilNode<'_, Self, B>, HilError<ModelError>> {
-        let reader = ChannelReader::new(input, CHANNELS).map(ChannelReader::with_empty_cells);
-        clocked_node(reader, SAMPLE_RATE_HZ, move || {
+        sensors_node(input, CHANNELS, SAMPLE_RATE_HZ, move || {
             let (model, paper) = storage.insert(estimators()?);
             Ok(Monitored::new(BoomNode::new(model, paper), &monitor_settings()))
         })

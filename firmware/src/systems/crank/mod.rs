@@ -342,9 +342,7 @@ impl HilImage for CrankImage {
     type Estimator<'s> = CrankNode<'s>;
     type StartError = FeatureError;
 
-    fn storage() -> Storage {
-        [0.0; WINDOW - 1]
-    }
+    const STORAGE: Storage = [0.0; WINDOW - 1];
 
     #[inline(never)] // start-up temporaries stay out of the caller's frame
     fn start<B: ByteSource>(input: B, storage: &mut Storage) -> Result<HilNode<'_, Self, B>, HilError<FeatureError>> {

@@ -339,9 +339,7 @@ impl HilImage for OscillatorImage {
     type Estimator<'s> = Captured<'s, Monitored<Watched, 1>, WINDOW>;
     type StartError = StartError<crate::virtual_adxl355::VirtualBusError>;
 
-    fn storage() -> [f32; WINDOW] {
-        [f32::NAN; WINDOW]
-    }
+    const STORAGE: [f32; WINDOW] = [f32::NAN; WINDOW];
 
     #[inline(never)] // start-up temporaries stay out of the caller's frame
     fn start<B: ByteSource>(

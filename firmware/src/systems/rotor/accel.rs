@@ -91,7 +91,7 @@ impl HilImage for RotorAccelImage {
     type Estimator<'s> = RotorNode<ACCEL_STATES, ACCEL_START_RANK>;
     type StartError = PairStartError;
 
-    fn storage() {}
+    const STORAGE: () = ();
 
     #[inline(never)] // start-up temporaries stay out of the caller's frame
     fn start<B: ByteSource>(input: B, _: &mut ()) -> Result<HilNode<'_, Self, B>, HilError<Self::StartError>> {

@@ -370,7 +370,7 @@ impl HilImage for RotorImage {
     type Estimator<'s> = RotorNode;
     type StartError = core::convert::Infallible;
 
-    fn storage() {}
+    const STORAGE: () = ();
 
     #[inline(never)] // start-up temporaries stay out of the caller's frame
     fn start<B: ByteSource>(input: B, _: &mut ()) -> Result<HilNode<'_, Self, B>, HilError<Self::StartError>> {

@@ -113,7 +113,7 @@ impl HilImage for SdofImage {
     type Estimator<'s> = SdofEstimator<f32>;
     type StartError = StartError;
 
-    fn storage() {}
+    const STORAGE: () = ();
 
     #[inline(never)] // start-up temporaries (the discretisation) stay out of the caller's frame
     fn start<B: ByteSource>(input: B, _: &mut ()) -> Result<HilNode<'_, Self, B>, HilError<StartError>> {

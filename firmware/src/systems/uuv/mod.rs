@@ -21,8 +21,8 @@
 //! flights and flag a DVL offset (`cargo xtask roundtrip uuv`).
 
 use crate::frame::FrameSink;
-use crate::hil::{clocked_node, FileEnd, HilError, HilImage, HilNode};
-use crate::line_feed::{ByteSource, ChannelReader};
+use crate::hil::{sensors_node, FileEnd, HilError, HilImage, HilNode};
+use crate::line_feed::ByteSource;
 use crate::monitor::{Monitored, Normalised};
 use crate::node::{Innovation, NodeEstimator, Pending, Poll};
 use crate::source::ChannelSource;
@@ -303,14 +303,11 @@ impl HilImage for UuvImage {
     type Estimator<'s> = Monitored<UuvNode<'s>, MONITORED>;
     type StartError = EstimatorError;
 
-    fn storage() -> Storage {
-        None
-    }
+    const STORAGE: Storage = None;
 
     #[inline(never)] // start-up temporaries stay out of the caller's frame
     fn start<B: ByteSource>(input: B, storage: &mut Storage) -> Result<HilNode<'_, Self, B>, HilError<EstimatorError>> {
-        let reader = ChannelReader::new(input, CHANNELS).map(ChannelReader::with_empty_cells);
-        clocked_node(reader, SAMPLE_RATE_HZ, move || {
+        sensors_node(input, CHANNELS, SAMPLE_RATE_HZ, move || {
             Ok(Monitored::new(UuvNode::new(storage.insert(estimator()?)), &monitor_settings()))
         })
     }

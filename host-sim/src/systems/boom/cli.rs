@@ -120,24 +120,16 @@ fn simulate_command(args: SimulateArgs) -> anyhow::Result<()> {
     }
     let config = load(args.run.files.config.as_deref())?;
     let options = args.run.options();
-    let rec = simulate(&config, &options, &mut |t| eprintln!("simulated {t:.0} s of {:.0} s", args.run.duration))?;
+    let rec = simulate(&config, &options, &mut args.run.progress())?;
     let text = rec.to_csv(&args.run.files.out)?;
     let statics = match &args.static_out {
         Some(path) => Some((path, static_csv(&config, args.run.files.seed, path)?)),
         None => None,
     };
-    write_atomic(&args.run.files.out, text)
-        .with_context(|| format!("cannot write {}", args.run.files.out.display()))?;
     let vib = rec.column("truth_tip_vibration").unwrap_or_default();
     let peak = vib.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    println!(
-        "{}: {} rows at {} Hz, run {}, seed {}; largest tip vibration {peak:.3} m",
-        args.run.files.out.display(),
-        rec.t.len(),
-        config.gyro.sample_rate,
-        args.run.scenario.name(),
-        args.run.files.seed
-    );
+    let headline = format!("largest tip vibration {peak:.3} m");
+    args.run.write(text, rec.t.len(), config.gyro.sample_rate, &headline)?;
     if let Some((path, text)) = statics {
         write_atomic(path, text).with_context(|| format!("cannot write {}", path.display()))?;
         println!("{}: {STATIC_S:.0} s of the gyro and the inclinometer at rest", path.display());

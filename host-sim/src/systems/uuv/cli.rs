@@ -105,21 +105,11 @@ fn simulate_command(args: SimulateArgs) -> anyhow::Result<()> {
         config.validate()?;
     }
     let options = args.run.options();
-    let rec = simulate(&config, &options, &mut |t| eprintln!("simulated {t:.0} s of {:.0} s", args.run.duration))?;
+    let rec = simulate(&config, &options, &mut args.run.progress())?;
     let text = rec.to_csv(&args.run.files.out)?;
-    write_atomic(&args.run.files.out, text)
-        .with_context(|| format!("cannot write {}", args.run.files.out.display()))?;
     let u = rec.column("truth_u").unwrap_or_default();
     let mean_u = u.iter().sum::<f64>() / u.len().max(1) as f64;
-    println!(
-        "{}: {} rows at {} Hz, scenario {}, seed {}; mean speed {mean_u:.3} m/s",
-        args.run.files.out.display(),
-        rec.t.len(),
-        config.sensors.rate,
-        args.run.scenario.name(),
-        args.run.files.seed
-    );
-    Ok(())
+    args.run.write(text, rec.t.len(), config.sensors.rate, &format!("mean speed {mean_u:.3} m/s"))
 }
 
 fn estimate_command(args: EstimateArgs) -> anyhow::Result<()> {
