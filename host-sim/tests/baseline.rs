@@ -4,11 +4,12 @@
 //! another: a bearing defect is named, a grown unbalance is reported as its ratio to the
 //! baseline's, and healthy records get nothing.
 
+use edgekf_sim::residual_loop::baseline::Comparison;
 use edgekf_sim::residual_loop::{LoopOptions, LoopReport};
 use edgekf_sim::systems::rotor::bearing_geometry::BearingLine;
 use edgekf_sim::systems::rotor::loop_system::baseline::{learn, BaselineOptions, RotorBaseline};
 use edgekf_sim::systems::rotor::loop_system::twin::{rig, Twin, HEALTHY_UNBALANCE, HOUSINGS};
-use edgekf_sim::systems::rotor::loop_system::{close_loop_from, RotorLoopOptions};
+use edgekf_sim::systems::rotor::loop_system::{close_loop_from, compare_with, RotorLoopOptions};
 use edgekf_sim::systems::rotor::RotorModel;
 use std::sync::OnceLock;
 
@@ -77,6 +78,10 @@ fn a_grown_unbalance_is_reported_as_its_ratio_to_the_baseline() {
     assert!((4.0..=6.0).contains(&ratio), "{c}");
     // The filter's unbalance states take the growth: the loop adds nothing for it.
     assert!(r.effects_added.is_empty(), "{:?}", r.effects_added);
+    // The growth is beyond the records' noise, and the page's findings say so in words.
+    assert_eq!(c["beyond_noise"], true, "{c}");
+    let page = edgekf_sim::report::html::render(&r).unwrap();
+    assert!(page.contains("Against the baseline: the unbalance at disk 6 is ×"), "no finding against the baseline");
     // And a record like the baseline's reads about ×1.
     let same = comparison(&diagnose(Twin::default(), 6), "unbalance", "disk 6");
     assert!((0.8..=1.25).contains(&same["ratio_to_baseline"].as_f64().unwrap()), "{same}");
@@ -102,4 +107,37 @@ fn healthy_records_30_to_39_get_nothing() {
 #[test]
 fn healthy_records_40_to_49_get_nothing() {
     healthy_records_get_nothing(40..50);
+}
+
+/// Every `baseline_comparison` row of `seed`'s record of `twin`, from the base model alone.
+fn comparisons(twin: Twin, seed: u64) -> Vec<Comparison> {
+    let data = twin.record(model(), seed).unwrap();
+    compare_with(model(), &data, &LoopOptions::default(), &RotorLoopOptions::default(), baseline()).unwrap()
+}
+
+/// The intervals' coverage: on healthy records at 20 seeds the 95 % intervals of the
+/// unbalance's and the order levels' ratios hold 1 about 95 % of the time (the records and the
+/// baseline's differ only by their noise and the motor's tones' phases), and a five-fold
+/// unbalance lies outside its interval.
+#[test]
+fn the_intervals_hold_one_on_healthy_records_and_leave_out_a_fivefold_unbalance() {
+    use rayon::prelude::*;
+    let rows: Vec<Comparison> =
+        (60..80u64).into_par_iter().flat_map(|seed| comparisons(Twin::default(), seed)).collect();
+    let with_interval: Vec<&Comparison> = rows.iter().filter(|c| c.interval.is_some()).collect();
+    let holds = with_interval.iter().filter(|c| c.beyond_noise == Some(false)).count();
+    let coverage = holds as f64 / with_interval.len() as f64;
+    for c in rows.iter().filter(|c| c.beyond_noise != Some(false)) {
+        eprintln!("outside: {}", c.describe());
+    }
+    eprintln!("coverage {holds}/{} = {coverage:.3} ({} rows)", with_interval.len(), rows.len());
+    // Every row has an interval, and about 95 % of them hold 1 (a binomial 95 % band for
+    // 140 intervals is 91–99 %).
+    assert_eq!(with_interval.len(), rows.len());
+    assert!((0.90..=0.995).contains(&coverage), "coverage {coverage:.3}");
+    let grown = comparisons(Twin { unbalance: 5.0 * HEALTHY_UNBALANCE, ..Twin::default() }, 81);
+    let disk = grown.iter().find(|c| c.kind == "unbalance").expect("an unbalance row");
+    eprintln!("×5: {}", disk.describe());
+    assert_eq!(disk.beyond_noise, Some(true), "{}", disk.describe());
+    assert!(disk.interval.unwrap()[0] > 3.0, "{}", disk.describe());
 }

@@ -59,6 +59,10 @@ pub struct InnovationLevel {
     pub channel: String,
     /// RMS innovation, in the channel's unit.
     pub innovation_rms: f64,
+    /// Its standard error from the healthy record's blocks (absent from baselines learned
+    /// before it was kept).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub std_error: Option<f64>,
 }
 
 impl LevelBaseline {
@@ -89,7 +93,16 @@ impl LevelBaseline {
             channels: summary
                 .innovation_rms
                 .iter()
-                .map(|(c, &rms)| InnovationLevel { channel: c.clone(), innovation_rms: rms })
+                .map(|(c, &rms)| InnovationLevel {
+                    channel: c.clone(),
+                    innovation_rms: rms,
+                    std_error: summary
+                        .channels
+                        .iter()
+                        .find(|s| &s.name == c)
+                        .map(|s| s.rms_standard_error)
+                        .filter(|se| se.is_finite()),
+                })
                 .collect(),
         })
     }
@@ -137,8 +150,9 @@ impl LevelBaseline {
             .channels
             .iter()
             .filter_map(|l| {
-                let now = *report.before.innovation_rms.get(&l.channel)?;
-                Some(Comparison::new("innovation_rms", &l.channel, None, "", now, l.innovation_rms))
+                let now = report.before.channels.iter().find(|c| c.name == l.channel)?;
+                let c = Comparison::new("innovation_rms", &l.channel, None, "", now.rms, l.innovation_rms);
+                Some(c.with_errors(Some(now.rms_standard_error), l.std_error))
             })
             .collect();
         let about = serde_json::json!({
@@ -156,8 +170,11 @@ impl LevelBaseline {
         section.lines.push(("baseline".into(), floor));
         for c in &comparisons {
             let text = format!(
-                "×{:.2} the baseline's ({:.3e} against {:.3e})",
-                c.ratio_to_baseline, c.value, c.baseline_value
+                "×{:.2} the baseline's ({:.3e} against {:.3e}){}",
+                c.ratio_to_baseline,
+                c.value,
+                c.baseline_value,
+                c.spread()
             );
             section.lines.push((format!("innovations of {}", c.location), text));
         }

@@ -168,6 +168,9 @@ pub struct ChannelSignature {
     pub z: f64,
     /// RMS innovation.
     pub rms: f64,
+    /// Its standard error, from the mean square's spread over blocks of the analysed samples
+    /// ([`batch_std_error`](super::baseline::batch_std_error)); NaN when too short.
+    pub rms_standard_error: f64,
     /// Mean of `e² / S_ii` (1 when consistent).
     pub nis: f64,
     /// The same over the first and the second half of the analysed samples.
@@ -354,6 +357,7 @@ fn channel_signature(
     let mut zs = Vec::with_capacity(keep.len());
     let mut tz = Vec::with_capacity(keep.len());
     let mut z2 = Vec::with_capacity(keep.len());
+    let mut squares = Vec::with_capacity(keep.len());
     for &k in keep {
         let e = run.innovation[i][k];
         let s = run.variance[i][k];
@@ -361,6 +365,7 @@ fn channel_signature(
             continue;
         }
         stats.push(e);
+        squares.push(e * e);
         nis.push(e * e / s);
         z2.push((t[k] - t0, e * e / s));
         let z = e / s.sqrt();
@@ -392,6 +397,7 @@ fn channel_signature(
         standard_error: se,
         z: stats.mean() / se,
         rms: stats.rms(),
+        rms_standard_error: rms_standard_error(&squares, stats.rms()),
         nis: nis.mean(),
         nis_halves: [mean(&z2[..half]), mean(&z2[half..])],
         step: step(&z2),
@@ -452,6 +458,16 @@ fn nis_consistency(run: &Run, keep: &[usize], channels: usize, o: &SignatureOpti
         (NisBounds::new(1, dof, o.alpha), nis_sum / dof as f64)
     };
     (per_channel, bounds.contains(if uniform || dof == 0 { nis_total.mean() } else { per_channel }))
+}
+
+/// The standard error of the RMS of samples whose squares are `squares`: batch means of the
+/// squares, carried through the square root (`σ_rms = σ_ms / 2 rms`).
+fn rms_standard_error(squares: &[f64], rms: f64) -> f64 {
+    let means: Vec<f64> = super::baseline::blocks(squares.len())
+        .into_iter()
+        .map(|b| squares[b.clone()].iter().sum::<f64>() / b.len() as f64)
+        .collect();
+    super::baseline::batch_std_error(&means) / (2.0 * rms)
 }
 
 /// Each virtual row's RMS error against its truth after `o.error_after`, where it has one.

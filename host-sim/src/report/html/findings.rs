@@ -98,4 +98,31 @@ pub(super) fn findings(out: &mut String, r: &LoopReport) {
     for n in r.not_identifiable.iter().filter(|n| n.kind == EffectKind::BearingDefect || !n.rivals.is_empty()) {
         para(out, "note", &format!("These sensors cannot tell: {}.", unseen(n)));
     }
+    against_baseline(out, r);
+}
+
+/// The baseline's comparison rows whose interval leaves 1 out, a sentence each; "no change
+/// beyond noise" when every row with an interval holds 1.
+fn against_baseline(out: &mut String, r: &LoopReport) {
+    let Some(rows) = r.section.fields.get("baseline_comparison").and_then(|v| v.as_array()) else { return };
+    let judged: Vec<&serde_json::Value> = rows.iter().filter(|c| c["beyond_noise"].is_boolean()).collect();
+    let changed: Vec<&&serde_json::Value> = judged.iter().filter(|c| c["beyond_noise"] == true).collect();
+    if !judged.is_empty() && changed.is_empty() {
+        let text = format!("Against the baseline: no change beyond noise in the {} levels compared.", judged.len());
+        para(out, "", &text);
+    }
+    for c in changed {
+        let what = match c["order"].as_u64() {
+            Some(o) => format!("{o}× level"),
+            None => c["kind"].as_str().unwrap_or_default().replace('_', " "),
+        };
+        let (ratio, lo, hi) = (c["ratio_to_baseline"].as_f64(), c["interval"][0].as_f64(), c["interval"][1].as_f64());
+        if let (Some(ratio), Some(lo), Some(hi)) = (ratio, lo, hi) {
+            let place = c["location"].as_str().unwrap_or_default();
+            let text = format!(
+                "Against the baseline: the {what} at {place} is ×{ratio:.2} the baseline's (95 %: ×{lo:.2}–×{hi:.2})."
+            );
+            para(out, "", &text);
+        }
+    }
 }

@@ -158,6 +158,7 @@ mod tests {
             standard_error: 1.0,
             z: 0.5,
             rms,
+            rms_standard_error: 0.01 * rms,
             nis: 1.0,
             nis_halves: [1.0, 1.0],
             step: None,

@@ -18,7 +18,7 @@ use super::healthy::{Healthy, Resonance};
 use super::speed::estimate_speed;
 use super::{Effect, RotorLoopOptions, RotorSystem};
 use crate::io::data::DataFile;
-use crate::residual_loop::baseline::{BaselineSource, Comparison};
+use crate::residual_loop::baseline::{batch_std_error, blocks, BaselineSource, Comparison};
 use crate::residual_loop::filter::Run;
 use crate::residual_loop::onset::halves;
 use crate::residual_loop::optimize::maximise;
@@ -61,6 +61,10 @@ pub struct UnbalanceLevel {
     pub node: usize,
     /// kg·m.
     pub value: f64,
+    /// Its standard error on the baseline's record (absent from baselines learned before it
+    /// was kept).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub std_error: Option<f64>,
 }
 
 /// A synchronous order's amplitude on a channel.
@@ -73,6 +77,9 @@ pub struct OrderLevel {
     pub order: u32,
     /// Amplitude, in the channel's unit.
     pub value: f64,
+    /// Its standard error on the baseline's record (as [`UnbalanceLevel::std_error`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub std_error: Option<f64>,
 }
 
 /// A healthy rotor's baseline, as `baseline.toml` holds it.
@@ -183,30 +190,27 @@ impl RotorBaseline {
     /// the baseline's, from the model and run the loop ended with.
     pub fn compare(&self, sys: &RotorSystem<'_>, model: &super::AugmentedModel, run: &Run) -> Vec<Comparison> {
         let mut out = Vec::new();
-        for (node, value) in sys.unbalance(model, run) {
-            if let Some(b) = self.unbalances.iter().find(|u| u.node == node) {
-                out.push(Comparison::new("unbalance", &format!("disk {node}"), None, "kg m", value, b.value));
+        let orders = order_levels(sys);
+        for u in unbalance_levels(sys, model, run, &orders) {
+            if let Some(b) = self.unbalances.iter().find(|b| b.node == u.node) {
+                let c = Comparison::new("unbalance", &format!("disk {}", u.node), None, "kg m", u.value, b.value);
+                out.push(c.with_errors(u.std_error, b.std_error));
             }
         }
-        for level in order_levels(sys) {
+        for level in orders {
             if let Some(b) = self.orders.iter().find(|o| o.channel == level.channel && o.order == level.order) {
                 let unit = sys.channel_unit(&level.channel);
-                out.push(Comparison::new(
-                    "order_level",
-                    &level.channel,
-                    Some(level.order),
-                    &unit,
-                    level.value,
-                    b.value,
-                ));
+                let c = Comparison::new("order_level", &level.channel, Some(level.order), &unit, level.value, b.value);
+                out.push(c.with_errors(level.std_error, b.std_error));
             }
         }
         out
     }
 }
 
-/// The amplitude of each channel at the orders [`ORDERS`] of the system's running speed
-/// (the channel's projection on the order's cosine and sine over the record).
+/// The amplitude of each channel at the orders [`ORDERS`] of the system's running speed (the
+/// channel's projection on the order's cosine and sine over the record), with its standard
+/// error: the spread over the record's blocks of each block's phasor along the record's.
 pub fn order_levels(sys: &RotorSystem<'_>) -> Vec<OrderLevel> {
     let hz = sys.speed().hz;
     let (t, rate) = (sys.times(), sys.sample_rate());
@@ -214,20 +218,54 @@ pub fn order_levels(sys: &RotorSystem<'_>) -> Vec<OrderLevel> {
     for (name, col) in sys.channel_names().iter().zip(sys.columns()) {
         for order in ORDERS {
             let w = TAU * hz * order as f64;
-            let (mut c, mut s, mut n) = (0.0, 0.0, 0usize);
-            for (k, &v) in col.iter().enumerate() {
-                if v.is_finite() {
-                    let tk = t.get(k).copied().unwrap_or(k as f64 / rate);
-                    c += v * (w * tk).cos();
-                    s += v * (w * tk).sin();
-                    n += 1;
+            let phasor = |range: std::ops::Range<usize>| {
+                let (mut c, mut s, mut n) = (0.0, 0.0, 0usize);
+                for k in range {
+                    let v = col[k];
+                    if v.is_finite() {
+                        let tk = t.get(k).copied().unwrap_or(k as f64 / rate);
+                        c += v * (w * tk).cos();
+                        s += v * (w * tk).sin();
+                        n += 1;
+                    }
                 }
-            }
-            let value = 2.0 * c.hypot(s) / n.max(1) as f64;
-            out.push(OrderLevel { channel: name.clone(), order, value });
+                let scale = 2.0 / n.max(1) as f64;
+                (scale * c, scale * s)
+            };
+            let (c, s) = phasor(0..col.len());
+            let value = c.hypot(s);
+            let along: Vec<f64> =
+                blocks(col.len()).into_iter().map(phasor).map(|(bc, bs)| (bc * c + bs * s) / value).collect();
+            let se = batch_std_error(&along);
+            out.push(OrderLevel { channel: name.clone(), order, value, std_error: se.is_finite().then_some(se) });
         }
     }
     out
+}
+
+/// The unbalance per disk in the model of `run`, with a standard error from the 1× levels
+/// `orders` (of the same record): the filter reads an unbalance from the synchronous response,
+/// so it is known relatively no better than the 1× phasors taken together,
+/// `σ/u = 1/√Σ (A/σ_A)²` over the channels. The filter's own unbalance states are too smooth
+/// for batch means (their blocks agree to 1 % where records of the same machine differ by 5 %).
+/// With several disks the 1× information is shared among them, so each disk's interval is then
+/// at least this wide.
+fn unbalance_levels(
+    sys: &RotorSystem<'_>,
+    model: &super::AugmentedModel,
+    run: &Run,
+    orders: &[OrderLevel],
+) -> Vec<UnbalanceLevel> {
+    let information: f64 = orders
+        .iter()
+        .filter(|o| o.order == 1)
+        .filter_map(|o| o.std_error.filter(|se| *se > 0.0).map(|se| (o.value / se).powi(2)))
+        .sum();
+    let relative = (information > 0.0).then(|| information.sqrt().recip());
+    sys.unbalance(model, run)
+        .into_iter()
+        .map(|(node, value)| UnbalanceLevel { node, value, std_error: relative.map(|r| r * value) })
+        .collect()
 }
 
 /// One part the learning tried: the parts with it, their run and the gain.
@@ -305,6 +343,7 @@ pub fn learn(
             }
         })
         .collect::<Result<_>>()?;
+    let orders = order_levels(&sys);
     Ok(RotorBaseline {
         system: "rotor".into(),
         condition: b.condition.clone(),
@@ -319,8 +358,8 @@ pub fn learn(
             .collect(),
         resonances: h.resonances,
         forces,
-        unbalances: sys.unbalance(&fm, &fr).into_iter().map(|(node, value)| UnbalanceLevel { node, value }).collect(),
-        orders: order_levels(&sys),
+        unbalances: unbalance_levels(&sys, &fm, &fr, &orders),
+        orders,
     })
 }
 

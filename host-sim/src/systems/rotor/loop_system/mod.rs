@@ -422,10 +422,37 @@ pub fn close_loop_from(
     rotor: &RotorLoopOptions,
     baseline: &RotorBaseline,
 ) -> Result<LoopReport> {
-    let rotor = &RotorLoopOptions { speed_band: rotor.speed_band.or(Some(0.1)), ..*rotor };
     let options = &LoopOptions { gain_floor: baseline::FLOOR_MARGIN * baseline.gain_floor, ..*options };
+    system_from(model, data, options, rotor, baseline)?.search(options)
+}
+
+/// The record's levels beside `baseline`'s (`baseline_comparison`, with their intervals) from
+/// the base model alone, without the search: what [`close_loop_from`] reports of a record where
+/// it adds nothing, at the cost of one filter run.
+pub fn compare_with(
+    model: &RotorModel,
+    data: &DataFile,
+    options: &LoopOptions,
+    rotor: &RotorLoopOptions,
+    baseline: &RotorBaseline,
+) -> Result<Vec<crate::residual_loop::baseline::Comparison>> {
+    let sys = system_from(model, data, options, rotor, baseline)?;
+    let (base, run) = sys.run(&[])?;
+    Ok(baseline.compare(&sys, &base, &run))
+}
+
+/// `model` on `data` with `baseline`'s parts, at the running speed read from `data` (within
+/// `rotor.speed_band`, default ±10 %).
+fn system_from<'a>(
+    model: &'a RotorModel,
+    data: &'a DataFile,
+    options: &LoopOptions,
+    rotor: &RotorLoopOptions,
+    baseline: &RotorBaseline,
+) -> Result<RotorSystem<'a>> {
+    let rotor = &RotorLoopOptions { speed_band: rotor.speed_band.or(Some(0.1)), ..*rotor };
     let speed = running_speed(model, data, options, rotor)?;
-    RotorSystem::from_baseline(model, data, options, rotor, speed, baseline)?.search(options)
+    RotorSystem::from_baseline(model, data, options, rotor, speed, baseline)
 }
 
 /// The configured running speed, or the one read from the data with `rotor.speed_band`.
