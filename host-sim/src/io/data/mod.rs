@@ -98,6 +98,9 @@ pub struct DataReport {
     pub ignored_columns: Vec<String>,
     /// Kept columns with empty or NaN cells, and how many (only columns with at least one).
     pub nan_cells: Vec<(String, usize)>,
+    /// Where those cells lie: each such column's runs of consecutive missing cells, as the
+    /// times of a run's first and last cell, s (a burst of NaN is a time range, not a count).
+    pub nan_runs: Vec<(String, Vec<[f64; 2]>)>,
     /// Regularity of the time column.
     pub timing: TimingReport,
     /// The line number of the last row when the file does not end with a newline: a file
@@ -114,10 +117,12 @@ impl DataReport {
             out.push(format!("ignored column `{name}`: not a channel this command uses"));
         }
         for (name, n) in &self.nan_cells {
+            let runs = self.nan_runs.iter().find(|(c, _)| c == name).map_or(&[][..], |(_, r)| r.as_slice());
             out.push(format!(
-                "column `{name}`: {n} empty/NaN cell(s) of {} ({:.2} %), treated as missing samples",
+                "column `{name}`: {n} empty/NaN cell(s) of {} ({:.2} %){}, treated as missing samples",
                 self.rows,
-                100.0 * *n as f64 / self.rows as f64
+                100.0 * *n as f64 / self.rows as f64,
+                describe_runs(runs)
             ));
         }
         out.extend(self.timing.notices());
@@ -136,6 +141,44 @@ impl fmt::Display for DataReport {
             write!(f, "\nnotice: {n}")?;
         }
         Ok(())
+    }
+}
+
+/// The runs of consecutive NaN in `column`, as `[t of the first, t of the last]`.
+fn missing_runs(t: &[f64], column: &[f64]) -> Vec<[f64; 2]> {
+    let mut runs: Vec<[f64; 2]> = Vec::new();
+    let mut open = false;
+    for (&tk, v) in t.iter().zip(column) {
+        match (v.is_nan(), open, runs.last_mut()) {
+            (true, true, Some(run)) => run[1] = tk,
+            (true, _, _) => runs.push([tk, tk]),
+            _ => {}
+        }
+        open = v.is_nan();
+    }
+    runs
+}
+
+/// ` in 1 run (1.200–1.350 s)` or ` in 37 runs, the longest 0.150 s from 1.200 s; the first
+/// 0.001 s, 2.5–2.6 s, 4.000 s`: where the missing cells are, for a notice.
+fn describe_runs(runs: &[[f64; 2]]) -> String {
+    let span = |[a, b]: [f64; 2]| if a == b { format!("{a:.3} s") } else { format!("{a:.3}–{b:.3} s") };
+    match runs {
+        [] => String::new(),
+        [one] => format!(" in 1 run ({})", span(*one)),
+        _ => {
+            let longest =
+                runs.iter().max_by(|x, y| (x[1] - x[0]).total_cmp(&(y[1] - y[0]))).copied().unwrap_or_default();
+            let first: Vec<String> = runs.iter().take(3).map(|r| span(*r)).collect();
+            let more = if runs.len() > 3 { ", …" } else { "" };
+            format!(
+                " in {} runs, the longest {:.3} s from {:.3} s; the first {}{more}",
+                runs.len(),
+                longest[1] - longest[0],
+                longest[0],
+                first.join(", ")
+            )
+        }
     }
 }
 
@@ -248,6 +291,12 @@ pub fn read_from_required<R: Read>(
     let report = DataReport {
         rows: data.t.len(),
         ignored_columns: layout.ignored,
+        nan_runs: nan_counts
+            .iter()
+            .zip(data.names.iter().zip(&data.columns))
+            .filter(|(n, _)| **n > 0)
+            .map(|(_, (name, column))| (name.clone(), missing_runs(&data.t, column)))
+            .collect(),
         nan_cells: data.names.iter().cloned().zip(nan_counts).filter(|(_, n)| *n > 0).collect(),
         timing: data.timing(),
         unterminated_last_line: (!bytes.ends_with(b"\n")).then_some(last_line),

@@ -57,6 +57,26 @@ fn empty_and_nan_cells_are_kept_and_counted() {
     assert!(ax[1].is_nan() && ax[2].is_nan() && ax[3] == 4.0);
     assert_eq!(r.nan_cells, [("ax".to_string(), 2), ("ay".to_string(), 1)]);
     assert!(r.notices().iter().any(|n| n.contains("`ax`: 2 empty/NaN")), "{:?}", r.notices());
+    // Where: ax's two cells are one run, 1–2 ms; ay's one cell is at 0 s.
+    assert_eq!(r.nan_runs, [("ax".to_string(), vec![[0.001, 0.002]]), ("ay".to_string(), vec![[0.0, 0.0]])]);
+    assert!(r.notices().iter().any(|n| n.contains("in 1 run (0.001–0.002 s)")), "{:?}", r.notices());
+}
+
+#[test]
+fn bursts_of_nan_are_reported_as_time_ranges() {
+    // A 100 Hz column with bursts at 0.10–0.14 s, 0.50 s and 0.70–0.79 s, and one at 0.95 s.
+    let mut text = String::from("t,ax\n");
+    for k in 0..100 {
+        let missing = (10..15).contains(&k) || k == 50 || (70..80).contains(&k) || k == 95;
+        text.push_str(&format!("{},{}\n", k as f64 / 100.0, if missing { "nan" } else { "1" }));
+    }
+    let (_, r) = parse(&text, &["ax"]).unwrap();
+    assert_eq!(r.nan_runs[0].1, vec![[0.1, 0.14], [0.5, 0.5], [0.7, 0.79], [0.95, 0.95]]);
+    let notice = r.notices().into_iter().find(|n| n.contains("`ax`")).unwrap();
+    assert!(
+        notice.contains("17 empty/NaN cell(s) of 100 (17.00 %) in 4 runs, the longest 0.090 s from 0.700 s; the first 0.100–0.140 s, 0.500 s, 0.700–0.790 s, …"),
+        "{notice}"
+    );
 }
 
 #[test]
