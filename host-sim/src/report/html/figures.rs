@@ -66,9 +66,8 @@ pub(super) fn plots(out: &mut String, r: &LoopReport) -> Result<()> {
         );
         return Ok(());
     }
-    let zoom =
-        "Virtual-sensing estimates against the truth (wide grey line) over about four periods at the end of the run.";
-    figure(out, &zoom_plot(r, &rows)?, zoom);
+    let (svg, windows) = zoom_plot(r, &rows)?;
+    figure(out, &svg, &zoom_caption(&windows));
     let error = "Virtual-sensing error (estimate − truth) over the run. The range is set by the run after its first 10 %: the filters' start-up may leave the plot.";
     figure(out, &error_plot(r, &rows)?, error);
     Ok(())
@@ -231,16 +230,40 @@ fn nis_plot(r: &LoopReport) -> Result<String> {
     grid(vec![p], 1, "NIS before and after")
 }
 
-/// Where the zoom window of a truth series starts: about four periods before the end (its
-/// mean crossings over the second half of the run give the period), at least 20 samples.
-fn zoom_start(truth: &[f64]) -> usize {
+/// A zoom window: where it starts, and whether it spans periods of an oscillation (else it is
+/// the run's last tenth).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Zoom {
+    from: usize,
+    periodic: bool,
+}
+
+/// Where the zoom window of a truth series starts: about four periods before the end where
+/// it oscillates (its mean crossings over the second half of the run give the period; at
+/// least ten samples between crossings, so that noise on a slow quantity is not read as an
+/// oscillation), else the last tenth of the run; at least 20 samples.
+fn zoom_start(truth: &[f64]) -> Zoom {
     let n = truth.len();
     let half = &truth[n / 2..];
     let finite: Vec<f64> = half.iter().copied().filter(|v| v.is_finite()).collect();
     let mean = finite.iter().sum::<f64>() / finite.len().max(1) as f64;
     let crossings = finite.windows(2).filter(|w| (w[0] - mean).signum() != (w[1] - mean).signum()).count();
-    let len = if crossings >= 2 { 4 * 2 * half.len() / crossings } else { n / 10 };
-    n - len.clamp(20.min(n), half.len().max(20).min(n))
+    let periodic = crossings >= 2 && 10 * crossings <= finite.len();
+    let len = if periodic { 4 * 2 * half.len() / crossings } else { n / 10 };
+    Zoom { from: n - len.clamp(20.min(n), half.len().max(20).min(n)), periodic }
+}
+
+/// The zoom figure's caption: what its windows span (each row's own, in s).
+fn zoom_caption(windows: &[(Zoom, f64)]) -> String {
+    let longest = windows.iter().map(|w| w.1).fold(0.0, f64::max);
+    let what = if !windows.is_empty() && windows.iter().all(|w| w.0.periodic) {
+        format!("about four periods of each row's oscillation at the end of the run (at most {longest:.3} s)")
+    } else if windows.iter().any(|w| w.0.periodic) {
+        format!("the end of the run: four periods where a row oscillates, else its last tenth (at most {longest:.3} s)")
+    } else {
+        format!("the last tenth of the run ({longest:.3} s)")
+    };
+    format!("Virtual-sensing estimates against the truth (wide grey line) over {what}.")
 }
 
 /// `series[from..]` against `t[from..]`, times `scale`.
@@ -249,13 +272,21 @@ fn tail(t: &[f64], series: Option<&Vec<f64>>, from: usize, scale: f64) -> Vec<(f
     t.iter().zip(s).skip(from).map(|(&t, &v)| (t, v * scale)).collect()
 }
 
-/// Estimated against true displacement of each virtual-sensing row near the end of the run.
-fn zoom_plot(r: &LoopReport, rows: &[usize]) -> Result<String> {
+/// Estimated against true displacement of each virtual-sensing row near the end of the run,
+/// and each row's window with its length in s.
+fn zoom_plot(r: &LoopReport, rows: &[usize]) -> Result<(String, Vec<(Zoom, f64)>)> {
     let tr = &r.traces;
     let mut panels = Vec::new();
+    let mut windows = Vec::new();
     for &j in rows {
         let truth = tr.truth[j].as_deref().unwrap_or_default();
-        let from = zoom_start(truth);
+        let zoom = zoom_start(truth);
+        let from = zoom.from;
+        let span = match (tr.t.get(from), tr.t.last()) {
+            (Some(a), Some(b)) => b - a,
+            _ => 0.0,
+        };
+        windows.push((zoom, span));
         let row = &tr.rows[j];
         let scale = row.display_scale;
         let mut p =
@@ -273,7 +304,7 @@ fn zoom_plot(r: &LoopReport, rows: &[usize]) -> Result<String> {
         }
         panels.push(p);
     }
-    grid(panels, 2, "Virtual-sensing estimates against the truth")
+    Ok((grid(panels, 2, "Virtual-sensing estimates against the truth")?, windows))
 }
 
 /// `(est − truth) · scale` (NaN where either is missing).
@@ -327,8 +358,17 @@ mod tests {
         // 1 kHz, 10 Hz sine over 3 s: four periods are 400 samples.
         let truth: Vec<f64> =
             (0..3000).map(|k| (std::f64::consts::TAU * 10.0 * k as f64 / 1000.0 + 0.3).sin()).collect();
-        let from = zoom_start(&truth);
-        assert!((380..=420).contains(&(3000 - from)), "{from}");
-        assert_eq!(zoom_start(&[f64::NAN; 5]), 0);
+        let zoom = zoom_start(&truth);
+        assert!(zoom.periodic && (380..=420).contains(&(3000 - zoom.from)), "{zoom:?}");
+        assert_eq!(zoom_start(&[f64::NAN; 5]).from, 0);
+        // A slow quantity with noise on it (a health factor) is not an oscillation: the last
+        // tenth, and the caption says so.
+        let noisy: Vec<f64> = (0..3000).map(|k| 0.9 + 1e-3 * ((k * 7919 % 13) as f64 - 6.0)).collect();
+        let zoom = zoom_start(&noisy);
+        assert_eq!(zoom, Zoom { from: 2700, periodic: false });
+        assert_eq!(
+            zoom_caption(&[(zoom, 30.0)]),
+            "Virtual-sensing estimates against the truth (wide grey line) over the last tenth of the run (30.000 s)."
+        );
     }
 }
