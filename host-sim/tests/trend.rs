@@ -238,4 +238,18 @@ fn a_folder_without_recordings_is_a_usage_error() {
     let out = edgekf_loop(&config, &data, &data, &[]);
     assert_eq!(out.status.code(), Some(1));
     assert!(!data.join("trend.csv").exists());
+    // A pattern picks the recordings: none matched is a usage error; a report folder holding
+    // the recordings is refused; `a*.csv` runs a.csv and not the others.
+    let out = edgekf_loop(&config, &data.join("z*.csv"), &root.join("out"), &[]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("no file matches the pattern"));
+    let out = edgekf_loop(&config, &data.join("*.csv"), &data, &[]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(!data.join("trend.csv").exists());
+    std::fs::write(data.join("b.csv"), "t,ax\nnot a recording").unwrap();
+    let out = edgekf_loop(&config, &data.join("a*.csv"), &root.join("out"), &["--quiet"]);
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    let trend = std::fs::read_to_string(root.join("out/trend.csv")).unwrap();
+    assert_eq!(trend.lines().count(), 2, "{trend}");
+    assert!(root.join("out/a/report.json").exists() && !root.join("out/b").exists());
 }

@@ -1,5 +1,5 @@
-//! `edgekf loop <system> --data DIR`: a machine's history. Every `*.csv` directly in `DIR` is
-//! one recording; each is run through the system's loop as `--data FILE` would run it (in
+//! `edgekf loop <system> --data DIR`: a machine's history. Every `*.csv` directly in `DIR` (or
+//! every file a pattern such as `'runs/2026-12-*.csv'` matches) is one recording; each is run through the system's loop as `--data FILE` would run it (in
 //! parallel over the cores), its report written under `--report OUT/<recording's stem>/`, and
 //! the history of all of them written as `OUT/trend.csv` and `OUT/trend.html`
 //! ([`crate::trend`]).
@@ -23,20 +23,51 @@ use std::path::{Path, PathBuf};
 /// The history's own files in the report folder.
 pub const HISTORY_FILES: [&str; 2] = ["trend.csv", "trend.html"];
 
-/// The recordings of the folder `dir`: its files named `*.csv` (any case), sorted by name
-/// (sub-folders are not searched, so reports written inside `dir` are never read back).
+/// Whether `data` names a set of recordings by a pattern (`runs/2026-12-*.csv`: `*`, `?` or
+/// `[…]` in it, as quoted on the command line) rather than one file or folder.
+///
+/// ```
+/// use edgekf_sim::cli::history::is_pattern;
+/// use std::path::Path;
+/// assert!(is_pattern(Path::new("runs/day-*.csv")) && !is_pattern(Path::new("runs/day-1.csv")));
+/// ```
+pub fn is_pattern(data: &Path) -> bool {
+    data.to_str().is_some_and(|s| s.contains(['*', '?', '[']))
+}
+
+/// The recordings `data` names: a folder's files named `*.csv` (any case; sub-folders are not
+/// searched, so reports written inside it are never read back), or the files a pattern
+/// ([`is_pattern`], the `glob` crate's syntax) matches; sorted by name.
 ///
 /// ```
 /// let dir = std::env::temp_dir().join("edgekf-doc-history-recordings");
 /// std::fs::create_dir_all(&dir).unwrap();
-/// for name in ["b.csv", "a.CSV", "notes.txt"] {
+/// for name in ["b.csv", "a.CSV", "notes.txt", "b2.csv"] {
 ///     std::fs::write(dir.join(name), "t,ax\n0,1\n").unwrap();
 /// }
+/// let names = |found: Vec<std::path::PathBuf>| -> Vec<String> {
+///     found.iter().map(|p| p.file_name().unwrap().to_string_lossy().into_owned()).collect()
+/// };
 /// let found = edgekf_sim::cli::history::recordings(&dir).unwrap();
-/// let names: Vec<_> = found.iter().map(|p| p.file_name().unwrap().to_str().unwrap()).collect();
-/// assert_eq!(names, ["a.CSV", "b.csv"]);
+/// assert_eq!(names(found), ["a.CSV", "b.csv", "b2.csv"]);
+/// let found = edgekf_sim::cli::history::recordings(&dir.join("b*.csv")).unwrap();
+/// assert_eq!(names(found), ["b.csv", "b2.csv"]);
 /// ```
-pub fn recordings(dir: &Path) -> Result<Vec<PathBuf>> {
+pub fn recordings(data: &Path) -> Result<Vec<PathBuf>> {
+    if is_pattern(data) && !data.is_dir() {
+        let pattern = data.to_string_lossy();
+        let paths = glob::glob(&pattern).with_context(|| format!("--data {pattern}: not a usable pattern"))?;
+        let mut out = Vec::new();
+        for path in paths {
+            let path = path.with_context(|| format!("--data {pattern}: cannot list a folder it reaches"))?;
+            if path.is_file() {
+                out.push(path);
+            }
+        }
+        out.sort();
+        return Ok(out);
+    }
+    let dir = data;
     let mut out = Vec::new();
     for entry in std::fs::read_dir(dir).with_context(|| format!("{}: cannot list the folder", dir.display()))? {
         let path = entry.with_context(|| format!("{}: cannot list the folder", dir.display()))?.path();
@@ -57,7 +88,9 @@ fn stem(path: &Path) -> String {
 /// Checks, before any work, that the history's files and each recording's report folder can
 /// be written without touching an input, and that no two recordings share a report folder.
 fn check_outputs(args: &LoopArgs, files: &[PathBuf]) -> Result<()> {
-    if same_file::is_same_file(&args.report, &args.data).unwrap_or(false) {
+    let folders: Vec<&Path> = files.iter().filter_map(|f| f.parent()).collect();
+    let holds_recordings = folders.iter().any(|d| same_file::is_same_file(&args.report, d).unwrap_or(false));
+    if same_file::is_same_file(&args.report, &args.data).unwrap_or(false) || holds_recordings {
         anyhow::bail!(
             "{}: the report folder is the data folder; choose another, so that the history's files are not read as recordings next time",
             args.report.display()

@@ -48,7 +48,7 @@ pub fn run(registry: &[SystemEntry], m: &ArgMatches, command_line: &str) -> Resu
             with.join(", ")
         );
     }
-    if args.data.is_dir() {
+    if args.data.is_dir() || super::history::is_pattern(&args.data) {
         return history(registry, name, entry, &args, sub, command_line);
     }
     let inputs = [Some(args.data.as_path()), Some(args.config.as_path()), args.baseline.as_deref()];
@@ -72,7 +72,7 @@ pub fn run(registry: &[SystemEntry], m: &ArgMatches, command_line: &str) -> Resu
     Ok(())
 }
 
-/// `edgekf loop <system> --data FOLDER`: the machine's history ([`super::history`]). A folder
+/// `edgekf loop <system> --data FOLDER` (or a pattern): the machine's history ([`super::history`]). A folder
 /// without recordings, or `--corrected-config` (one file cannot carry many recordings'
 /// corrections), is a usage error (exit code 2, as clap's).
 fn history(
@@ -89,7 +89,9 @@ fn history(
         usage_error(registry, name, message);
     }
     if super::history::recordings(&args.data)?.is_empty() {
-        usage_error(registry, name, &format!("--data {}: the folder holds no *.csv recording", args.data.display()));
+        let what =
+            if args.data.is_dir() { "the folder holds no *.csv recording" } else { "no file matches the pattern" };
+        usage_error(registry, name, &format!("--data {}: {what}", args.data.display()));
     }
     super::history::run(name, entry, args, sub, command_line)
 }

@@ -17,9 +17,10 @@ pub struct LoopArgs {
     #[arg(long, value_name = "TOML")]
     pub config: PathBuf,
     /// Data file (channels named like the configured sensors; `truth_` columns optional), or a
-    /// folder of them: every `*.csv` in it is run, its report written to `DIR/<name>/`, and the
-    /// machine's history to `DIR/trend.csv` and `DIR/trend.html`.
-    #[arg(long, value_name = "CSV|FOLDER")]
+    /// folder of them, or a quoted pattern ('runs/2026-12-*.csv'): every recording is run, its
+    /// report written to `DIR/<name>/`, and the machine's history to `DIR/trend.csv` and
+    /// `DIR/trend.html`.
+    #[arg(long, value_name = "CSV|FOLDER|PATTERN")]
     pub data: PathBuf,
     /// Directory for report.json and report.html (with a folder of data: for each recording's
     /// report folder and the history).
