@@ -170,11 +170,10 @@ impl RotorSystem<'_> {
     /// The housings' vibration velocity and its ISO 20816-3 zone, per accelerometer (the
     /// standard grades housings; shaft displacement probes are left out), from the raw record.
     fn severity(&self) -> Vec<Severity> {
-        let t = &self.data.t;
-        let fs = match (t.first(), t.last()) {
-            (Some(a), Some(b)) if b > a && t.len() > 1 => (t.len() - 1) as f64 / (b - a),
-            _ => return Vec::new(),
-        };
+        let fs = self.sample_rate();
+        if self.data.t.len() < 2 || !(fs > 0.0) {
+            return Vec::new();
+        }
         let class = self.cfg.severity.machine_class;
         let accelerometers = self.channel_info.iter().filter(|c| c.unit == "m/s^2");
         accelerometers
