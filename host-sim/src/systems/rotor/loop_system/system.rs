@@ -171,7 +171,7 @@ impl RotorSystem<'_> {
     /// standard grades housings; shaft displacement probes are left out), from the raw record.
     fn severity(&self) -> Vec<Severity> {
         let fs = self.sample_rate();
-        if self.data.t.len() < 2 || !(fs > 0.0) {
+        if self.data.t.len() < 2 || !fs.is_finite() || fs <= 0.0 {
             return Vec::new();
         }
         let class = self.cfg.severity.machine_class;
